@@ -1,0 +1,71 @@
+import pytest
+
+from server_select.params import (ParamError, parse_fixed_server, parse_id, parse_id_list,
+                                  parse_mode, parse_non_negative, parse_positive)
+
+
+@pytest.mark.parametrize('value, expected', [
+    ([1, 2, 3], [1, 2, 3]), ('1,2,3', [1, 2, 3]), ('1 2 3', [1, 2, 3]), ('[1, 2, 3]', [1, 2, 3]),
+    (' 3 , 1 ', [3, 1]), (4, [4]), ('4', [4]), (['5', 6], [5, 6]),
+])
+def test_id_lists(value, expected):
+    assert parse_id_list('~servers', value) == expected
+
+
+@pytest.mark.parametrize('value', ['', '[]', [], 'a,b', '1,x', [1.5], [-1], '1,1', None, True, [True]])
+def test_bad_id_lists(value):
+    with pytest.raises(ParamError) as info:
+        parse_id_list('~servers', value)
+    assert '~servers' in str(info.value)
+
+
+@pytest.mark.parametrize('value', [-1, '-1', 'one', 1.0, None, False])
+def test_bad_ids(value):
+    with pytest.raises(ParamError):
+        parse_id('~robot_id', value)
+
+
+@pytest.mark.parametrize('value, expected', [(1, 1.0), ('2.5', 2.5), (0.1, 0.1)])
+def test_positive(value, expected):
+    assert parse_positive('~probe_rate', value) == expected
+
+
+@pytest.mark.parametrize('value', [0, -1, 'fast', None, float('nan'), float('inf'), True])
+def test_non_positive_rates_are_rejected(value):
+    with pytest.raises(ParamError) as info:
+        parse_positive('~probe_rate', value)
+    assert '~probe_rate' in str(info.value)
+
+
+def test_positive_integer():
+    assert parse_positive('~task_size', 1000, integer=True) == 1000
+    assert parse_positive('~task_size', '1000', integer=True) == 1000
+    for bad in (10.5, 0, '1e3x'):
+        with pytest.raises(ParamError):
+            parse_positive('~task_size', bad, integer=True)
+
+
+def test_non_negative():
+    assert parse_non_negative('~hysteresis', 0) == 0.0
+    for bad in (-0.1, 'x', float('inf'), None):
+        with pytest.raises(ParamError):
+            parse_non_negative('~hysteresis', bad)
+
+
+def test_modes():
+    assert parse_mode('~mode', 'select') == 'select'
+    assert parse_mode('~mode', 'fixed') == 'fixed'
+    with pytest.raises(ParamError) as info:
+        parse_mode('~mode', 'random')
+    assert 'random' in str(info.value)
+
+
+def test_fixed_server_must_be_listed():
+    assert parse_fixed_server('~fixed_server', 2, [1, 2, 3], 'fixed') == 2
+    assert parse_fixed_server('~fixed_server', '3', [1, 2, 3], 'fixed') == 3
+    with pytest.raises(ParamError) as info:
+        parse_fixed_server('~fixed_server', 4, [1, 2, 3], 'fixed')
+    assert 'not in servers' in str(info.value)
+    with pytest.raises(ParamError):
+        parse_fixed_server('~fixed_server', '', [1, 2, 3], 'fixed')
+    assert parse_fixed_server('~fixed_server', '', [1, 2, 3], 'select') is None

@@ -1,0 +1,25 @@
+from server_select.report import RunReport
+from server_select.stats import format_ms, summarize
+
+
+def test_summarize():
+    s = summarize([0.001, 0.002, 0.003, float('nan'), None])
+    assert s['n'] == 3 and s['median'] == 0.002 and s['max'] == 0.003
+    assert summarize([]) == {'n': 0}
+    assert format_ms({'n': 0}) == 'no samples'
+    assert format_ms(s, ('median',)) == 'median 2.000 ms'
+
+
+def test_run_report_counts_switches_and_tasks():
+    r = RunReport()
+    r.add_flag(1, 2, [2, 1], [0.001, 0.002])
+    r.add_flag(1, 2, [2, 1], [0.001, 0.002])
+    r.add_flag(1, 1, [1, 2], [0.001, 0.002])
+    r.add_task(1, True, 0.004, 2, '')
+    r.add_task(1, False, float('nan'), -1, 'timeout')
+    (s,) = r.summaries()
+    assert s['switches'] == 1 and s['selected'] == 1
+    assert (s['tasks'], s['ok'], s['failed']) == (2, 1, 1)
+    assert s['errors'] == {'timeout': 1} and s['servers_used'] == [2]
+    table = r.table()
+    assert '| R1 | S1 | S1 1.00, S2 2.00 | 1 | 2 | 1 | 1 | 4.00 |' in table

@@ -1,0 +1,63 @@
+import math
+
+import pytest
+
+from server_select.window import LatencyWindow
+
+
+def test_mean_of_successful_samples_in_window():
+    w = LatencyWindow(5.0)
+    for t, rtt in [(0.0, 0.010), (1.0, 0.020), (2.0, 0.030)]:
+        w.add(1, 1, t, True, rtt)
+    stats = w.stats(1, 1, 2.0)
+    assert stats.ok_count == 3
+    assert stats.mean == pytest.approx(0.020)
+
+
+def test_samples_older_than_window_are_dropped():
+    w = LatencyWindow(5.0)
+    w.add(1, 1, 0.0, True, 1.0)
+    w.add(1, 1, 4.0, True, 0.002)
+    assert w.stats(1, 1, 4.9).mean == pytest.approx(0.501)
+    # the first sample is exactly `window` old at t=5.0: gone
+    assert w.stats(1, 1, 5.0).mean == pytest.approx(0.002)
+    assert w.stats(1, 1, 9.0) == (None, 0, 0)
+
+
+def test_failed_samples_count_but_do_not_enter_the_mean():
+    w = LatencyWindow(5.0)
+    w.add(1, 2, 0.0, True, 0.004)
+    w.add(1, 2, 1.0, False, 123.0)
+    stats = w.stats(1, 2, 1.0)
+    assert stats.mean == pytest.approx(0.004)
+    assert (stats.ok_count, stats.failed_count) == (1, 1)
+
+
+def test_only_failed_samples_give_no_mean():
+    w = LatencyWindow(5.0)
+    w.add(1, 2, 0.0, False, 0.0)
+    assert w.stats(1, 2, 0.5) == (None, 0, 1)
+
+
+def test_pairs_are_independent_and_unknown_pairs_are_empty():
+    w = LatencyWindow(5.0)
+    w.add(1, 1, 0.0, True, 0.001)
+    w.add(2, 1, 0.0, True, 0.009)
+    assert w.stats(1, 1, 0.0).mean == pytest.approx(0.001)
+    assert w.stats(2, 1, 0.0).mean == pytest.approx(0.009)
+    assert w.stats(3, 3, 0.0) == (None, 0, 0)
+    stats = w.robot_stats(1, [1, 2], 0.0)
+    assert stats[1].ok_count == 1 and stats[2].mean is None
+
+
+@pytest.mark.parametrize('bad', [0, -1.0, float('nan')])
+def test_window_must_be_positive(bad):
+    with pytest.raises(ValueError):
+        LatencyWindow(bad)
+
+
+def test_failed_sample_rtt_is_not_kept():
+    w = LatencyWindow(1.0)
+    w.add(1, 1, 0.0, False, 5.0)
+    w.add(1, 1, 0.1, True, 0.5)
+    assert not math.isnan(w.stats(1, 1, 0.1).mean)
