@@ -18,13 +18,17 @@ class ManagerNode(object):
     Keeps the samples of the last ``~window`` seconds of every (robot, server) pair, ranks
     each robot's servers by mean round trip (stable sort, ties to the lower id, servers
     without a successful sample excluded) and publishes one ``server_select_flag`` per
-    robot every ``1/~publish_rate`` s, and at once when a robot's selected server changes.
-    Window times are the manager's receive times: robot and manager clocks are not shared.
+    robot every ``1/~publish_rate`` s, and at once when a robot's selected server or the set
+    of servers it ranks changes. Rankings are re-evaluated on every sample and every
+    ``1/~update_rate`` s, so a server drops out as soon as its last good sample leaves the
+    window. Window times are the manager's receive times: robot and manager clocks are
+    not shared.
 
     :ROS Parameters:
         - ``~robots`` (list of int, required), ``~servers`` (list of int, required)
         - ``~window`` (s, 5.0): sample window.
         - ``~publish_rate`` (Hz, 1.0): periodic flag rate.
+        - ``~update_rate`` (Hz, 10.0): rate of re-evaluation between samples.
         - ``~hysteresis`` (s, 0.0): keep the current server while its mean is within this
           of the best one (0: always the best, as in the paper).
     :ROS Subscribers:
@@ -38,17 +42,19 @@ class ManagerNode(object):
         self.servers = parse_id_list('~servers', get_param('~servers'))
         self.window = LatencyWindow(parse_positive('~window', get_param('~window', 5.0)))
         publish_rate = parse_positive('~publish_rate', get_param('~publish_rate', 1.0))
+        update_rate = parse_positive('~update_rate', get_param('~update_rate', 10.0))
         self.hysteresis = parse_non_negative('~hysteresis', get_param('~hysteresis', 0.0))
 
         self._lock = threading.Lock()
-        self._selected = {}
+        self._published = {}  # robot -> (selected server, set of ranked servers)
         self.flag_pub = rospy.Publisher(names.SELECTION_TOPIC, SelectionFlag,
                                         queue_size=4 * len(self.robots))
         self.sample_subs = [
             rospy.Subscriber(names.sample_topic(r, s), LatencySample, self.on_sample,
                              callback_args=(r, s), queue_size=100, tcp_nodelay=True)
             for r in self.robots for s in self.servers]
-        self.timer = rospy.Timer(rospy.Duration(1.0 / publish_rate), self.on_timer)
+        self.publish_timer = rospy.Timer(rospy.Duration(1.0 / publish_rate), self.on_publish_timer)
+        self.update_timer = rospy.Timer(rospy.Duration(1.0 / update_rate), self.on_update_timer)
         rospy.loginfo('manager: robots %s, servers %s, window %.3g s',
                       self.robots, self.servers, self.window.window)
 
@@ -61,24 +67,29 @@ class ManagerNode(object):
         self.window.add(pair[0], pair[1], rospy.get_time(), sample.ok, sample.rtt)
         self.update(pair[0], only_on_change=True)
 
-    def on_timer(self, _event):
+    def on_publish_timer(self, _event):
         for robot in self.robots:
             self.update(robot, only_on_change=False)
+
+    def on_update_timer(self, _event):
+        for robot in self.robots:
+            self.update(robot, only_on_change=True)
 
     def update(self, robot, only_on_change):
         """Rank ``robot``'s servers now; publish unless unchanged and ``only_on_change``."""
         ranking = rank_servers(self.window.robot_stats(robot, self.servers, rospy.get_time()))
         with self._lock:
-            previous = self._selected.get(robot)
+            previous, previous_ranked = self._published.get(robot, (None, None))
             selected = choose(ranking, previous, self.hysteresis)
-            changed = previous != selected
+            ranked = frozenset(ranking.ranking)
+            changed = previous != selected or previous_ranked != ranked
             if only_on_change and not changed:
                 return
-            if changed:
+            if previous != selected:
                 rospy.loginfo('manager: robot %d -> server %s (ranking %s, mean ms %s)', robot,
                               selected, ranking.ranking,
                               ['%.2f' % (m * 1e3) for m in ranking.means])
-            self._selected[robot] = selected
+            self._published[robot] = (selected, ranked)
             flag = SelectionFlag(robot_id=robot, server_id=selected,
                                  ranking=ranking.ranking, mean_latency=ranking.means,
                                  sample_count=ranking.counts, excluded=ranking.excluded)

@@ -13,7 +13,7 @@ from server_select import names
 from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask, TaskReport
 from server_select.node_util import get_param, run
 from server_select.params import (parse_fixed_server, parse_id, parse_id_list, parse_mode,
-                                  parse_positive)
+                                  parse_non_negative, parse_positive)
 from server_select.probe_client import TimedServiceProxy
 from server_select.sort_task import check_sorted, fingerprint, make_values
 from server_select.srv import LatencyProbe, LatencyProbeRequest
@@ -42,6 +42,8 @@ class RobotNode(object):
         - ``~probe_rate`` (Hz, 1.0), ``~probe_timeout`` (s, 0.5)
         - ``~task_rate`` (Hz, 2.0), ``~task_size`` (int, 1000), ``~task_timeout`` (s, 2.0)
         - ``~tasks`` (int, 0): stop after this many tasks (0: never).
+        - ``~start_delay`` (s, 0.0): wait this long before the first task, e.g. for a
+          recorder (rosbag, a test) to connect: rospy drops messages sent before that.
         - ``~summary_period`` (s, 10.0): period of the log summary.
         - ``~seed`` (int, robot_id): task data random seed.
     :ROS Publishers:
@@ -70,6 +72,8 @@ class RobotNode(object):
         self.task_limit = 0 if tasks in (0, '0') else parse_positive('~tasks', tasks, integer=True)
         summary_period = parse_positive('~summary_period', get_param('~summary_period', 10.0))
         seed = parse_id('~seed', get_param('~seed', self.robot_id))
+        start_delay = parse_non_negative('~start_delay', get_param('~start_delay', 0.0))
+        self._start_after = time.monotonic() + start_delay
 
         self._rng = np.random.default_rng(seed)
         self._lock = threading.Lock()
@@ -176,6 +180,8 @@ class RobotNode(object):
 
     def _ready(self):
         """Tasks start once the target is known to answer and the task topics are wired."""
+        if time.monotonic() < self._start_after:
+            return False
         if self.mode == 'fixed':
             target_up = self.fixed_server in self._probe_ok
         else:

@@ -1,0 +1,55 @@
+"""Shared helper of the rostest test nodes: records what a fleet says on its topics."""
+
+import collections
+import threading
+import time
+
+import rospy
+from rospy.numpy_msg import numpy_msg
+
+from server_select import names
+from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
+
+Received = collections.namedtuple('Received', 'time msg')
+
+
+class FleetRecorder(object):
+    """Every flag, task, result and task report, with its (monotonic) receive time."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.flags, self.tasks, self.results, self.reports = [], [], [], []
+        self.subs = [
+            rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self._add, 'flags',
+                             tcp_nodelay=True, queue_size=1000),
+            rospy.Subscriber(names.SORT_TASK_TOPIC, numpy_msg(SortTask), self._add, 'tasks',
+                             tcp_nodelay=True, queue_size=1000),
+            rospy.Subscriber(names.SORT_RESULT_TOPIC, numpy_msg(SortResult), self._add,
+                             'results', tcp_nodelay=True, queue_size=1000),
+            rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, self._add, 'reports',
+                             tcp_nodelay=True, queue_size=1000),
+        ]
+
+    def _add(self, msg, store):
+        with self.lock:
+            getattr(self, store).append(Received(time.monotonic(), msg))
+
+    def snapshot(self, store):
+        with self.lock:
+            return list(store)
+
+    def latest_flags(self):
+        """{robot_id: last SelectionFlag}."""
+        return dict((r.msg.robot_id, r.msg) for r in self.snapshot(self.flags))
+
+    def reports_of(self, robot_id):
+        return [r.msg for r in self.snapshot(self.reports) if r.msg.robot_id == robot_id]
+
+    def wait_for(self, condition, timeout):
+        """Poll ``condition()`` until it is true (return True) or ``timeout`` s pass."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not rospy.is_shutdown():
+            if condition():
+                return True
+            time.sleep(0.05)
+        return bool(condition())

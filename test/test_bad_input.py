@@ -1,0 +1,103 @@
+#!/usr/bin/env python3
+"""Bad input: invalid parameters stop a node with one clear line; bad tasks get error
+results and the server keeps serving."""
+
+import subprocess
+import sys
+import time
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+from rospy.numpy_msg import numpy_msg
+
+from server_select import names
+from server_select.msg import SortResult, SortTask
+
+ROBOT_OK = ['_robot_id:=1', '_servers:=1,2,3']
+
+BAD_PARAMS = [
+    ('robot', ROBOT_OK + ['_mode:=random'], "~mode: unknown mode 'random'"),
+    ('robot', ['_robot_id:=1', '_servers:=""'], '~servers: expected a non-empty list of ids'),
+    ('robot', ['_robot_id:=1', '_servers:=a,b'], '~servers: expected a non-negative integer id'),
+    ('robot', ['_robot_id:=1', '_servers:=1,1'], '~servers: duplicate ids [1]'),
+    ('robot', ['_servers:=1,2'], '~robot_id: required parameter is not set'),
+    ('robot', ROBOT_OK + ['_mode:=fixed', '_fixed_server:=9'],
+     '~fixed_server: server 9 is not in servers [1, 2, 3]'),
+    ('robot', ROBOT_OK + ['_probe_rate:=0'], '~probe_rate: expected a positive number, got 0'),
+    ('robot', ROBOT_OK + ['_task_rate:=-2'], '~task_rate: expected a positive number, got -2'),
+    ('robot', ROBOT_OK + ['_task_size:=ten'], '~task_size: expected a positive integer'),
+    ('manager', ['_robots:=1', '_servers:=[]'], '~servers: expected a non-empty list of ids'),
+    ('manager', ['_robots:=1', '_servers:=1', '_window:=0'], '~window: expected a positive'),
+    ('server', [], '~server_id: required parameter is not set'),
+    ('server', ['_server_id:=-3'], '~server_id: ids must be non-negative, got -3'),
+]
+
+
+class BadInputTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('test_bad_input')
+        cls.results = []
+        cls.sub = rospy.Subscriber(names.SORT_RESULT_TOPIC, numpy_msg(SortResult),
+                                   lambda m: cls.results.append(m), tcp_nodelay=True)
+        cls.pub = rospy.Publisher(names.SORT_TASK_TOPIC, numpy_msg(SortTask), queue_size=10)
+
+    def test_invalid_parameters_exit_with_one_clear_line(self):
+        for i, (node, args, message) in enumerate(BAD_PARAMS):
+            proc = subprocess.run(
+                ['rosrun', 'server_select', node, '__name:=bad_%s_%d' % (node, i)] + args,
+                stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
+                timeout=30)
+            lines = [l for l in proc.stderr.splitlines() if 'invalid parameter' in l]
+            self.assertEqual(proc.returncode, 2, (node, args, proc.stderr))
+            self.assertEqual(len(lines), 1, proc.stderr)
+            self.assertIn(message, lines[0])
+            self.assertNotIn('Traceback', proc.stderr)
+
+    def send(self, task_id, data, server_id=1):
+        task = SortTask(robot_id=77, task_id=task_id, server_id=server_id,
+                        data=np.asarray(data, dtype=np.int32))
+        task.header.stamp = rospy.Time.now()
+        self.pub.publish(task)
+
+    def result(self, task_id, timeout=5.0):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            found = [r for r in self.results if r.task_id == task_id]
+            if found:
+                return found
+            time.sleep(0.02)
+        return []
+
+    def test_bad_tasks_get_error_results_and_the_server_keeps_serving(self):
+        deadline = time.monotonic() + 20
+        while (self.pub.get_num_connections() == 0 or self.sub.get_num_connections() == 0) \
+                and time.monotonic() < deadline:
+            time.sleep(0.05)
+        self.send(1, [])
+        (empty,) = self.result(1)
+        self.assertFalse(empty.ok)
+        self.assertIn('empty task', empty.error)
+        self.assertEqual((empty.robot_id, empty.server_id, len(empty.data)), (77, 1, 0))
+
+        self.send(2, np.arange(1001)[::-1])  # the test launches the server with max 1000
+        (oversized,) = self.result(2)
+        self.assertFalse(oversized.ok)
+        self.assertIn('exceeds max_task_len 1000', oversized.error)
+
+        self.send(3, [5, -2, 9, 0])
+        self.send(4, [1, 2], server_id=7)      # another server's task: not answered here
+        (good,) = self.result(3)
+        self.assertTrue(good.ok, good.error)
+        self.assertEqual(list(good.data), [-2, 0, 5, 9])
+        self.assertGreaterEqual(good.process_time, 0.0)
+        time.sleep(0.5)
+        self.assertEqual([r for r in self.results if r.task_id == 4], [])
+        self.assertEqual(sorted(r.task_id for r in self.results), [1, 2, 3])
+
+
+if __name__ == '__main__':
+    rostest.rosrun('server_select', 'test_bad_input', BadInputTest, sys.argv)

@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""Integration test of a running fleet (demo.launch): selection, probing, task delivery.
+
+Parameters (private): ``robots``, ``servers`` (id lists), ``tasks`` (per robot), ``mode``
+(``select`` or ``fixed``), ``fixed_server``, ``timeout`` (s to wait for all tasks).
+"""
+
+import collections
+import re
+import subprocess
+import sys
+import unittest
+
+import rospy
+import rostest
+
+from server_select import names
+from server_select.params import parse_id_list
+
+from fleet_recorder import FleetRecorder
+
+
+class FleetTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('test_fleet')
+        cls.robots = parse_id_list('robots', rospy.get_param('~robots'))
+        cls.servers = parse_id_list('servers', rospy.get_param('~servers'))
+        cls.tasks = int(rospy.get_param('~tasks'))
+        cls.mode = rospy.get_param('~mode', 'select')
+        cls.fixed_server = int(rospy.get_param('~fixed_server', 1))
+        cls.timeout = float(rospy.get_param('~timeout', 60.0))
+        cls.rec = FleetRecorder()
+
+    def test_every_robot_selects_a_live_server(self):
+        def all_selected():
+            flags = self.rec.latest_flags()
+            return all(r in flags and flags[r].server_id in self.servers for r in self.robots)
+        self.assertTrue(self.rec.wait_for(all_selected, 20.0),
+                        'flags received: %s' % self.rec.latest_flags())
+        for robot, flag in self.rec.latest_flags().items():
+            self.assertIn(robot, self.robots)
+            self.assertEqual(flag.ranking[0], flag.server_id)
+            self.assertEqual(len(flag.ranking), len(flag.mean_latency))
+            self.assertEqual(list(flag.mean_latency), sorted(flag.mean_latency))
+            self.assertTrue(all(0 < m < 1.0 for m in flag.mean_latency), flag.mean_latency)
+
+    def test_probe_service_answers_rosservice_call(self):
+        server = self.servers[-1]
+        service = rospy.resolve_name(names.probe_service(server))
+        rospy.wait_for_service(service, 20.0)
+        out = subprocess.run(
+            ['rosservice', 'call', service, '{robot_id: 42, seq: 7, stamp: {secs: 3, nsecs: 4}}'],
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
+            timeout=30)
+        self.assertEqual(out.returncode, 0, out.stdout)
+        self.assertRegex(out.stdout, r'server_id: %d\b' % server)
+        self.assertRegex(out.stdout, r'seq: 7\b')
+        self.assertTrue(re.search(r'stamp:\s*\n\s*secs: 3\s*\n\s*nsecs:\s*4\b', out.stdout),
+                        out.stdout)
+
+    def test_tasks_complete_exactly_once_from_the_flagged_server(self):
+        def all_reported():
+            return all(len(self.rec.reports_of(r)) >= self.tasks for r in self.robots)
+        self.assertTrue(self.rec.wait_for(all_reported, self.timeout),
+                        'reports per robot: %s' % dict(
+                            (r, len(self.rec.reports_of(r))) for r in self.robots))
+        rospy.sleep(1.0)  # let any late duplicate result arrive before counting
+        tasks = self.rec.snapshot(self.rec.tasks)
+        results = self.rec.snapshot(self.rec.results)
+        flags = self.rec.snapshot(self.rec.flags)
+        for robot in self.robots:
+            reports = self.rec.reports_of(robot)
+            self.assertEqual(sorted(r.task_id for r in reports), list(range(1, self.tasks + 1)))
+            failed = [(r.task_id, r.error) for r in reports if not r.ok]
+            self.assertEqual(failed, [])
+            sent = dict((t.msg.task_id, t) for t in tasks if t.msg.robot_id == robot)
+            self.assertEqual(sorted(sent), list(range(1, self.tasks + 1)))
+            answers = collections.Counter(
+                (r.msg.task_id, r.msg.server_id) for r in results if r.msg.robot_id == robot)
+            for task_id, task in sent.items():
+                target = task.msg.server_id
+                self.assertEqual(answers[(task_id, target)], 1,
+                                 'task %d of robot %d: answers %s' % (task_id, robot, answers))
+                self.assertEqual(sum(n for (t, _), n in answers.items() if t == task_id), 1)
+                if self.mode == 'fixed':
+                    self.assertEqual(target, self.fixed_server)
+                else:
+                    # the target is what the manager had flagged for this robot by then
+                    flagged = [f.msg.server_id for f in flags
+                               if f.msg.robot_id == robot and f.time <= task.time]
+                    self.assertTrue(flagged, 'task %d sent before any flag' % task_id)
+                    self.assertIn(target, flagged[-3:])
+            for report in reports:
+                self.assertEqual(report.answered_by, report.server_id)
+                self.assertGreater(report.rtt, 0.0)
+                self.assertLess(report.rtt, 2.0)
+        if self.mode == 'fixed':
+            self.assertEqual(set(r.msg.server_id for r in results), {self.fixed_server})
+
+
+if __name__ == '__main__':
+    rostest.rosrun('server_select', 'test_fleet', FleetTest, sys.argv)
