@@ -12,6 +12,7 @@ class RunReport(object):
         self.flags = {}
         self.switches = collections.Counter()
         self.tasks = collections.defaultdict(list)
+        self.probes = collections.defaultdict(list)
 
     def add_flag(self, robot_id, server_id, ranking, means):
         previous = self.flags.get(robot_id)
@@ -21,6 +22,9 @@ class RunReport(object):
 
     def add_task(self, robot_id, ok, rtt, server_id, error):
         self.tasks[robot_id].append((ok, rtt, server_id, error))
+
+    def add_probe(self, robot_id, server_id, ok, rtt):
+        self.probes[robot_id].append((server_id, ok, rtt))
 
     def robot_summary(self, robot_id):
         tasks = self.tasks.get(robot_id, [])
@@ -38,23 +42,32 @@ class RunReport(object):
             'errors': dict(errors),
             'servers_used': sorted(set(t[2] for t in tasks if t[0])),
             'rtt': summarize([t[1] for t in tasks if t[0]]),
+            'probes': len(self.probes.get(robot_id, [])),
+            'probes_failed': sum(1 for p in self.probes.get(robot_id, []) if not p[1]),
+            'probe_rtt': summarize([p[2] for p in self.probes.get(robot_id, []) if p[1]]),
         }
 
     def summaries(self):
-        return [self.robot_summary(r) for r in sorted(set(self.flags) | set(self.tasks))]
+        robots = set(self.flags) | set(self.tasks) | set(self.probes)
+        return [self.robot_summary(r) for r in sorted(robots)]
 
     def table(self):
         """A Markdown table, one row per robot."""
         lines = ['| robot | selected | ranking (mean probe RTT ms) | switches | tasks | ok | failed '
-                 '| RTT median ms | RTT p95 ms | RTT p99 ms | RTT max ms |',
-                 '|---|---|---|---|---|---|---|---|---|---|---|']
+                 '| task RTT median ms | p95 | p99 | max | probes (failed) '
+                 '| probe RTT median ms | p99 |',
+                 '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|']
         for s in self.summaries():
             ranking = ', '.join('S%d %.2f' % (srv, ms)
                                 for srv, ms in zip(s['ranking'], s['mean_latency_ms'])) or '-'
-            rtt = s['rtt']
-            cells = ['%.2f' % (rtt[k] * 1e3) if rtt['n'] else '-'
-                     for k in ('median', 'p95', 'p99', 'max')]
-            lines.append('| R%d | %s | %s | %d | %d | %d | %d | %s |' % (
+            cells = _ms(s['rtt'], ('median', 'p95', 'p99', 'max'))
+            probe_cells = _ms(s['probe_rtt'], ('median', 'p99'))
+            lines.append('| R%d | %s | %s | %d | %d | %d | %d | %s | %d (%d) | %s |' % (
                 s['robot'], 'S%d' % s['selected'] if s['selected'] not in (None, -1) else 'none',
-                ranking, s['switches'], s['tasks'], s['ok'], s['failed'], ' | '.join(cells)))
+                ranking, s['switches'], s['tasks'], s['ok'], s['failed'], ' | '.join(cells),
+                s['probes'], s['probes_failed'], ' | '.join(probe_cells)))
         return '\n'.join(lines)
+
+
+def _ms(summary, keys):
+    return ['%.2f' % (summary[k] * 1e3) if summary['n'] else '-' for k in keys]

@@ -5,9 +5,9 @@ import json
 import rospy
 
 from server_select import names
-from server_select.msg import SelectionFlag, TaskReport
+from server_select.msg import LatencySample, SelectionFlag, TaskReport
 from server_select.node_util import get_param, run
-from server_select.params import parse_positive
+from server_select.params import parse_id_list, parse_positive
 from server_select.report import RunReport
 
 
@@ -17,9 +17,12 @@ class ReportNode(object):
     :ROS Parameters:
         - ``~duration`` (s, 30.0): how long to listen before printing and exiting.
         - ``~output`` (str, ''): also write the summary as JSON to this path.
+        - ``~robots``, ``~servers`` (id lists, optional): also summarise the probe samples
+          of these pairs.
     :ROS Subscribers:
         - ``server_select_flag`` (server_select/SelectionFlag)
         - ``task_report`` (server_select/TaskReport)
+        - ``latency_R<r>S<s>`` (server_select/LatencySample), with ``~robots``/``~servers``
     """
 
     def __init__(self):
@@ -30,11 +33,22 @@ class ReportNode(object):
                                          queue_size=100)
         self.task_sub = rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, self.on_task,
                                          queue_size=1000)
+        robots, servers = get_param('~robots', ''), get_param('~servers', '')
+        self.probe_subs = []
+        if robots not in ('', None) and servers not in ('', None):
+            self.probe_subs = [
+                rospy.Subscriber(names.sample_topic(r, s), LatencySample, self.on_probe,
+                                 queue_size=100)
+                for r in parse_id_list('~robots', robots)
+                for s in parse_id_list('~servers', servers)]
         self.timer = rospy.Timer(rospy.Duration(duration), self.finish, oneshot=True)
         rospy.loginfo('report: listening for %.3g s', duration)
 
     def on_flag(self, flag):
         self.report.add_flag(flag.robot_id, flag.server_id, flag.ranking, flag.mean_latency)
+
+    def on_probe(self, sample):
+        self.report.add_probe(sample.robot_id, sample.server_id, sample.ok, sample.rtt)
 
     def on_task(self, report):
         self.report.add_task(report.robot_id, report.ok, report.rtt, report.answered_by,

@@ -17,9 +17,13 @@ def test_run_report_counts_switches_and_tasks():
     r.add_flag(1, 1, [1, 2], [0.001, 0.002])
     r.add_task(1, True, 0.004, 2, '')
     r.add_task(1, False, float('nan'), -1, 'timeout')
+    r.add_probe(1, 1, True, 0.0005)
+    r.add_probe(1, 2, False, 0.0)
     (s,) = r.summaries()
     assert s['switches'] == 1 and s['selected'] == 1
     assert (s['tasks'], s['ok'], s['failed']) == (2, 1, 1)
     assert s['errors'] == {'timeout': 1} and s['servers_used'] == [2]
+    assert (s['probes'], s['probes_failed'], s['probe_rtt']['n']) == (2, 1, 1)
     table = r.table()
-    assert '| R1 | S1 | S1 1.00, S2 2.00 | 1 | 2 | 1 | 1 | 4.00 |' in table
+    assert ('| R1 | S1 | S1 1.00, S2 2.00 | 1 | 2 | 1 | 1 | 4.00 | 4.00 | 4.00 | 4.00 '
+            '| 2 (1) | 0.50 | 0.50 |') in table
