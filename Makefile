@@ -16,7 +16,8 @@ DEMO_DURATION ?= 30
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
-.PHONY: all deps build demo test unit-test rostest lint clean
+.PHONY: all deps build demo demo-loopback evaluate bench-emulator test unit-test testbed-test \
+  rostest lint clean
 all: build
 
 $(BUILD)/.apt-stamp:
@@ -48,11 +49,35 @@ build: deps
 	  || { tail -40 $(BUILD)/cmake.log; exit 1; }
 	@echo "built devel space $(DEVEL) (log: $(BUILD)/cmake.log)"
 
+# With root and TUN: a short version of the evaluation (3 modes on config/demo_short.yaml,
+# about 2 minutes). Otherwise: the loopback demo (all nodes on this host, DEMO_DURATION s).
 demo: build
-	@echo "demo: manager + 3 servers + 2 robots on this host for $(DEMO_DURATION) s"
+	@$(ROSENV) cd $(TOP) && if $(PY) -c 'import sys; from server_select.testbed import available; \
+	    ok, why = available(); print("" if ok else why); sys.exit(0 if ok else 1)'; then \
+	  echo "demo: testbed experiment on config/demo_short.yaml (select, fixed, oracle; ~2 min)"; \
+	  $(PY) scripts/evaluate --scenario config/demo_short.yaml --out $(BUILD)/demo_eval; \
+	else \
+	  echo "demo: the testbed is not available here (see above): running the loopback demo"; \
+	  echo "demo: manager + 3 servers + 2 robots on this host for $(DEMO_DURATION) s"; \
+	  export ROS_MASTER_URI=http://localhost:$${DEMO_PORT:-11411} && \
+	  roslaunch --port $${DEMO_PORT:-11411} server_select demo.launch \
+	    duration:=$(DEMO_DURATION) output:=log summary_file:=$(BUILD)/demo_summary.json; \
+	fi
+
+# The loopback demo even where the testbed is available.
+demo-loopback: build
 	@$(ROSENV) export ROS_MASTER_URI=http://localhost:$${DEMO_PORT:-11411} && \
 	  roslaunch --port $${DEMO_PORT:-11411} server_select demo.launch \
 	    duration:=$(DEMO_DURATION) output:=log summary_file:=$(BUILD)/demo_summary.json
+
+# The paper's experiment on the testbed (root): 3 modes x 160 s, bags + report + plots.
+SCENARIO ?= config/paper_moving.yaml
+evaluate: build
+	@$(ROSENV) cd $(TOP) && $(PY) scripts/evaluate --scenario $(SCENARIO) --out results/eval
+
+# Link emulator accuracy: configured vs measured round trip (root).
+bench-emulator: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.emulator_bench --out results/bench
 
 unit-test: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q test/unit
@@ -64,11 +89,15 @@ rostest: build
 lint: build
 	@$(ROSENV) catkin_lint -W2 --strict --ignore package_path_name $(TOP)
 
-# Lint first, then unit tests (no master), then the launch-level rostests; the last line
-# printed is the rostest tally "rostest: N passed, N failed".
+# Lint first, then unit tests (no master), the testbed tests (root and TUN; reported as
+# skipped elsewhere), then the launch-level rostests; the last line printed is the rostest
+# tally "rostest: N passed, N failed".
 test: build
 	@$(ROSENV) cd $(TOP) && catkin_lint -W2 --strict --ignore package_path_name $(TOP) \
-	  && $(PY) -m pytest -q test/unit && bash test/run_rostests.sh
+	  && $(PY) -m pytest -q -rs test/unit test/testbed && bash test/run_rostests.sh
+
+testbed-test: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q -rs test/testbed
 
 clean:
 	rm -rf $(BUILD) $(VENV)

@@ -40,15 +40,20 @@ def load(bag_path):
     return Run(meta, flags, reports, samples)
 
 
-def switches(flags):
-    """Number of changes of selected server, per robot, after its first selection."""
+def switches(reports):
+    """Changes of the server a robot sent its tasks to (in task order), per robot.
+
+    Counted from the robots' task reports, so that a fixed robot shows none whatever the
+    manager publishes; tasks sent with no server selected do not count.
+    """
     counts = collections.Counter()
-    last = {}
-    for f in sorted(flags, key=lambda f: f.t):
-        if f.robot in last and last[f.robot] != f.server:
-            counts[f.robot] += 1
-        if f.robot in last or f.server >= 0:
-            last[f.robot] = f.server
+    by_robot = collections.defaultdict(list)
+    for r in reports:
+        if r.server >= 0:
+            by_robot[r.robot].append((r.task, r.server))
+    for robot, tasks in by_robot.items():
+        servers = [server for _, server in sorted(tasks)]
+        counts[robot] = sum(1 for a, b in zip(servers, servers[1:]) if a != b)
     return counts
 
 
@@ -98,7 +103,7 @@ def mode_summary(run_reports, flags, changes=None):
         'tasks': len(run_reports),
         'failed': sum(1 for r in run_reports if not r.ok),
         'rtt_ms': dict((k, v * 1e3) for k, v in rtt.items() if k != 'n'),
-        'switches': sum(switches(flags).values()),
+        'switches': sum(switches(run_reports).values()),
     }
     if changes is not None:
         reactions = reaction_times(flags, changes)
@@ -160,7 +165,8 @@ def plot_task_rtt(runs, path):
                     label=mode, linewidth=1)
         ax.set_title('robot %d' % robot)
         ax.set_xlabel('task index')
-        ax.set_ylabel('round trip (ms)')
+        ax.set_ylabel('round trip (ms, log)')
+        ax.set_yscale('log')
         ax.grid(True, alpha=0.3)
         ax.legend()
     fig.tight_layout()

@@ -1,0 +1,120 @@
+"""Testbed tests: real roscore and nodes in network namespaces over emulated links.
+
+They need root and /dev/net/tun (as CI has); elsewhere they are reported as skipped with
+the reason, never as passed.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from server_select import bag_analysis
+from server_select.evaluation import RunOptions, run_mode
+from server_select.scenario import Scenario
+from server_select import testbed
+from server_select.testbed import available, leftovers
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SCENARIO = os.path.join(HERE, 'step_down.yaml')
+STEP_AT = 18.0
+WINDOW, PROBE_PERIOD, PROBE_TIMEOUT = 5.0, 1.0, 0.5
+
+ok, why = available()
+pytestmark = pytest.mark.skipif(not ok, reason=why)
+
+
+@pytest.fixture(scope='module')
+def runs(tmp_path_factory):
+    out = str(tmp_path_factory.mktemp('testbed'))
+    options = RunOptions(fixed_server=1, window=WINDOW, prefix='sstest')
+    result = dict((mode, bag_analysis.load(run_mode(SCENARIO, mode, out, options)))
+                  for mode in ('select', 'fixed'))
+    assert leftovers('sstest') == []
+    return result
+
+
+def flags_of(run, robot):
+    return sorted((f for f in run.flags if f.robot == robot), key=lambda f: f.t)
+
+
+def test_step_change_moves_selection_within_window_plus_one_probe(runs):
+    flags = flags_of(runs['select'], 1)
+    before = [f for f in flags if 10.0 < f.t < STEP_AT]
+    assert before and all(f.server == 1 for f in before), before
+    moved = next(f for f in flags if f.t >= STEP_AT and f.server == 2)
+    assert moved.t - STEP_AT <= WINDOW + PROBE_PERIOD, moved
+    assert all(f.server == 2 for f in flags if f.t > moved.t)
+    # the robot's tasks went with it: answered by server 2 once it was selected
+    later = [r for r in runs['select'].reports if r.robot == 1 and r.t > moved.t + 3.0]
+    assert later and all(r.ok and r.answered_by == 2 for r in later)
+
+
+def test_down_link_drops_the_server(runs):
+    flags = flags_of(runs['select'], 2)
+    dropped = next(f for f in flags if f.t >= STEP_AT and 1 not in f.ranking)
+    assert dropped.t - STEP_AT <= WINDOW + PROBE_TIMEOUT + PROBE_PERIOD, dropped
+    assert dropped.server == 2
+    failed_probes = [s for s in runs['select'].samples
+                     if s.robot == 2 and s.server == 1 and s.t > STEP_AT + 1 and not s.ok]
+    assert failed_probes, 'probes over the down link must be reported failed'
+
+
+def test_fixed_mode_never_switches(runs):
+    reports = runs['fixed'].reports
+    assert len(reports) > 20
+    assert set(r.server for r in reports) == {1}
+    assert set(r.answered_by for r in reports if r.ok) == {1}
+    # robot2's link to its fixed server is down from 18 s: its tasks fail, none is lost
+    late = [r for r in reports if r.robot == 2 and r.t > STEP_AT + 3]
+    assert late and not any(r.ok for r in late)
+    ids = sorted(r.task for r in reports if r.robot == 2)
+    assert ids == list(range(1, len(ids) + 1))
+
+
+def test_rtt_follows_the_emulated_delay(runs):
+    """Task round trips before the step reflect the 2 ms one-way links (4 ms + ROS)."""
+    early = [r.rtt for r in runs['select'].reports if r.ok and r.t < STEP_AT - 1]
+    median = sorted(early)[len(early) // 2]
+    assert 0.004 <= median < 0.010, median
+
+
+CRASHER = r'''
+import os, sys, time
+sys.path.insert(0, %(src)r)
+from server_select.scenario import Scenario
+from server_select.testbed import Testbed
+tb = Testbed(Scenario.load(%(scenario)r), %(scenario)r, %(run)r, prefix='sscrash')
+tb.up()
+tb.popen('robot1', ['sleep', '600'])
+print('up', flush=True)
+if sys.argv[1] == 'crash':
+    os._exit(1)            # no teardown at all
+try:
+    time.sleep(600)
+finally:
+    tb.down()
+'''
+
+
+@pytest.mark.parametrize('how', ['ctrl-c', 'sigterm', 'crash'])
+def test_teardown_leaves_nothing(tmp_path, how):
+    script = CRASHER % {'src': os.path.join(HERE, '..', '..', 'src'), 'scenario': SCENARIO,
+                        'run': str(tmp_path)}
+    proc = subprocess.Popen([sys.executable, '-c', script, 'crash' if how == 'crash' else 'run'],
+                            stdout=subprocess.PIPE, universal_newlines=True)
+    assert proc.stdout.readline().strip() == 'up'
+    assert leftovers('sscrash'), 'the testbed should be up'
+    if how != 'crash':
+        proc.send_signal(signal.SIGINT if how == 'ctrl-c' else signal.SIGTERM)
+    proc.wait(30)
+    if how == 'crash':
+        assert leftovers('sscrash'), 'a crash leaves the testbed behind...'
+        testbed.Testbed(Scenario.load(SCENARIO), SCENARIO, str(tmp_path), prefix='sscrash').down()
+    assert leftovers('sscrash') == []
+    assert subprocess.run(['pgrep', '-f', 'sleep 600'], stdout=subprocess.PIPE).stdout == b''
+    assert subprocess.run(['pgrep', '-f', 'linkemu.*sscrash'],
+                          stdout=subprocess.PIPE).stdout == b''

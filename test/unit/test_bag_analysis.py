@@ -1,0 +1,61 @@
+import pytest
+
+from server_select.bag_analysis import (Flag, Report, compare, mode_summary, oracle_changes,
+                                        reaction_times, switches, table)
+from server_select.scenario import Scenario
+
+
+def flag(t, robot, server):
+    return Flag(t, robot, server, [server], [0.001])
+
+
+def test_switches_count_changes_of_the_target_server_in_task_order():
+    reports = [Report(0, 1, task, True, 0.001, server, server, '')
+               for task, server in [(3, 3), (1, 2), (2, 2), (4, 2), (5, -1), (6, 2)]]
+    reports.append(Report(0, 2, 1, True, 0.001, 1, 1, ''))
+    assert switches(reports) == {1: 2, 2: 0}
+
+
+def scenario():
+    return Scenario({'hosts': {'m': {'role': 'manager'}, 's1': {'role': 'server', 'id': 1},
+                               's2': {'role': 'server', 'id': 2},
+                               'r1': {'role': 'robot', 'id': 1}},
+                     'links': {'r1 s1': [{'at': 0, 'delay': 2}, {'at': 10, 'ramp': 12, 'over': 10}],
+                               'r1 s2': [{'at': 0, 'delay': 6}, {'at': 30, 'down': True}]}})
+
+
+def test_oracle_changes_find_the_ramp_crossing_and_the_down_link():
+    changes = oracle_changes(scenario(), [1], 0.0, 40.0, step=0.05)
+    assert [(round(t, 2), r, s) for t, r, s in changes] == [(14.05, 1, 2), (30.0, 1, 1)]
+
+
+def test_reaction_times():
+    changes = [(14.0, 1, 2), (30.0, 1, 1)]
+    flags = [flag(5, 1, 1), flag(15, 1, 1), flag(16.5, 1, 2), flag(29, 1, 2)]
+    assert reaction_times(flags, changes) == [(14.0, 1, 2, 2.5), (30.0, 1, 1, None)]
+    # already on the new server before the change: no reaction needed
+    assert reaction_times([flag(13, 1, 2)], [(14.0, 1, 2)]) == [(14.0, 1, 2, 0.0)]
+
+
+def report(task, ok, rtt, server=1):
+    return Report(0, 1, task, ok, rtt, server, server if ok else -1, '' if ok else 'timeout')
+
+
+def test_mode_summary_compare_and_table():
+    summaries = {
+        'select': mode_summary([report(1, True, 0.010), report(2, True, 0.020, server=2)],
+                               [flag(1, 1, 1), flag(2, 1, 2)], [(1.5, 1, 2)]),
+        'fixed': mode_summary([report(1, True, 0.030), report(2, False, float('nan'))], []),
+        'oracle': mode_summary([report(1, True, 0.010), report(2, True, 0.010)], []),
+    }
+    compare(summaries)
+    s = summaries['select']
+    assert (s['tasks'], s['failed'], s['switches']) == (2, 0, 1)
+    assert s['rtt_ms']['mean'] == pytest.approx(15.0)
+    assert s['vs_fixed_pct'] == pytest.approx(50.0)
+    assert s['gap_to_oracle_pct'] == pytest.approx(50.0)
+    assert s['reaction_mean_s'] == pytest.approx(0.5) and s['reaction_missed'] == 0
+    assert summaries['fixed']['failed'] == 1
+    text = table(summaries)
+    assert '| select | 2 | 0 | 15.00 | 15.00 |' in text
+    assert '+50.0 %' in text and '| fixed | 2 | 1 | 30.00 |' in text

@@ -1,0 +1,103 @@
+import pytest
+
+from server_select.scenario import LinkState, Scenario, ScenarioError
+
+HOSTS = {'m': {'role': 'manager'}, 's1': {'role': 'server', 'id': 1},
+         's2': {'role': 'server', 'id': 2}, 'r1': {'role': 'robot', 'id': 1}}
+
+
+def scenario(links=None, **extra):
+    data = dict(name='t', duration=100, hosts=HOSTS, default={'delay': 1.0}, links=links or {})
+    data.update(extra)
+    return Scenario(data)
+
+
+def test_default_applies_to_unlisted_pairs_both_ways():
+    sc = scenario()
+    assert sc.link('r1', 's1', 0) == LinkState(1.0, 0.0, 0.0, False)
+    assert sc.link('s1', 'r1', 50) == sc.link('r1', 's1', 50)
+
+
+def test_steps_ramps_down_and_carry_over():
+    sc = scenario({'r1 s1': [
+        {'at': 0, 'delay': 2, 'jitter': 0.5},
+        {'at': 10, 'ramp': 22, 'over': 20},
+        {'at': 40, 'down': True},
+        {'at': 50, 'down': False, 'delay': 5, 'loss': 0.1}]})
+    assert sc.link('r1', 's1', 5) == LinkState(2.0, 0.5, 0.0, False)
+    assert sc.link('s1', 'r1', 10).delay == pytest.approx(2.0)
+    assert sc.link('r1', 's1', 20).delay == pytest.approx(12.0)
+    assert sc.link('r1', 's1', 30).delay == pytest.approx(22.0)
+    assert sc.link('r1', 's1', 35) == LinkState(22.0, 0.5, 0.0, False)
+    assert sc.link('r1', 's1', 45).down
+    assert sc.link('r1', 's1', 45).delay == pytest.approx(22.0)
+    assert sc.link('r1', 's1', 60) == LinkState(5.0, 0.5, 0.1, False)
+    assert sc.change_times() == [10, 30, 40, 50]
+
+
+def test_link_before_first_event_is_the_default():
+    sc = scenario({'r1-s1': [{'at': 10, 'delay': 7}]})
+    assert sc.link('r1', 's1', 5).delay == 1.0 and sc.link('r1', 's1', 10).delay == 7.0
+
+
+def test_nearest_server_follows_delays_ties_and_down_links():
+    sc = scenario({'r1 s1': [{'at': 0, 'delay': 3}, {'at': 10, 'delay': 8},
+                             {'at': 20, 'down': True}],
+                   'r1 s2': [{'at': 0, 'delay': 5}, {'at': 30, 'down': True}]})
+    assert [sc.nearest_server(1, t) for t in (0, 10, 20, 30)] == [1, 2, 2, -1]
+    tie = scenario({'r1 s1': [{'at': 0, 'delay': 4}], 'r1 s2': [{'at': 0, 'delay': 4}]})
+    assert tie.nearest_server(1, 0) == 1
+
+
+def test_roles_and_lookup():
+    sc = scenario()
+    assert sc.manager.name == 'm'
+    assert [h.id for h in sc.of_role('server')] == [1, 2]
+    assert sc.host_for('robot', 1).name == 'r1'
+    with pytest.raises(KeyError):
+        sc.host_for('robot', 9)
+
+
+@pytest.mark.parametrize('links, message', [
+    ({'r1 s9': []}, 'unknown host s9'),
+    ({'r1': []}, 'not a pair'),
+    ({'r1 r1': []}, 'not a pair'),
+    ({'r1 s1': [{'delay': 1}]}, 'with "at"'),
+    ({'r1 s1': [{'at': 5, 'delay': 1}, {'at': 2, 'delay': 3}]}, 'time order'),
+    ({'r1 s1': [{'at': 0, 'ramp': 3}]}, 'needs "over"'),
+    ({'r1 s1': [{'at': 0, 'delay': 1, 'ramp': 3, 'over': 1}]}, 'not both'),
+    ({'r1 s1': [{'at': 0, 'delay': -1}]}, 'out of range'),
+    ({'r1 s1': [{'at': 0, 'loss': 2}]}, 'out of range'),
+    ({'r1 s1': [{'at': 0, 'down': 'yes'}]}, 'true or false'),
+    ({'r1 s1': [{'at': 0, 'latency': 3}]}, 'unknown keys'),
+    ({'r1 s1': [], 's1 r1': []}, 'given twice'),
+])
+def test_bad_links_are_reported_with_their_place(links, message):
+    with pytest.raises(ScenarioError, match=message):
+        scenario(links)
+
+
+@pytest.mark.parametrize('hosts, message', [
+    ({}, 'non-empty'),
+    ({'s1': {'role': 'server', 'id': 1}}, 'exactly one host must have role manager'),
+    ({'m': {'role': 'manager'}, 'x': {'role': 'cloud'}}, "role 'cloud'"),
+    ({'m': {'role': 'manager'}, 'x': {'role': 'robot'}}, 'integer id'),
+    ({'m': {'role': 'manager'}, 'a': {'role': 'robot', 'id': 1},
+      'b': {'role': 'robot', 'id': 1}}, 'two robots with id 1'),
+    ({'m': {'role': 'manager'}, 'a-very-long-name': {'role': 'robot', 'id': 1}}, 'alphanumeric'),
+])
+def test_bad_hosts(hosts, message):
+    with pytest.raises(ScenarioError, match=message):
+        Scenario({'hosts': hosts})
+
+
+def test_shipped_scenarios_load(tmp_path):
+    import os
+    config = os.path.join(os.path.dirname(__file__), '..', '..', 'config')
+    for name in ('paper_moving.yaml', 'demo_short.yaml'):
+        sc = Scenario.load(os.path.join(config, name))
+        assert len(sc.of_role('server')) == 3 and len(sc.of_role('robot')) == 2
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('hosts: [1, 2')
+    with pytest.raises(ScenarioError, match='bad.yaml'):
+        Scenario.load(str(bad))
