@@ -10,6 +10,7 @@ PY := $(VENV)/bin/python
 APT_PACKAGES := python3-venv python3-rospy python3-rostest python3-roslaunch python3-rosbag \
   python3-rosservice python3-rostopic python3-rosnode python3-rosmsg python3-roslib \
   catkin catkin-lint ros-message-generation libstd-msgs-dev libsensor-msgs-dev ros-base-dev \
+  python3-std-msgs python3-sensor-msgs python3-geometry-msgs \
   rosbash procps cmake g++ make iproute2
 DEMO_DURATION ?= 30
 # Runs a command with the workspace sourced and the venv's python first on PATH (the
@@ -20,7 +21,7 @@ ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=
   rostest lint clean
 all: build
 
-$(BUILD)/.apt-stamp:
+$(BUILD)/.apt-stamp: Makefile
 	@mkdir -p $(BUILD)
 	@missing=$$(for p in $(APT_PACKAGES); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null \
 	    | grep -q 'install ok installed' || echo $$p; done); \

@@ -17,3 +17,9 @@ def probe_service(server_id):
 def sample_topic(robot_id, server_id):
     """Name of the topic carrying the latency samples of one (robot, server) pair."""
     return 'latency_R%dS%d' % (robot_id, server_id)
+
+IMAGE_TASK_TOPIC = 'task_image'
+IMAGE_RESULT_TOPIC = 'processed_image'
+DETECTIONS_TOPIC = 'detections'
+FOUND_TARGETS_TOPIC = 'found_targets'
+KNOWN_TARGETS_SERVICE = '~known_targets'

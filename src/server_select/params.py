@@ -8,7 +8,7 @@ parameter otherwise.
 
 import re
 
-MODES = ('select', 'fixed')
+MODES = ('select', 'fixed', 'local')
 
 
 class ParamError(ValueError):
@@ -81,7 +81,8 @@ def parse_non_negative(name, value):
 
 
 def parse_mode(name, value):
-    """Robot task mode: ``select`` (follow the manager) or ``fixed`` (paper baseline)."""
+    """Robot task mode: ``select`` (follow the manager), ``fixed`` (paper baseline) or
+    ``local`` (the robot processes its tasks itself)."""
     if value not in MODES:
         raise ParamError('%s: unknown mode %r, expected one of %s' % (name, value, ', '.join(MODES)))
     return value

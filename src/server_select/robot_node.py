@@ -1,24 +1,25 @@
-"""Robot: probes every server, follows the manager's selection and sends sort tasks."""
+"""Robot: probes every server, follows the manager's selection and sends tasks."""
 
 import concurrent.futures
 import itertools
 import threading
 import time
 
-import numpy as np
 import rospy
-from rospy.numpy_msg import numpy_msg
+from std_msgs.msg import Header
 
 from server_select import names
-from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask, TaskReport
+from server_select.detection import Detector, DetectorError
+from server_select.image_source import SourceError, open_source
+from server_select.msg import FoundTarget, LatencySample, SelectionFlag, TaskReport
 from server_select.node_util import get_param, run
-from server_select.params import (parse_fixed_server, parse_id, parse_id_list, parse_mode,
-                                  parse_non_negative, parse_positive)
+from server_select.params import (ParamError, parse_fixed_server, parse_id, parse_id_list,
+                                  parse_mode, parse_non_negative, parse_positive)
 from server_select.probe_client import TimedServiceProxy
-from server_select.sort_task import check_sorted, fingerprint, make_values
-from server_select.srv import LatencyProbe, LatencyProbeRequest
-from server_select.stats import format_ms, summarize
-from server_select.tracker import NONE, TaskTracker
+from server_select.search import Found, SearchError, TargetRegistry
+from server_select.srv import KnownTargets, KnownTargetsResponse, LatencyProbe, LatencyProbeRequest
+from server_select.task_streams import ImageStream, SortStream
+from server_select.tracker import NONE
 
 
 class RobotNode(object):
@@ -29,30 +30,47 @@ class RobotNode(object):
     ``~probe_timeout``; a server whose previous probe is still running gets a failed
     sample instead of a second call. Every sample, failed ones too, is published.
 
-    Tasks: ``~task_size`` random int32 values at ``~task_rate``, addressed to the selected
-    server (``~mode`` ``select``) or to ``~fixed_server`` (``fixed``, the paper's baseline).
-    Each task ends in exactly one ``task_report``: a checked result, an error result, or a
-    timeout after ``~task_timeout``.
+    Tasks go to the selected server (``~mode`` ``select``), to ``~fixed_server``
+    (``fixed``, the paper's baseline), or are processed by the robot itself (``local``,
+    the no-offloading reference). Two streams, each optional: sort tasks (``~task_size``
+    random int32 at ``~task_rate``) and camera frames (``~image_source`` at
+    ``~frame_rate``). Each task ends in exactly one ``task_report``: a checked result, an
+    error result, or a timeout after ``~task_timeout``. Targets detected in the robot's
+    frames are recorded once in a registry shared through ``found_targets``: a target
+    another robot already found is not reported again.
 
     :ROS Parameters:
         - ``~robot_id`` (int, required)
         - ``~servers`` (list of int, required): servers to probe.
-        - ``~mode`` (str, ``select``): ``select`` or ``fixed``.
+        - ``~mode`` (str, ``select``): ``select``, ``fixed`` or ``local``.
         - ``~fixed_server`` (int, first of ``~servers``): target in fixed mode.
         - ``~probe_rate`` (Hz, 1.0), ``~probe_timeout`` (s, 0.5)
+        - ``~sort_tasks`` (bool, true): send sort tasks.
         - ``~task_rate`` (Hz, 2.0), ``~task_size`` (int, 1000), ``~task_timeout`` (s, 2.0)
-        - ``~tasks`` (int, 0): stop after this many tasks (0: never).
+        - ``~tasks`` (int, 0): stop each stream after this many tasks (0: never).
+        - ``~image_source`` (str, ''): camera frames from a folder, a video file, or
+          ``search:<area.yaml>`` (a synthetic search area); empty: no image tasks.
+        - ``~frame_rate`` (Hz, 10.0), ``~image_encoding`` (``bgr8``; or ``rgb8``, ``mono8``)
+        - ``~robot_index``, ``~robot_count`` (int, 0 and 1): this robot's strip of a search area.
+        - ``~speed`` (area pixels/s, 200.0): how fast the robot sweeps its strip.
+        - ``~merge_radius`` (area pixels, 150.0): detections this close are one target.
+        - ``~detector``, ``~cascade`` (as the server's): used in mode ``local`` only.
         - ``~start_delay`` (s, 0.0): wait this long before the first task, e.g. for a
           recorder (rosbag, a test) to connect: rospy drops messages sent before that.
         - ``~summary_period`` (s, 10.0): period of the log summary.
         - ``~seed`` (int, robot_id): task data random seed.
     :ROS Publishers:
         - ``latency_R<robot_id>S<s>`` (server_select/LatencySample), one topic per server.
-        - ``data`` (server_select/SortTask)
+        - ``data`` (server_select/SortTask), ``task_image`` (server_select/ImageTask)
         - ``task_report`` (server_select/TaskReport)
+        - ``found_targets`` (server_select/FoundTarget)
     :ROS Subscribers:
         - ``server_select_flag`` (server_select/SelectionFlag)
-        - ``processed_data`` (server_select/SortResult)
+        - ``processed_data`` (server_select/SortResult), ``processed_image``
+          (server_select/ImageResult), ``detections`` (server_select/Detections)
+        - ``found_targets`` (server_select/FoundTarget)
+    :ROS Services:
+        - ``~known_targets`` (server_select/KnownTargets): the targets found so far.
     :ROS Services called:
         - ``latency_S<s>`` (server_select/LatencyProbe)
     """
@@ -65,38 +83,46 @@ class RobotNode(object):
             '~fixed_server', get_param('~fixed_server', self.servers[0]), self.servers, self.mode)
         self.probe_rate = parse_positive('~probe_rate', get_param('~probe_rate', 1.0))
         self.probe_timeout = parse_positive('~probe_timeout', get_param('~probe_timeout', 0.5))
-        self.task_rate = parse_positive('~task_rate', get_param('~task_rate', 2.0))
-        self.task_size = parse_positive('~task_size', get_param('~task_size', 1000), integer=True)
         task_timeout = parse_positive('~task_timeout', get_param('~task_timeout', 2.0))
         tasks = get_param('~tasks', 0)
-        self.task_limit = 0 if tasks in (0, '0') else parse_positive('~tasks', tasks, integer=True)
+        task_limit = 0 if tasks in (0, '0') else parse_positive('~tasks', tasks, integer=True)
         summary_period = parse_positive('~summary_period', get_param('~summary_period', 10.0))
         seed = parse_id('~seed', get_param('~seed', self.robot_id))
         start_delay = parse_non_negative('~start_delay', get_param('~start_delay', 0.0))
         self._start_after = time.monotonic() + start_delay
 
-        self._rng = np.random.default_rng(seed)
         self._lock = threading.Lock()
         self._selected = NONE
         self._selection_seen = False
         self._switches = 0
         self._task_ids = itertools.count(1)
-        self._sent = 0
-        self._rtts = []
-        self._failed = 0
-        self._started = False
-        self.tracker = TaskTracker(task_timeout)
 
         self.sample_pubs = dict(
             (s, rospy.Publisher(names.sample_topic(self.robot_id, s), LatencySample, queue_size=10))
             for s in self.servers)
-        self.task_pub = rospy.Publisher(names.SORT_TASK_TOPIC, numpy_msg(SortTask), queue_size=100)
         self.report_pub = rospy.Publisher(names.TASK_REPORT_TOPIC, TaskReport, queue_size=100)
         self.flag_sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
                                          queue_size=100, tcp_nodelay=True)
-        self.result_sub = rospy.Subscriber(names.SORT_RESULT_TOPIC, numpy_msg(SortResult),
-                                           self.on_result, queue_size=100, tcp_nodelay=True,
-                                           buff_size=1 << 24)
+
+        self.streams = []
+        if get_param('~sort_tasks', True):
+            self.streams.append(SortStream(
+                self, parse_positive('~task_rate', get_param('~task_rate', 2.0)), task_limit,
+                task_timeout, parse_positive('~task_size', get_param('~task_size', 1000),
+                                             integer=True), seed))
+        self.registry = TargetRegistry(
+            parse_positive('~merge_radius', get_param('~merge_radius', 150.0)))
+        self.found_pub = rospy.Publisher(names.FOUND_TARGETS_TOPIC, FoundTarget, queue_size=100,
+                                         latch=False)
+        self.found_sub = rospy.Subscriber(names.FOUND_TARGETS_TOPIC, FoundTarget,
+                                          self.on_found, queue_size=100, tcp_nodelay=True)
+        self.known_srv = rospy.Service(names.KNOWN_TARGETS_SERVICE, KnownTargets,
+                                       self.on_known_targets)
+        image_source = get_param('~image_source', '')
+        if image_source:
+            self.streams.append(self._image_stream(image_source, task_limit, task_timeout))
+        if not self.streams:
+            raise ParamError('~sort_tasks is false and ~image_source is empty: no tasks to send')
 
         self.proxies = dict(
             (s, TimedServiceProxy(names.probe_service(s), LatencyProbe)) for s in self.servers)
@@ -107,14 +133,37 @@ class RobotNode(object):
         self._probe_ok = set()
 
         self.probe_timer = rospy.Timer(rospy.Duration(1.0 / self.probe_rate), self.on_probe_timer)
-        self.task_timer = rospy.Timer(rospy.Duration(1.0 / self.task_rate), self.on_task_timer)
-        self.expire_timer = rospy.Timer(rospy.Duration(0.05), self.on_expire_timer)
         self.summary_timer = rospy.Timer(rospy.Duration(summary_period), self.on_summary_timer)
         rospy.on_shutdown(self.on_shutdown)
-        rospy.loginfo('robot %d: mode %s%s, probing servers %s at %.3g Hz',
+        rospy.loginfo('robot %d: mode %s%s, probing servers %s at %.3g Hz, tasks: %s',
                       self.robot_id, self.mode,
                       ' (server %d)' % self.fixed_server if self.mode == 'fixed' else '',
-                      self.servers, self.probe_rate)
+                      self.servers, self.probe_rate, ', '.join(s.kind for s in self.streams))
+
+    def _image_stream(self, spec, limit, timeout):
+        encoding = get_param('~image_encoding', 'bgr8')
+        if encoding not in ('bgr8', 'rgb8', 'mono8'):
+            raise ParamError('~image_encoding: %r is not one of bgr8, rgb8, mono8' % encoding)
+        index = parse_non_negative('~robot_index', get_param('~robot_index', 0))
+        count = parse_positive('~robot_count', get_param('~robot_count', 1), integer=True)
+        try:
+            source = open_source(spec, int(index), count,
+                                 parse_positive('~speed', get_param('~speed', 200.0)))
+        except (SourceError, SearchError, OSError) as error:
+            raise ParamError('~image_source: %s' % error)
+        detector_args = {'kind': get_param('~detector', 'haar'),
+                         'cascade': get_param('~cascade', 'haarcascade_frontalface_default.xml')}
+        if self.mode == 'local':
+            try:
+                Detector(**detector_args)
+            except DetectorError as error:
+                raise ParamError('~detector/~cascade: %s' % error)
+        return ImageStream(self, parse_positive('~frame_rate', get_param('~frame_rate', 10.0)),
+                           limit, timeout, source, encoding, self.registry, self.found_pub,
+                           detector_args)
+
+    def next_task_id(self):
+        return next(self._task_ids)
 
     # -- probing ---------------------------------------------------------------------------
 
@@ -178,106 +227,53 @@ class RobotNode(object):
         with self._lock:
             return self._selected
 
-    def _ready(self):
-        """Tasks start once the target is known to answer and the task topics are wired."""
+    def ready(self, stream):
+        """A stream starts once its target answers and its topics are wired."""
         if time.monotonic() < self._start_after:
             return False
+        if self.mode == 'local':
+            return True
         if self.mode == 'fixed':
             target_up = self.fixed_server in self._probe_ok
         else:
             with self._lock:
                 target_up = self._selection_seen and self._selected != NONE
-        return (target_up and self.task_pub.get_num_connections() > 0
-                and self.result_sub.get_num_connections() > 0)
+        return target_up and stream.wired()
 
-    # -- tasks -----------------------------------------------------------------------------
+    # -- cooperative search ----------------------------------------------------------------
 
-    def on_task_timer(self, _event):
-        if self.task_limit and self._sent >= self.task_limit:
-            return
-        if not self._started:
-            if not self._ready():
-                rospy.loginfo_throttle(5.0, 'robot %d: waiting for a server before sending tasks'
-                                       % self.robot_id)
-                return
-            self._started = True
-            rospy.loginfo('robot %d: sending tasks of %d values at %.3g Hz',
-                          self.robot_id, self.task_size, self.task_rate)
-        self.send_task()
+    def on_found(self, msg):
+        if msg.robot_id != self.robot_id:
+            self.registry.add(Found(msg.robot_id, msg.task_id, msg.label, msg.x, msg.y,
+                                    msg.header.stamp.to_sec()))
 
-    def send_task(self):
-        task_id = next(self._task_ids)
-        self._sent += 1
-        target = self.target()
-        stamp = rospy.Time.now()
-        if target == NONE:
-            self._report(self.tracker.fail(task_id, time.perf_counter(), NONE,
-                                           'no server selected'), stamp)
-            return
-        values = make_values(self._rng, self.task_size)
-        task = SortTask(robot_id=self.robot_id, task_id=task_id, server_id=target, data=values)
-        task.header.stamp = stamp
-        self.tracker.sent(task_id, time.perf_counter(), target, (fingerprint(values), stamp))
-        self.task_pub.publish(task)
+    def on_known_targets(self, _request):
+        return KnownTargetsResponse(targets=[
+            FoundTarget(header=self._header(f.stamp), robot_id=f.robot_id, task_id=f.task_id,
+                        label=f.label, x=f.x, y=f.y) for f in self.registry.all()])
 
-    def on_result(self, result):
-        if result.robot_id != self.robot_id:
-            return
-        now = time.perf_counter()
-        context = self.tracker.context(result.task_id)
-        error = result.error
-        if context is not None and result.ok:
-            error = check_sorted(result.data, context[0]) or ''
-        outcome = self.tracker.resolve(result.task_id, now, result.server_id,
-                                       result.ok and not error, error)
-        if outcome is None:
-            rospy.logwarn('robot %d: result for task %d from server %d is a duplicate or '
-                          'arrived after its timeout', self.robot_id, result.task_id,
-                          result.server_id)
-            return
-        if outcome.answered_by != outcome.server_id:
-            rospy.logwarn('robot %d: task %d sent to server %d was answered by server %d',
-                          self.robot_id, result.task_id, outcome.server_id, outcome.answered_by)
-        self._report(outcome, context[1])
-
-    def on_expire_timer(self, _event):
-        for outcome in self.tracker.expire(time.perf_counter()):
-            self._report(outcome, None)
-
-    def _report(self, outcome, stamp):
-        report = TaskReport(robot_id=self.robot_id, task_id=outcome.task_id, kind='sort',
-                            server_id=outcome.server_id, answered_by=outcome.answered_by,
-                            ok=outcome.ok, error=outcome.error, rtt=outcome.rtt)
-        if stamp is not None:
-            report.header.stamp = stamp
-        with self._lock:
-            if outcome.ok:
-                self._rtts.append(outcome.rtt)
-            else:
-                self._failed += 1
-        if not outcome.ok:
-            rospy.logerr('robot %d: task %d (server %d) failed: %s', self.robot_id,
-                         outcome.task_id, outcome.server_id, outcome.error)
-        self.report_pub.publish(report)
+    @staticmethod
+    def _header(stamp):
+        return Header(stamp=rospy.Time.from_sec(stamp))
 
     # -- reporting -------------------------------------------------------------------------
 
     def summary(self):
         with self._lock:
-            rtts = list(self._rtts)
-            failed, switches, selected = self._failed, self._switches, self._selected
-        return ('robot %d: %d tasks sent, %d ok, %d failed, %d pending; task round trip %s; '
-                'server %s, %d switches' % (
-                    self.robot_id, self._sent, len(rtts), failed, len(self.tracker),
-                    format_ms(summarize(rtts), ('median', 'p99', 'max')),
-                    self.target() if self.target() != NONE else 'none', switches))
+            switches = self._switches
+        target = self.target() if self.mode != 'local' else 'local'
+        return 'robot %d: %s; server %s, %d switches' % (
+            self.robot_id, '; '.join(s.summary() for s in self.streams),
+            target if target != NONE else 'none', switches)
 
     def on_summary_timer(self, _event):
         rospy.loginfo(self.summary())
 
     def on_shutdown(self):
-        for timer in (self.probe_timer, self.task_timer, self.expire_timer, self.summary_timer):
+        for timer in (self.probe_timer, self.summary_timer):
             timer.shutdown()
+        for stream in self.streams:
+            stream.shutdown()
         self._probe_pool.shutdown(wait=False)
         for proxy in self.proxies.values():
             proxy.close()

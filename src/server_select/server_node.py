@@ -1,4 +1,4 @@
-"""Compute server: answers latency probes and the sort tasks addressed to it."""
+"""Compute server: answers latency probes, and the sort and image tasks addressed to it."""
 
 import threading
 import time
@@ -6,11 +6,14 @@ import time
 import numpy as np
 import rospy
 from rospy.numpy_msg import numpy_msg
+from sensor_msgs.msg import Image, RegionOfInterest
 
-from server_select import names
-from server_select.msg import SortResult, SortTask
+from server_select import image_codec, names
+from server_select.detection import Detector, DetectorError, annotate
+from server_select.msg import (Detection, Detections, ImageResult, ImageTask, SortResult,
+                               SortTask)
 from server_select.node_util import get_param, run
-from server_select.params import parse_id, parse_positive
+from server_select.params import ParamError, parse_id, parse_positive
 from server_select.sort_task import TaskError, sort_values
 from server_select.srv import LatencyProbe, LatencyProbeResponse
 
@@ -25,16 +28,28 @@ class ServerNode(object):
     stamped in the task (rather than by the latest flag each server happens to have seen)
     is what keeps one task from being answered twice, or not at all, around a switch.
 
+    Image tasks are searched for targets with an OpenCV Haar cascade (``~cascade``, any
+    file of ``cv2.data.haarcascades`` or a path) or the HOG people detector
+    (``~detector:=hog``); frames in ``bgr8``, ``rgb8`` or ``mono8`` (any row padding) are
+    accepted, anything else gets an error result.
+
     :ROS Parameters:
         - ``~server_id`` (int, required): this server's id.
         - ``~max_task_len`` (int, 1000000): larger sort tasks get an error result.
-        - ``~queue_size`` (int, 100): task subscriber queue.
+        - ``~queue_size`` (int, 100): task subscriber queues.
+        - ``~detector`` (str, ``haar``): ``haar`` or ``hog``.
+        - ``~cascade`` (str, ``haarcascade_frontalface_default.xml``)
+        - ``~scale_factor`` (1.2), ``~min_neighbors`` (5), ``~min_size`` (24 px): cascade settings.
+        - ``~max_image_pixels`` (int, 16777216): larger frames get an error result.
     :ROS Services:
         - ``latency_S<server_id>`` (server_select/LatencyProbe): echo for RTT probing.
     :ROS Subscribers:
-        - ``data`` (server_select/SortTask)
+        - ``data`` (server_select/SortTask), ``task_image`` (server_select/ImageTask)
     :ROS Publishers:
-        - ``processed_data`` (server_select/SortResult): one result per task addressed here.
+        - ``processed_data`` (server_select/SortResult): one result per sort task addressed here.
+        - ``processed_image`` (server_select/ImageResult): one result per frame addressed here,
+          with the annotated frame.
+        - ``detections`` (server_select/Detections): what was found in each frame.
     """
 
     def __init__(self):
@@ -42,6 +57,18 @@ class ServerNode(object):
         self.max_task_len = parse_positive(
             '~max_task_len', get_param('~max_task_len', 1000000), integer=True)
         queue_size = parse_positive('~queue_size', get_param('~queue_size', 100), integer=True)
+        self.max_image_pixels = parse_positive(
+            '~max_image_pixels', get_param('~max_image_pixels', 1 << 24), integer=True)
+        try:
+            self.detector = Detector(
+                kind=get_param('~detector', 'haar'),
+                cascade=get_param('~cascade', 'haarcascade_frontalface_default.xml'),
+                scale_factor=parse_positive('~scale_factor', get_param('~scale_factor', 1.2)),
+                min_neighbors=parse_positive('~min_neighbors', get_param('~min_neighbors', 5),
+                                             integer=True),
+                min_size=parse_positive('~min_size', get_param('~min_size', 24), integer=True))
+        except DetectorError as error:
+            raise ParamError('~detector/~cascade: %s' % error)
         self._lock = threading.Lock()
         self.tasks_done = 0
         self.tasks_failed = 0
@@ -51,6 +78,13 @@ class ServerNode(object):
         self.task_sub = rospy.Subscriber(
             names.SORT_TASK_TOPIC, numpy_msg(SortTask), self.on_sort_task,
             queue_size=queue_size, tcp_nodelay=True, buff_size=1 << 24)
+        self.image_pub = rospy.Publisher(names.IMAGE_RESULT_TOPIC, ImageResult,
+                                         queue_size=queue_size)
+        self.detections_pub = rospy.Publisher(names.DETECTIONS_TOPIC, Detections,
+                                              queue_size=queue_size)
+        self.image_sub = rospy.Subscriber(
+            names.IMAGE_TASK_TOPIC, ImageTask, self.on_image_task, queue_size=queue_size,
+            tcp_nodelay=True, buff_size=1 << 24)
         # Advertised last: a robot that can probe us finds our task topics wired already.
         self.probe_srv = rospy.Service(
             names.probe_service(self.server_id), LatencyProbe, self.on_probe)
@@ -79,8 +113,45 @@ class ServerNode(object):
                          self.server_id, task.task_id, task.robot_id, error)
         result.process_time = time.perf_counter() - start
         self.result_pub.publish(result)
+        self._count(result.ok)
+
+    def on_image_task(self, task):
+        if task.server_id != self.server_id:
+            return
+        result = ImageResult(header=task.header, robot_id=task.robot_id, task_id=task.task_id,
+                             server_id=self.server_id)
+        start = time.perf_counter()
+        img = task.image
+        try:
+            if img.height * img.width > self.max_image_pixels:
+                raise image_codec.ImageError('frame of %dx%d exceeds max_image_pixels %d'
+                                             % (img.width, img.height, self.max_image_pixels))
+            frame = image_codec.to_array(img.encoding, img.height, img.width, img.step, img.data)
+        except image_codec.ImageError as error:
+            result.ok = False
+            result.error = str(error)
+            rospy.logerr('server %d: frame %d of robot %d rejected: %s',
+                         self.server_id, task.task_id, task.robot_id, error)
+        else:
+            boxes = self.detector.detect(frame)
+            encoding, height, width, step, data = image_codec.from_array(annotate(frame, boxes))
+            result.image = Image(header=img.header, height=height, width=width,
+                                 encoding=encoding, step=step, data=data)
+            result.ok = True
+            result.detection_count = len(boxes)
+            found = Detections(header=task.header, robot_id=task.robot_id,
+                               task_id=task.task_id, server_id=self.server_id, detections=[
+                                   Detection(roi=RegionOfInterest(x_offset=b.x, y_offset=b.y,
+                                                                  width=b.width, height=b.height),
+                                             label=b.label, score=b.score) for b in boxes])
+            self.detections_pub.publish(found)
+        result.process_time = time.perf_counter() - start
+        self.image_pub.publish(result)
+        self._count(result.ok)
+
+    def _count(self, ok):
         with self._lock:
-            if result.ok:
+            if ok:
                 self.tasks_done += 1
             else:
                 self.tasks_failed += 1
