@@ -17,7 +17,7 @@ DEMO_DURATION ?= 30
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
-.PHONY: all deps build demo demo-loopback evaluate bench-emulator test unit-test testbed-test \
+.PHONY: all deps build demo demo-loopback search-demo evaluate bench-emulator test unit-test testbed-test \
   rostest lint clean
 all: build
 
@@ -70,6 +70,13 @@ demo-loopback: build
 	@$(ROSENV) export ROS_MASTER_URI=http://localhost:$${DEMO_PORT:-11411} && \
 	  roslaunch --port $${DEMO_PORT:-11411} server_select demo.launch \
 	    duration:=$(DEMO_DURATION) output:=log summary_file:=$(BUILD)/demo_summary.json
+
+# Cooperative search: 2 robots, 2 servers, people hidden in a synthetic area; ends when all
+# are found and prints who found what and when.
+search-demo: build
+	@$(ROSENV) export ROS_MASTER_URI=http://localhost:$${DEMO_PORT:-11412} && \
+	  roslaunch --port $${DEMO_PORT:-11412} server_select search_demo.launch \
+	    summary_file:=$(BUILD)/search_summary.json
 
 # The paper's experiment on the testbed (root): 3 modes x 160 s, bags + report + plots.
 SCENARIO ?= config/paper_moving.yaml
