@@ -17,7 +17,7 @@ DEMO_DURATION ?= 30
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
-.PHONY: all deps build demo demo-loopback search-demo evaluate bench-emulator test unit-test testbed-test \
+.PHONY: all deps build demo demo-loopback search-demo evaluate bench bench-emulator test unit-test testbed-test \
   rostest lint clean
 all: build
 
@@ -83,6 +83,10 @@ SCENARIO ?= config/paper_moving.yaml
 evaluate: build
 	@$(ROSENV) cd $(TOP) && $(PY) scripts/evaluate --scenario $(SCENARIO) --out results/eval
 
+# The second paper's tables and throughput: results/bench/*.json and REPORT.md.
+bench: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.benchmarks --out results/bench
+
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.emulator_bench --out results/bench
@@ -98,11 +102,11 @@ lint: build
 	@$(ROSENV) catkin_lint -W2 --strict --ignore package_path_name $(TOP)
 
 # Lint first, then unit tests (no master), the testbed tests (root and TUN; reported as
-# skipped elsewhere), then the launch-level rostests; the last line printed is the rostest
+# skipped elsewhere), the benchmarks' smoke run, then the launch-level rostests; the last line printed is the rostest
 # tally "rostest: N passed, N failed".
 test: build
 	@$(ROSENV) cd $(TOP) && catkin_lint -W2 --strict --ignore package_path_name $(TOP) \
-	  && $(PY) -m pytest -q -rs test/unit test/testbed && bash test/run_rostests.sh
+	  && $(PY) -m pytest -q -rs test/unit test/testbed test/bench && bash test/run_rostests.sh
 
 testbed-test: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q -rs test/testbed
