@@ -12,23 +12,15 @@ import signal
 import sys
 import time
 import unittest
-import xmlrpc.client
 
 import rosgraph
 import rospy
 import rostest
 
 from server_select.params import parse_id_list
+from server_select.usage_node import node_pid
 
 from fleet_recorder import FleetRecorder
-
-
-def node_pid(node_name):
-    api = rosgraph.Master(rospy.get_name()).lookupNode(node_name)
-    code, msg, pid = xmlrpc.client.ServerProxy(api).getPid(rospy.get_name())
-    if code != 1:
-        raise RuntimeError('getPid of %s: %s' % (node_name, msg))
-    return pid
 
 
 class ServerFailureTest(unittest.TestCase):
@@ -47,7 +39,8 @@ class ServerFailureTest(unittest.TestCase):
         self.assertTrue(rec.wait_for(lambda: len(rec.reports_of(1)) >= 5, 30.0))
 
         victim = rec.latest_flags()[1].server_id
-        os.kill(node_pid('/server%d' % victim), signal.SIGKILL)
+        os.kill(node_pid(rosgraph.Master(rospy.get_name()), '/server%d' % victim),
+                signal.SIGKILL)
         killed_at = time.monotonic()
 
         def excluded_everywhere():

@@ -75,8 +75,8 @@ class Roscore(object):
 
 def node_pid(name):
     import rosgraph
-    uri = rosgraph.Master('/bench').lookupNode(name)
-    return xmlrpc.client.ServerProxy(uri).getPid('/bench')[2]
+    from server_select.usage_node import node_pid as lookup
+    return lookup(rosgraph.Master('/bench'), name)
 
 
 @contextlib.contextmanager

@@ -186,13 +186,13 @@ class ImageStream(TaskStream):
         self.local_detector = None
         self.t0 = time.monotonic()
         self.detections_sub = None
+        self._views = {}   # task id -> where the frame was taken; before the timer starts
         super(ImageStream, self).__init__(robot, rate, limit, timeout, names.IMAGE_TASK_TOPIC,
                                           ImageTask, names.IMAGE_RESULT_TOPIC, ImageResult,
                                           buff_size=1 << 24)
         self.detections_sub = rospy.Subscriber(names.DETECTIONS_TOPIC, Detections,
                                                self.on_detections, queue_size=100,
                                                tcp_nodelay=True)
-        self._views = {}
 
     def capture(self):
         frame, where = self.source.frame(time.monotonic() - self.t0)
