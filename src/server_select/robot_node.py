@@ -151,16 +151,17 @@ class RobotNode(object):
                                  parse_positive('~speed', get_param('~speed', 200.0)))
         except (SourceError, SearchError, OSError) as error:
             raise ParamError('~image_source: %s' % error)
-        detector_args = {'kind': get_param('~detector', 'haar'),
-                         'cascade': get_param('~cascade', 'haarcascade_frontalface_default.xml')}
+        local_detector = None
         if self.mode == 'local':
             try:
-                Detector(**detector_args)
+                local_detector = Detector(
+                    kind=get_param('~detector', 'haar'),
+                    cascade=get_param('~cascade', 'haarcascade_frontalface_default.xml'))
             except DetectorError as error:
                 raise ParamError('~detector/~cascade: %s' % error)
         return ImageStream(self, parse_positive('~frame_rate', get_param('~frame_rate', 10.0)),
                            limit, timeout, source, encoding, self.registry, self.found_pub,
-                           detector_args)
+                           local_detector)
 
     def next_task_id(self):
         return next(self._task_ids)

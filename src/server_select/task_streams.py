@@ -10,7 +10,7 @@ from rospy.numpy_msg import numpy_msg
 from sensor_msgs.msg import Image
 
 from server_select import image_codec, names
-from server_select.detection import Detector, annotate
+from server_select.detection import annotate
 from server_select.msg import (Detections, FoundTarget, ImageResult, ImageTask, SortResult,
                                SortTask, TaskReport)
 from server_select.sort_task import check_sorted, fingerprint, make_values, sort_values
@@ -177,13 +177,12 @@ class ImageStream(TaskStream):
     kind = 'image'
 
     def __init__(self, robot, rate, limit, timeout, source, encoding, registry, found_pub,
-                 detector_args):
+                 local_detector=None):
         self.source = source
         self.encoding = encoding
         self.registry = registry
         self.found_pub = found_pub
-        self.detector_args = detector_args
-        self.local_detector = None
+        self.local_detector = local_detector   # mode local only
         self.t0 = time.monotonic()
         self.detections_sub = None
         self._views = {}   # task id -> where the frame was taken; before the timer starts
@@ -244,9 +243,9 @@ class ImageStream(TaskStream):
                 self.found_pub.publish(msg)
 
     def run_locally(self, task_id, stamp):
+        # The same work a server does for a frame (message conversion, detection,
+        # annotation), so that robot CPU with and without offloading compare fairly.
         start = time.perf_counter()
-        if self.local_detector is None:
-            self.local_detector = Detector(**self.detector_args)
         frame, where = self.capture()
         encoding, height, width, step, data = image_codec.from_array(frame, self.encoding)
         frame = image_codec.to_array(encoding, height, width, step, data)
