@@ -11,7 +11,7 @@ APT_PACKAGES := python3-venv python3-rospy python3-rostest python3-roslaunch pyt
   python3-rosservice python3-rostopic python3-rosnode python3-rosmsg python3-roslib \
   catkin catkin-lint ros-message-generation libstd-msgs-dev libsensor-msgs-dev ros-base-dev \
   python3-std-msgs python3-sensor-msgs python3-geometry-msgs \
-  rosbash procps cmake g++ make iproute2
+  rosbash procps cmake g++ make iproute2 flake8
 DEMO_DURATION ?= 30
 # Runs a command with the workspace sourced and the venv's python first on PATH (the
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
@@ -53,7 +53,7 @@ build: deps
 # With root and TUN: a short version of the evaluation (3 modes on config/demo_short.yaml,
 # about 2 minutes). Otherwise: the loopback demo (all nodes on this host, DEMO_DURATION s).
 demo: build
-	@$(ROSENV) cd $(TOP) && if $(PY) -c 'import sys; from server_select.testbed import available; \
+	@$(ROSENV) cd $(TOP) && if $(PY) -c 'import sys; from server_select.testbed.netns import available; \
 	    ok, why = available(); print("" if ok else why); sys.exit(0 if ok else 1)'; then \
 	  echo "demo: testbed experiment on config/demo_short.yaml (select, fixed, oracle; ~2 min)"; \
 	  $(PY) scripts/evaluate --scenario config/demo_short.yaml --out $(BUILD)/demo_eval; \
@@ -85,11 +85,11 @@ evaluate: build
 
 # The second paper's tables and throughput: results/bench/*.json and REPORT.md.
 bench: build
-	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.benchmarks --out results/bench
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.run --out results/bench
 
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build
-	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.emulator_bench --out results/bench
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.emulator --out results/bench
 
 unit-test: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q test/unit
@@ -98,14 +98,17 @@ unit-test: build
 rostest: build
 	@$(ROSENV) cd $(TOP) && bash test/run_rostests.sh $(T)
 
+# catkin_lint for the package, flake8 (Debian's, settings in setup.cfg) for the Python.
+LINT := catkin_lint -W2 --strict --ignore package_path_name $(TOP) && \
+  /usr/bin/python3 -m flake8 src test $(filter-out %.sh,$(wildcard scripts/*))
 lint: build
-	@$(ROSENV) catkin_lint -W2 --strict --ignore package_path_name $(TOP)
+	@$(ROSENV) cd $(TOP) && $(LINT)
 
 # Lint first, then unit tests (no master), the testbed tests (root and TUN; reported as
 # skipped elsewhere), the benchmarks' smoke run, then the launch-level rostests; the last line printed is the rostest
 # tally "rostest: N passed, N failed".
 test: build
-	@$(ROSENV) cd $(TOP) && catkin_lint -W2 --strict --ignore package_path_name $(TOP) \
+	@$(ROSENV) cd $(TOP) && $(LINT) \
 	  && $(PY) -m pytest -q -rs test/unit test/testbed test/bench && bash test/run_rostests.sh
 
 testbed-test: build

@@ -7,7 +7,8 @@ import time
 import rospy
 from rospy.numpy_msg import numpy_msg
 
-from server_select import names
+from server_select.core import names
+from server_select.core.procs import wait_until
 from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
 
 Received = collections.namedtuple('Received', 'time msg')
@@ -45,11 +46,7 @@ class FleetRecorder(object):
     def reports_of(self, robot_id):
         return [r.msg for r in self.snapshot(self.reports) if r.msg.robot_id == robot_id]
 
-    def wait_for(self, condition, timeout):
+    @staticmethod
+    def wait_for(condition, timeout):
         """Poll ``condition()`` until it is true (return True) or ``timeout`` s pass."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not rospy.is_shutdown():
-            if condition():
-                return True
-            time.sleep(0.05)
-        return bool(condition())
+        return wait_until(condition, timeout)

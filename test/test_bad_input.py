@@ -12,7 +12,8 @@ import rospy
 import rostest
 from rospy.numpy_msg import numpy_msg
 
-from server_select import names
+from server_select.core import names
+from server_select.core.procs import wait_until
 from server_select.msg import SortResult, SortTask
 
 ROBOT_OK = ['_robot_id:=1', '_servers:=1,2,3']
@@ -51,7 +52,7 @@ class BadInputTest(unittest.TestCase):
                 ['rosrun', 'server_select', node, '__name:=bad_%s_%d' % (node, i)] + args,
                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
                 timeout=30)
-            lines = [l for l in proc.stderr.splitlines() if 'invalid parameter' in l]
+            lines = [x for x in proc.stderr.splitlines() if 'invalid parameter' in x]
             self.assertEqual(proc.returncode, 2, (node, args, proc.stderr))
             self.assertEqual(len(lines), 1, proc.stderr)
             self.assertIn(message, lines[0])
@@ -64,19 +65,14 @@ class BadInputTest(unittest.TestCase):
         self.pub.publish(task)
 
     def result(self, task_id, timeout=5.0):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            found = [r for r in self.results if r.task_id == task_id]
-            if found:
-                return found
-            time.sleep(0.02)
-        return []
+        def found():
+            return [r for r in self.results if r.task_id == task_id]
+        wait_until(found, timeout, period=0.02)
+        return found()
 
     def test_bad_tasks_get_error_results_and_the_server_keeps_serving(self):
-        deadline = time.monotonic() + 20
-        while (self.pub.get_num_connections() == 0 or self.sub.get_num_connections() == 0) \
-                and time.monotonic() < deadline:
-            time.sleep(0.05)
+        self.assertTrue(wait_until(lambda: self.pub.get_num_connections() > 0
+                                   and self.sub.get_num_connections() > 0, 20.0))
         self.send(1, [])
         (empty,) = self.result(1)
         self.assertFalse(empty.ok)

@@ -4,7 +4,7 @@
 - frames sent straight to server 2 (as robot 99): a face is found where it is in every
   encoding and with padded rows, a photo without a face yields no detection, an
   unsupported encoding gets an error result, the annotated frame comes back;
-- robots 1 and 2 search small_area.yaml: the target robot 1 finds is known to robot 2
+- robots 1 and 2 search test/search_small.yaml: the target robot 1 finds is known to robot 2
   (its ~known_targets service) within one second.
 """
 
@@ -19,11 +19,12 @@ import rospy
 import rostest
 from sensor_msgs.msg import Image
 
-from server_select import names
-from server_select.detection import iou
-from server_select.image_codec import from_array
+from server_select.core import names
+from server_select.core.procs import wait_until
+from server_select.vision.detection import iou
+from server_select.vision.image_codec import from_array
 from server_select.msg import Detections, FoundTarget, ImageResult, ImageTask
-from server_select.search import sample_image
+from server_select.vision.search import sample_image
 from server_select.srv import KnownTargets
 
 FACE = (177, 66, 95, 95)
@@ -57,11 +58,9 @@ class ImageTest(unittest.TestCase):
         with cls.lock:
             cls.found.append((time.monotonic(), msg))
 
-    def wait(self, condition, timeout):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not condition():
-            time.sleep(0.01)
-        return condition()
+    @staticmethod
+    def wait(condition, timeout):
+        return wait_until(condition, timeout, period=0.01)
 
     def send(self, task_id, fields):
         encoding, height, width, step, data = fields

@@ -13,12 +13,11 @@ import sys
 import time
 import unittest
 
-import rosgraph
 import rospy
 import rostest
 
-from server_select.params import parse_id_list
-from server_select.usage_node import node_pid
+from server_select.core.params import parse_id_list
+from server_select.ros.graph import node_pid
 
 from fleet_recorder import FleetRecorder
 
@@ -39,7 +38,7 @@ class ServerFailureTest(unittest.TestCase):
         self.assertTrue(rec.wait_for(lambda: len(rec.reports_of(1)) >= 5, 30.0))
 
         victim = rec.latest_flags()[1].server_id
-        os.kill(node_pid(rosgraph.Master(rospy.get_name()), '/server%d' % victim),
+        os.kill(node_pid('/server%d' % victim, rospy.get_name()),
                 signal.SIGKILL)
         killed_at = time.monotonic()
 
@@ -85,6 +84,7 @@ class ServerFailureTest(unittest.TestCase):
         self.assertTrue(rec.wait_for(
             lambda: sent <= set(r.task_id for r in rec.reports_of(1)), 5.0),
             'never reported: %s' % sorted(sent - set(r.task_id for r in rec.reports_of(1))))
+
 
 if __name__ == '__main__':
     rostest.rosrun('server_select', 'test_server_failure', ServerFailureTest, sys.argv)

@@ -8,15 +8,13 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
 
-from server_select import bag_analysis
-from server_select.evaluation import RunOptions, run_mode
-from server_select.scenario import Scenario
-from server_select import testbed
-from server_select.testbed import available, leftovers
+from server_select.testbed import bag_analysis
+from server_select.testbed.evaluation import RunOptions, run_mode
+from server_select.testbed.scenario import Scenario
+from server_select.testbed.netns import Testbed, available, leftovers
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENARIO = os.path.join(HERE, 'step_down.yaml')
@@ -84,12 +82,11 @@ def test_rtt_follows_the_emulated_delay(runs):
 
 CRASHER = r'''
 import os, sys, time
-sys.path.insert(0, %(src)r)
-from server_select.scenario import Scenario
-from server_select.testbed import Testbed
+from server_select.testbed.scenario import Scenario
+from server_select.testbed.netns import Testbed
 tb = Testbed(Scenario.load(%(scenario)r), %(scenario)r, %(run)r, prefix='sscrash')
 tb.up()
-tb.popen('robot1', ['sleep', '600'])
+tb.popen('robot1', ['sleep', %(marker)r])
 print('up', flush=True)
 if sys.argv[1] == 'crash':
     os._exit(1)            # no teardown at all
@@ -100,21 +97,31 @@ finally:
 '''
 
 
+def pgrep(pattern):
+    out = subprocess.run(['pgrep', '-f', pattern], stdout=subprocess.PIPE,
+                         universal_newlines=True).stdout
+    return [int(p) for p in out.split()]
+
+
 @pytest.mark.parametrize('how', ['ctrl-c', 'sigterm', 'crash'])
 def test_teardown_leaves_nothing(tmp_path, how):
-    script = CRASHER % {'src': os.path.join(HERE, '..', '..', 'src'), 'scenario': SCENARIO,
-                        'run': str(tmp_path)}
+    marker = '599.%06d' % (os.getpid() % 1000000)   # this run's own sleeper, "sleep 599.<pid>"
+    script = CRASHER % {'scenario': SCENARIO,
+                        'run': str(tmp_path), 'marker': marker}
     proc = subprocess.Popen([sys.executable, '-c', script, 'crash' if how == 'crash' else 'run'],
                             stdout=subprocess.PIPE, universal_newlines=True)
     assert proc.stdout.readline().strip() == 'up'
     assert leftovers('sscrash'), 'the testbed should be up'
+    # what must be gone afterwards is there now: the host's process and the emulator,
+    # whose command line names this run's folder (its --hosts file)
+    assert len(pgrep('^sleep %s$' % marker)) == 1
+    assert len(pgrep('testbed.linkemu .*%s' % tmp_path)) == 1
     if how != 'crash':
         proc.send_signal(signal.SIGINT if how == 'ctrl-c' else signal.SIGTERM)
     proc.wait(30)
     if how == 'crash':
         assert leftovers('sscrash'), 'a crash leaves the testbed behind...'
-        testbed.Testbed(Scenario.load(SCENARIO), SCENARIO, str(tmp_path), prefix='sscrash').down()
+        Testbed(Scenario.load(SCENARIO), SCENARIO, str(tmp_path), prefix='sscrash').down()
     assert leftovers('sscrash') == []
-    assert subprocess.run(['pgrep', '-f', 'sleep 600'], stdout=subprocess.PIPE).stdout == b''
-    assert subprocess.run(['pgrep', '-f', 'linkemu.*sscrash'],
-                          stdout=subprocess.PIPE).stdout == b''
+    assert pgrep('^sleep %s$' % marker) == []
+    assert pgrep('testbed.linkemu .*%s' % tmp_path) == []

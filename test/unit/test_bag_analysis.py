@@ -1,8 +1,8 @@
 import pytest
 
-from server_select.bag_analysis import (Flag, Report, compare, mode_summary, oracle_changes,
-                                        reaction_times, switches, table)
-from server_select.scenario import Scenario
+from server_select.testbed.bag_analysis import (Flag, Report, compare, mode_summary,
+                                                oracle_changes, reaction_times, switches, table)
+from server_select.testbed.scenario import Scenario
 
 
 def flag(t, robot, server):

@@ -3,9 +3,9 @@ import cv2
 import numpy as np
 import pytest
 
-from server_select.detection import Detector, DetectorError, annotate, iou
-from server_select.image_codec import ImageError, from_array, to_array
-from server_select.search import sample_image
+from server_select.vision.detection import Detector, DetectorError, annotate, iou
+from server_select.vision.image_codec import ImageError, from_array, to_array
+from server_select.vision.search import sample_image
 
 FACE = (177, 66, 95, 95)   # where the astronaut's face is in astronaut.png (x, y, w, h)
 

@@ -5,8 +5,8 @@ import struct
 
 import pytest
 
-from server_select.linkemu import LinkEmulator
-from server_select.scenario import Scenario
+from server_select.testbed.linkemu import LinkEmulator
+from server_select.testbed.scenario import Scenario
 
 ADDR = {'a': '10.231.0.1', 'b': '10.231.0.2'}
 

@@ -1,7 +1,7 @@
 import pytest
 
-from server_select.params import (ParamError, parse_fixed_server, parse_id, parse_id_list,
-                                  parse_mode, parse_non_negative, parse_positive)
+from server_select.core.params import (ParamError, parse_fixed_server, parse_id, parse_id_list,
+                                       parse_mode, parse_non_negative, parse_positive)
 
 
 @pytest.mark.parametrize('value, expected', [
@@ -12,7 +12,8 @@ def test_id_lists(value, expected):
     assert parse_id_list('~servers', value) == expected
 
 
-@pytest.mark.parametrize('value', ['', '[]', [], 'a,b', '1,x', [1.5], [-1], '1,1', None, True, [True]])
+@pytest.mark.parametrize('value', ['', '[]', [], 'a,b', '1,x', [1.5], [-1], '1,1', None, True,
+                                   [True]])
 def test_bad_id_lists(value):
     with pytest.raises(ParamError) as info:
         parse_id_list('~servers', value)

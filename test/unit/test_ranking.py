@@ -1,7 +1,7 @@
 import pytest
 
-from server_select.ranking import NO_SERVER, choose, rank_servers
-from server_select.window import LatencyWindow, PairStats
+from server_select.core.ranking import NO_SERVER, choose, rank_servers
+from server_select.core.window import LatencyWindow, PairStats
 
 
 def stats(**means):

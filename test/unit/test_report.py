@@ -1,5 +1,5 @@
-from server_select.report import RunReport
-from server_select.stats import format_ms, summarize
+from server_select.core.report import RunReport
+from server_select.core.stats import format_ms, summarize
 
 
 def test_summarize():

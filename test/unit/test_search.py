@@ -2,10 +2,10 @@ import os
 
 import pytest
 
-from server_select.detection import Detector
-from server_select.image_source import FolderSource, SearchSource, SourceError, open_source
-from server_select.search import (Found, PathFollower, SearchError, SearchWorld, TargetRegistry,
-                                  lawnmower, sample_image)
+from server_select.vision.detection import Detector
+from server_select.vision.image_source import FolderSource, SearchSource, SourceError, open_source
+from server_select.vision.search import (Found, PathFollower, SearchError, SearchWorld,
+                                         TargetRegistry, lawnmower, sample_image)
 
 
 @pytest.fixture(scope='module')
@@ -55,9 +55,8 @@ def test_registry_merges_by_distance():
     registry = TargetRegistry(radius=100)
     assert registry.add(Found(1, 5, 'face', 100, 100, 1.0))
     assert not registry.add(Found(2, 9, 'face', 150, 120, 2.0))
-    assert registry.known(160, 100).robot_id == 1
     assert registry.add(Found(2, 10, 'face', 400, 100, 3.0))
-    assert [f.robot_id for f in registry.all()] == [1, 2]
+    assert [(f.robot_id, f.task_id) for f in registry.all()] == [(1, 5), (2, 10)]
 
 
 def test_sources(tmp_path, world):

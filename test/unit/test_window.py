@@ -1,8 +1,6 @@
-import math
-
 import pytest
 
-from server_select.window import LatencyWindow
+from server_select.core.window import LatencyWindow
 
 
 def test_mean_of_successful_samples_in_window():
@@ -60,4 +58,5 @@ def test_failed_sample_rtt_is_not_kept():
     w = LatencyWindow(1.0)
     w.add(1, 1, 0.0, False, 5.0)
     w.add(1, 1, 0.1, True, 0.5)
-    assert not math.isnan(w.stats(1, 1, 0.1).mean)
+    stats = w.stats(1, 1, 0.1)
+    assert stats.mean == 0.5 and (stats.ok_count, stats.failed_count) == (1, 1)

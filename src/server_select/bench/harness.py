@@ -1,0 +1,110 @@
+"""What the benchmarks run on: a roscore of their own, a small fleet, the task reports."""
+
+import contextlib
+import os
+import socket
+import subprocess
+import sys
+import threading
+import time
+import xmlrpc.client
+
+from server_select.core import names
+from server_select.core.procs import stop_group, wait_until
+from server_select.ros.graph import node_pid as graph_node_pid
+
+PY = [sys.executable, '-m']
+
+
+def free_port():
+    with contextlib.closing(socket.socket()) as s:
+        s.bind(('127.0.0.1', 0))
+        return s.getsockname()[1]
+
+
+def _master_up(uri):
+    try:
+        xmlrpc.client.ServerProxy(uri).getPid('/bench')
+        return True
+    except OSError:
+        return False
+
+
+class Roscore(object):
+    """A roscore on a free port, its URI exported to this process and its children."""
+
+    def __init__(self, log_dir):
+        self.port = free_port()
+        self.uri = 'http://127.0.0.1:%d' % self.port
+        self.log_dir = log_dir
+        self.proc = None
+
+    def __enter__(self):
+        os.environ['ROS_MASTER_URI'] = self.uri
+        os.environ.setdefault('ROS_HOME', self.log_dir)
+        self.proc = subprocess.Popen(['roscore', '-p', str(self.port)],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                     start_new_session=True)
+        if not wait_until(lambda: _master_up(self.uri), 30.0, period=0.2):
+            stop_group(self.proc)
+            raise RuntimeError('roscore did not start on port %d' % self.port)
+        return self
+
+    def __exit__(self, *exc):
+        stop_group(self.proc)
+        return False
+
+
+def node_pid(name):
+    return graph_node_pid(name, '/bench')
+
+
+def _registered(*names):
+    try:
+        for name in names:
+            node_pid(name)
+        return True
+    except Exception:  # not registered yet, or the master is busy
+        return False
+
+
+@contextlib.contextmanager
+def fleet(log, **args):
+    """bench_fleet.launch with ``args``; yields once robot1 and server1 are registered."""
+    cmd = ['roslaunch', 'server_select', 'bench_fleet.launch'] + \
+        ['%s:=%s' % kv for kv in sorted(args.items())]
+    with open(log, 'a') as stream:
+        proc = subprocess.Popen(cmd, stdout=stream, stderr=subprocess.STDOUT,
+                                start_new_session=True)
+    try:
+        if not wait_until(lambda: proc.poll() is not None
+                          or _registered('/robot1', '/server1'), 40.0, period=0.3) \
+                or proc.poll() is not None:
+            raise RuntimeError('bench fleet did not come up (see %s)' % log)
+        yield proc
+    finally:
+        stop_group(proc, timeout=20.0)
+
+
+class ReportListener(object):
+    """task_report messages received by this process (the benchmark driver)."""
+
+    def __init__(self):
+        import rospy
+        from server_select.msg import TaskReport
+        self.lock = threading.Lock()
+        self.reports = []
+        self.sub = rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, self.on_report,
+                                    queue_size=10000)
+
+    def on_report(self, msg):
+        with self.lock:
+            self.reports.append((time.monotonic(), msg))
+
+    def between(self, start, end, kind):
+        with self.lock:
+            return [m for t, m in self.reports if start <= t < end and m.kind == kind]
+
+
+def us(summary):
+    return dict((k, v * 1e6 if k != 'n' else v) for k, v in summary.items())

@@ -1,0 +1,70 @@
+"""Processes: waiting for a condition, stopping a process group, CPU and memory use."""
+
+import os
+import signal
+import subprocess
+import time
+
+import psutil
+
+
+def wait_until(condition, timeout, period=0.05, clock=time.monotonic, sleep=time.sleep):
+    """Poll ``condition()`` every ``period`` s until it is true (True) or ``timeout`` passes
+    (then the last answer of ``condition()``)."""
+    deadline = clock() + timeout
+    while clock() < deadline:
+        if condition():
+            return True
+        sleep(period)
+    return bool(condition())
+
+
+def stop_group(proc, sig=signal.SIGINT, timeout=15.0):
+    """Stop a ``Popen`` started with ``start_new_session=True``, with its whole process
+    group: ``sig`` first, SIGKILL after ``timeout`` s. Returns the exit status."""
+    if proc.poll() is not None:
+        return proc.returncode
+    try:
+        os.killpg(proc.pid, sig)
+        return proc.wait(timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        return proc.wait()
+    except ProcessLookupError:
+        return proc.wait()
+
+
+def measure(pids, duration, clock=time.monotonic, sleep=time.sleep):
+    """``{pid: {'cpu_percent', 'rss_mb', 'threads'}}`` over ``duration`` seconds.
+
+    CPU% is (user + system) CPU time used during the window divided by the window length,
+    so 100 means one core busy; RSS is sampled at the end. Processes that exit during
+    the window are left out.
+    """
+    procs, before = {}, {}
+    for pid in pids:
+        try:
+            proc = psutil.Process(pid)
+            times = proc.cpu_times()
+        except psutil.Error:
+            continue
+        procs[pid] = proc
+        before[pid] = times.user + times.system
+    start = clock()
+    sleep(duration)
+    elapsed = clock() - start
+    usage = {}
+    for pid, proc in procs.items():
+        try:
+            with proc.oneshot():
+                times = proc.cpu_times()
+                rss = proc.memory_info().rss
+                threads = proc.num_threads()
+        except psutil.Error:
+            continue
+        usage[pid] = {
+            'cpu_percent': 100.0 * (times.user + times.system - before[pid]) / elapsed,
+            'rss_mb': rss / 2.0 ** 20,
+            'threads': threads,
+        }
+    return usage

@@ -1,0 +1,75 @@
+"""Per-robot run summary built from selection flags and task reports (no rospy)."""
+
+import collections
+
+from server_select.core.ranking import NO_SERVER
+from server_select.core.stats import summarize
+from server_select.core.tables import markdown_table
+
+
+class RunReport(object):
+    """Accumulates what a run's topics say about each robot."""
+
+    def __init__(self):
+        self.flags = {}
+        self.switches = collections.Counter()
+        self.tasks = collections.defaultdict(list)
+        self.probes = collections.defaultdict(list)
+
+    def add_flag(self, robot_id, server_id, ranking, means):
+        previous = self.flags.get(robot_id)
+        if previous is not None and previous[0] != server_id:
+            self.switches[robot_id] += 1
+        self.flags[robot_id] = (server_id, list(ranking), list(means))
+
+    def add_task(self, robot_id, ok, rtt, server_id, error):
+        self.tasks[robot_id].append((ok, rtt, server_id, error))
+
+    def add_probe(self, robot_id, server_id, ok, rtt):
+        self.probes[robot_id].append((server_id, ok, rtt))
+
+    def robot_summary(self, robot_id):
+        tasks = self.tasks.get(robot_id, [])
+        selected, ranking, means = self.flags.get(robot_id, (None, [], []))
+        errors = collections.Counter(t[3] for t in tasks if not t[0])
+        return {
+            'robot': robot_id,
+            'selected': selected,
+            'ranking': ranking,
+            'mean_latency_ms': [m * 1e3 for m in means],
+            'switches': self.switches[robot_id],
+            'tasks': len(tasks),
+            'ok': sum(1 for t in tasks if t[0]),
+            'failed': sum(1 for t in tasks if not t[0]),
+            'errors': dict(errors),
+            'servers_used': sorted(set(t[2] for t in tasks if t[0])),
+            'rtt': summarize([t[1] for t in tasks if t[0]]),
+            'probes': len(self.probes.get(robot_id, [])),
+            'probes_failed': sum(1 for p in self.probes.get(robot_id, []) if not p[1]),
+            'probe_rtt': summarize([p[2] for p in self.probes.get(robot_id, []) if p[1]]),
+        }
+
+    def summaries(self):
+        robots = set(self.flags) | set(self.tasks) | set(self.probes)
+        return [self.robot_summary(r) for r in sorted(robots)]
+
+    def table(self):
+        """A Markdown table, one row per robot."""
+        rows = []
+        for s in self.summaries():
+            ranking = ', '.join('S%d %.2f' % (srv, ms)
+                                for srv, ms in zip(s['ranking'], s['mean_latency_ms'])) or '-'
+            selected = s['selected'] not in (None, NO_SERVER)
+            rows.append(['R%d' % s['robot'], 'S%d' % s['selected'] if selected else 'none',
+                         ranking, s['switches'], s['tasks'], s['ok'], s['failed']]
+                        + _ms(s['rtt'], ('median', 'p95', 'p99', 'max'))
+                        + ['%d (%d)' % (s['probes'], s['probes_failed'])]
+                        + _ms(s['probe_rtt'], ('median', 'p99')))
+        return markdown_table(
+            ('robot', 'selected', 'ranking (mean probe RTT ms)', 'switches', 'tasks', 'ok',
+             'failed', 'task RTT median ms', 'p95', 'p99', 'max', 'probes (failed)',
+             'probe RTT median ms', 'p99'), rows)
+
+
+def _ms(summary, keys):
+    return ['%.2f' % (summary[k] * 1e3) if summary['n'] else '-' for k in keys]

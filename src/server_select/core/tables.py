@@ -1,0 +1,21 @@
+"""Markdown tables, the one format every report, benchmark and summary prints."""
+
+
+def markdown_table(header, rows):
+    """A Markdown table: ``header`` is a list of column titles, ``rows`` lists of cells.
+
+    Cells are converted with ``str``; a row of the wrong length raises ValueError.
+    """
+    header = [str(h) for h in header]
+    lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
+    for row in rows:
+        cells = [str(c) for c in row]
+        if len(cells) != len(header):
+            raise ValueError('row %r has %d cells, the header %d' % (row, len(cells), len(header)))
+        lines.append('| ' + ' | '.join(cells) + ' |')
+    return '\n'.join(lines)
+
+
+def fmt(value, spec='%.2f', missing='-'):
+    """``spec % value``, or ``missing`` when the value is None."""
+    return missing if value is None else spec % value

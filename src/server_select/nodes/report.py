@@ -1,0 +1,65 @@
+"""Listens to a run for ``~duration`` seconds, then prints the per-robot summary."""
+
+import json
+
+import rospy
+
+from server_select.core import names
+from server_select.core.params import parse_id_list
+from server_select.core.report import RunReport
+from server_select.msg import LatencySample, SelectionFlag, TaskReport
+from server_select.ros.node import param, run
+
+
+class ReportNode(object):
+    """Run summary for demos and evaluations.
+
+    :ROS Parameters:
+        - ``~duration`` (s, 30.0): how long to listen before printing and exiting.
+        - ``~output`` (str, ''): also write the summary as JSON to this path.
+        - ``~robots``, ``~servers`` (id lists, optional): also summarise the probe samples
+          of these pairs.
+    :ROS Subscribers:
+        - ``server_select_flag`` (server_select/SelectionFlag)
+        - ``task_report`` (server_select/TaskReport)
+        - ``latency_R<r>S<s>`` (server_select/LatencySample), with ``~robots``/``~servers``
+    """
+
+    def __init__(self):
+        duration = param('duration')
+        self.output = param('output')
+        self.report = RunReport()
+        self.flag_sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
+                                         queue_size=100)
+        self.task_sub = rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, self.on_task,
+                                         queue_size=1000)
+        optional = dict(default='', parse=lambda n, v: parse_id_list(n, v) if v != '' else [])
+        self.probe_subs = [
+            rospy.Subscriber(names.sample_topic(r, s), LatencySample, self.on_probe,
+                             queue_size=100)
+            for r in param('robots', **optional) for s in param('servers', **optional)]
+        self.timer = rospy.Timer(rospy.Duration(duration), self.finish, oneshot=True)
+        rospy.loginfo('report: listening for %.3g s', duration)
+
+    def on_flag(self, flag):
+        self.report.add_flag(flag.robot_id, flag.server_id, flag.ranking, flag.mean_latency)
+
+    def on_probe(self, sample):
+        self.report.add_probe(sample.robot_id, sample.server_id, sample.ok, sample.rtt)
+
+    def on_task(self, report):
+        self.report.add_task(report.robot_id, report.ok, report.rtt, report.answered_by,
+                             report.error)
+
+    def finish(self, _event=None):
+        table = self.report.table()
+        print('\nserver_select run summary\n\n' + table + '\n', flush=True)
+        if self.output:
+            with open(self.output, 'w') as stream:
+                json.dump(self.report.summaries(), stream, indent=2)
+            rospy.loginfo('report: summary written to %s', self.output)
+        rospy.signal_shutdown('report done')
+
+
+def main():
+    run('report', ReportNode)

@@ -1,0 +1,152 @@
+"""Robot: probes every server, follows the manager's selection and sends tasks."""
+
+import itertools
+import time
+
+import rospy
+
+from server_select.core import names
+from server_select.core.params import ParamError, parse_fixed_server
+from server_select.core.selection import Selection
+from server_select.core.task_flow import LOCAL, NO_SERVER
+from server_select.msg import SelectionFlag
+from server_select.ros.node import param, run
+from server_select.ros.prober import Prober
+from server_select.ros.search import SearchParticipant
+from server_select.ros.task_kinds import ImageKind, SortKind
+from server_select.ros.task_stream import TaskStream
+from server_select.vision.detection import DetectorError, make_detector
+from server_select.vision.image_source import SourceError, open_source
+from server_select.vision.search import SearchError
+
+
+class RobotNode(object):
+    """A robot of the fleet: a prober, a selection follower and one or two task streams.
+
+    Tasks go to the selected server (``~mode`` ``select``), to ``~fixed_server``
+    (``fixed``, the paper's baseline), or are processed by the robot itself (``local``,
+    the no-offloading reference). Two streams, each optional: sort tasks (``~task_size``
+    random int32 at ``~task_rate``) and camera frames (``~image_source`` at
+    ``~frame_rate``). Each task ends in exactly one ``task_report``: a checked result, an
+    error result, or a timeout after ``~task_timeout``. With camera frames, the robot
+    takes part in the cooperative search: targets detected in its frames are recorded
+    once in a registry shared through ``found_targets``.
+
+    :ROS Parameters:
+        - ``~robot_id`` (int, required), ``~servers`` (list of int, required)
+        - ``~mode`` (``select``), ``~fixed_server`` (first of ``~servers``)
+        - ``~probe_rate`` (Hz, 1.0), ``~probe_timeout`` (s, 0.5)
+        - ``~sort_tasks`` (true), ``~task_rate`` (Hz, 2.0), ``~task_size`` (1000),
+          ``~task_timeout`` (s, 2.0), ``~tasks`` (0: no limit), ``~seed`` (robot id)
+        - ``~image_source`` ('': none; a folder, a video file or ``search:<area.yaml>``),
+          ``~frame_rate`` (Hz, 10.0), ``~image_encoding`` (``bgr8``, ``rgb8``, ``mono8``)
+        - ``~robot_index``, ``~robot_count`` (0, 1): this robot's strip of a search area;
+          ``~speed`` (area px/s, 200), ``~merge_radius`` (px, 150)
+        - ``~detector``, ``~cascade``, ``~scale_factor``, ``~min_neighbors``, ``~min_size``
+          (as the server's): used in mode ``local`` only.
+        - ``~start_delay`` (s, 0.0): wait before the first task, e.g. for a recorder to
+          connect (rospy drops messages sent before that); ``~summary_period`` (s, 10)
+    :ROS Publishers:
+        - ``latency_R<robot_id>S<s>`` (server_select/LatencySample), one topic per server.
+        - ``data`` (server_select/SortTask), ``task_image`` (server_select/ImageTask)
+        - ``task_report`` (server_select/TaskReport), ``found_targets`` (FoundTarget)
+    :ROS Subscribers:
+        - ``server_select_flag`` (server_select/SelectionFlag)
+        - ``processed_data`` (SortResult), ``processed_image`` (ImageResult),
+          ``detections`` (Detections), ``found_targets`` (FoundTarget)
+    :ROS Services:
+        - ``~known_targets`` (server_select/KnownTargets): the targets found so far.
+    :ROS Services called:
+        - ``latency_S<s>`` (server_select/LatencyProbe)
+    """
+
+    def __init__(self):
+        self.robot_id = param('robot_id')
+        servers = param('servers')
+        mode = param('mode')
+        fixed = param('fixed_server', default=servers[0],
+                      parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
+        self.selection = Selection(self.robot_id, mode, fixed)
+        self.prober = Prober(self.robot_id, servers, param('probe_rate'), param('probe_timeout'))
+        self.start_delay = param('start_delay')
+        self.summary_period = param('summary_period')
+        self.search = None
+        kinds = []
+        if param('sort_tasks'):
+            kinds.append((SortKind(self.robot_id, param('task_size'),
+                                   param('seed', default=self.robot_id)), param('task_rate')))
+        if param('image_source'):
+            kinds.append((self._image_kind(mode), param('frame_rate')))
+        if not kinds:
+            raise ParamError('~sort_tasks is false and ~image_source is empty: no tasks to send')
+        ids = itertools.count(1)   # task ids are unique per robot, across its streams
+        self.streams = [TaskStream(self.robot_id, kind, rate, param('tasks'),
+                                   param('task_timeout'), self.selection.target, self.ready,
+                                   ids, local=mode == 'local') for kind, rate in kinds]
+        self._start_after = None
+        self.timers = []
+
+    def _image_kind(self, mode):
+        try:
+            source = open_source(param('image_source'), param('robot_index'),
+                                 param('robot_count'), param('speed'))
+        except (SourceError, SearchError, OSError) as error:
+            raise ParamError('~image_source: %s' % error)
+        detector = None
+        if mode == 'local':
+            try:
+                detector = make_detector(param)
+            except DetectorError as error:
+                raise ParamError('~detector/~cascade: %s' % error)
+        self.search = SearchParticipant(self.robot_id, param('merge_radius'),
+                                        getattr(source, 'world', None))
+        return ImageKind(self.robot_id, source, param('image_encoding'), self.search, detector,
+                         param('max_image_pixels'))
+
+    def start(self):
+        self._start_after = time.monotonic() + self.start_delay
+        self.flag_sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
+                                         queue_size=100, tcp_nodelay=True)
+        if self.search is not None:
+            self.search.start()
+        for stream in self.streams:
+            stream.start()
+        self.prober.start()
+        self.timers = [rospy.Timer(rospy.Duration(self.summary_period),
+                                   lambda _e: rospy.loginfo(self.summary()))]
+        rospy.on_shutdown(self.on_shutdown)
+        selection = self.selection
+        rospy.loginfo('robot %d: mode %s%s, probing servers %s at %.3g Hz, tasks: %s',
+                      self.robot_id, selection.mode,
+                      ' (server %d)' % selection.fixed_server if selection.mode == 'fixed' else '',
+                      self.prober.servers, self.prober.rate,
+                      ', '.join(s.flow.kind for s in self.streams))
+
+    def ready(self):
+        """Tasks start once ``~start_delay`` has passed and the target is known to be up."""
+        return (time.monotonic() >= self._start_after
+                and self.selection.ready(self.prober.answered))
+
+    def on_flag(self, flag):
+        if self.selection.on_flag(flag.robot_id, flag.server_id):
+            rospy.loginfo('robot %d: selected server %s (ranking %s)', self.robot_id,
+                          flag.server_id if flag.server_id != NO_SERVER else 'none',
+                          list(flag.ranking))
+
+    def summary(self):
+        target = self.selection.target()
+        return 'robot %d: %s; server %s, %d switches' % (
+            self.robot_id, '; '.join(s.summary() for s in self.streams),
+            {NO_SERVER: 'none', LOCAL: 'local'}.get(target, target), self.selection.switches)
+
+    def on_shutdown(self):
+        for timer in self.timers:
+            timer.shutdown()
+        for stream in self.streams:
+            stream.shutdown()
+        self.prober.shutdown()
+        rospy.loginfo(self.summary())
+
+
+def main():
+    run('robot', RobotNode)

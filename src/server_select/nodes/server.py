@@ -1,0 +1,155 @@
+"""Compute server: answers latency probes, and the sort and image tasks addressed to it."""
+
+import threading
+import time
+
+import numpy as np
+import rospy
+from rospy.numpy_msg import numpy_msg
+from sensor_msgs.msg import Image, RegionOfInterest
+
+from server_select.core import names
+from server_select.core.params import ParamError
+from server_select.core.sort_task import TaskError, sort_values
+from server_select.msg import (Detection, Detections, ImageResult, ImageTask, SortResult,
+                               SortTask)
+from server_select.ros.node import param, run
+from server_select.srv import LatencyProbe, LatencyProbeResponse
+from server_select.vision import image_codec
+from server_select.vision.detection import DetectorError, make_detector, search_frame
+
+EMPTY = np.empty(0, dtype=np.int32)
+
+
+class ServerNode(object):
+    """A compute server of the fleet.
+
+    Tasks are broadcast on ``data`` to every server; each task names the server the robot
+    selected when it sent it, and only that server processes it. Deciding by the id
+    stamped in the task (rather than by the latest flag each server happens to have seen)
+    is what keeps one task from being answered twice, or not at all, around a switch.
+
+    Image tasks are searched for targets with an OpenCV Haar cascade (``~cascade``, a file
+    of OpenCV's cascade folder or a path) or the HOG people detector (``~detector:=hog``);
+    frames in ``bgr8``, ``rgb8`` or ``mono8`` (any row padding) are accepted, anything
+    else gets an error result.
+
+    :ROS Parameters:
+        - ``~server_id`` (int, required): this server's id.
+        - ``~max_task_len`` (int, 1000000): larger sort tasks get an error result.
+        - ``~queue_size`` (int, 100): task subscriber queues.
+        - ``~detector`` (str, ``haar``): ``haar`` or ``hog``.
+        - ``~cascade`` (str, ``haarcascade_frontalface_default.xml``)
+        - ``~scale_factor`` (1.2), ``~min_neighbors`` (5), ``~min_size`` (24 px): cascade settings.
+        - ``~max_image_pixels`` (int, 16777216): larger frames get an error result.
+    :ROS Services:
+        - ``latency_S<server_id>`` (server_select/LatencyProbe): echo for RTT probing.
+    :ROS Subscribers:
+        - ``data`` (server_select/SortTask), ``task_image`` (server_select/ImageTask)
+    :ROS Publishers:
+        - ``processed_data`` (server_select/SortResult): one result per sort task addressed here.
+        - ``processed_image`` (server_select/ImageResult): one result per frame addressed here,
+          with the annotated frame.
+        - ``detections`` (server_select/Detections): what was found in each frame.
+    """
+
+    def __init__(self):
+        self.server_id = param('server_id')
+        self.max_task_len = param('max_task_len')
+        self.queue_size = param('queue_size')
+        self.max_image_pixels = param('max_image_pixels')
+        try:
+            self.detector = make_detector(param)
+        except DetectorError as error:
+            raise ParamError('~detector/~cascade: %s' % error)
+        self._lock = threading.Lock()
+        self.tasks_done = 0
+        self.tasks_failed = 0
+
+    def start(self):
+        queue = self.queue_size
+        self.result_pub = rospy.Publisher(
+            names.SORT_RESULT_TOPIC, numpy_msg(SortResult), queue_size=queue)
+        self.image_pub = rospy.Publisher(names.IMAGE_RESULT_TOPIC, ImageResult, queue_size=queue)
+        self.detections_pub = rospy.Publisher(names.DETECTIONS_TOPIC, Detections,
+                                              queue_size=queue)
+        self.task_sub = rospy.Subscriber(
+            names.SORT_TASK_TOPIC, numpy_msg(SortTask), self.on_sort_task,
+            queue_size=queue, tcp_nodelay=True, buff_size=1 << 24)
+        self.image_sub = rospy.Subscriber(
+            names.IMAGE_TASK_TOPIC, ImageTask, self.on_image_task, queue_size=queue,
+            tcp_nodelay=True, buff_size=1 << 24)
+        # Advertised last: a robot that can probe us finds our task topics wired already.
+        self.probe_srv = rospy.Service(
+            names.probe_service(self.server_id), LatencyProbe, self.on_probe)
+        rospy.loginfo('server %d: probe service %s, tasks on %s',
+                      self.server_id, self.probe_srv.resolved_name, self.task_sub.resolved_name)
+        rospy.on_shutdown(self.on_shutdown)
+
+    def on_probe(self, req):
+        return LatencyProbeResponse(
+            server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now())
+
+    def on_sort_task(self, task):
+        if task.server_id != self.server_id:
+            return
+        result = SortResult(header=task.header, robot_id=task.robot_id, task_id=task.task_id,
+                            server_id=self.server_id, data=EMPTY)
+        start = time.perf_counter()
+        try:
+            result.data = sort_values(task.data, self.max_task_len)
+            result.ok = True
+        except TaskError as error:
+            self._reject(result, 'task', task, error)
+        result.process_time = time.perf_counter() - start
+        self.result_pub.publish(result)
+        self._count(result.ok)
+
+    def on_image_task(self, task):
+        if task.server_id != self.server_id:
+            return
+        result = ImageResult(header=task.header, robot_id=task.robot_id, task_id=task.task_id,
+                             server_id=self.server_id)
+        start = time.perf_counter()
+        img = task.image
+        try:
+            boxes, annotated = search_frame(self.detector, img.encoding, img.height, img.width,
+                                            img.step, img.data, self.max_image_pixels)
+        except image_codec.ImageError as error:
+            self._reject(result, 'frame', task, error)
+        else:
+            encoding, height, width, step, data = image_codec.from_array(annotated)
+            result.image = Image(header=img.header, height=height, width=width,
+                                 encoding=encoding, step=step, data=data)
+            result.ok = True
+            result.detection_count = len(boxes)
+            self.detections_pub.publish(Detections(
+                header=task.header, robot_id=task.robot_id, task_id=task.task_id,
+                server_id=self.server_id, detections=[
+                    Detection(roi=RegionOfInterest(x_offset=b.x, y_offset=b.y, width=b.width,
+                                                   height=b.height),
+                              label=b.label, score=b.score) for b in boxes]))
+        result.process_time = time.perf_counter() - start
+        self.image_pub.publish(result)
+        self._count(result.ok)
+
+    def _reject(self, result, what, task, error):
+        result.ok = False
+        result.error = str(error)
+        rospy.logerr('server %d: %s %d of robot %d rejected: %s',
+                     self.server_id, what, task.task_id, task.robot_id, error)
+
+    def _count(self, ok):
+        with self._lock:
+            if ok:
+                self.tasks_done += 1
+            else:
+                self.tasks_failed += 1
+
+    def on_shutdown(self):
+        rospy.loginfo('server %d: %d tasks done, %d rejected',
+                      self.server_id, self.tasks_done, self.tasks_failed)
+
+
+def main():
+    run('server', ServerNode)

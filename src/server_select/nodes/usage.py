@@ -1,0 +1,48 @@
+"""Measures the CPU% and RSS of running ROS nodes (looked up by name at the master)."""
+
+import rosgraph
+import rospy
+
+from server_select.core.procs import measure
+from server_select.core.tables import markdown_table
+from server_select.ros.graph import node_pid
+from server_select.ros.node import param, run
+
+
+class UsageNode(object):
+    """Prints one Markdown table of CPU% and RSS per node, measured over ``~duration``.
+
+    :ROS Parameters:
+        - ``~nodes`` (list of str, required): node names, e.g. ``[/manager, /server1]``.
+        - ``~duration`` (s, 20.0), ``~delay`` (s, 5.0): wait ``~delay``, then measure.
+    """
+
+    def __init__(self):
+        self.nodes = [rospy.resolve_name(n) for n in param('nodes')]
+        self.duration = param('duration', default=20.0)
+        self.delay = param('delay')
+
+    def start(self):
+        self.timer = rospy.Timer(rospy.Duration(self.delay), self.measure, oneshot=True)
+
+    def measure(self, _event):
+        pids = {}
+        for node in self.nodes:
+            try:
+                pids[node] = node_pid(node, rospy.get_name())
+            except (rosgraph.MasterError, OSError) as error:
+                rospy.logerr('usage: cannot find the pid of %s: %s', node, error)
+        usage = measure(list(pids.values()), self.duration)
+        rows = []
+        for node, pid in pids.items():
+            u = usage.get(pid)
+            rows.append((node, 'exited', '-', '-') if u is None else (
+                node, '%.2f' % u['cpu_percent'], '%.1f' % u['rss_mb'], u['threads']))
+        table = markdown_table(('node', 'CPU %% (over %.0f s)' % self.duration, 'RSS MiB',
+                                'threads'), rows)
+        print('\nnode usage\n\n' + table + '\n', flush=True)
+        rospy.signal_shutdown('usage measured')
+
+
+def main():
+    run('usage', UsageNode)

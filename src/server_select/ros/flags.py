@@ -1,0 +1,46 @@
+"""Publishing selection flags: one place builds a SelectionFlag from a ranking."""
+
+import threading
+
+import rospy
+
+from server_select.core import names
+from server_select.msg import SelectionFlag
+
+
+class FlagPublisher(object):
+    """``server_select_flag`` for many robots, sent when asked or when it changes.
+
+    A robot's flag counts as changed when its selected server or the set of servers it
+    ranks differs from the last one published for it.
+    """
+
+    def __init__(self, robots, source):
+        self.source = source     # 'manager', 'oracle': for the log
+        self._lock = threading.Lock()
+        self._published = {}     # robot -> (selected, frozenset of ranked servers)
+        self.pub = rospy.Publisher(names.SELECTION_TOPIC, SelectionFlag,
+                                   queue_size=4 * max(1, len(robots)))
+
+    def offer(self, robot, ranking, only_on_change, choose=None):
+        """Publish ``robot``'s flag for ``ranking`` (a
+        :class:`~server_select.core.ranking.Ranking`) unless ``only_on_change`` and nothing
+        changed; True if published. ``choose(previous)`` picks the server given the one
+        published before (None at first); default: the ranking's best."""
+        ranked = frozenset(ranking.ranking)
+        with self._lock:
+            previous, previous_ranked = self._published.get(robot, (None, None))
+            selected = choose(previous) if choose else ranking.selected
+            if only_on_change and (previous, previous_ranked) == (selected, ranked):
+                return False
+            self._published[robot] = (selected, ranked)
+            flag = SelectionFlag(robot_id=robot, server_id=selected, ranking=ranking.ranking,
+                                 mean_latency=ranking.means, sample_count=ranking.counts,
+                                 excluded=ranking.excluded)
+            flag.header.stamp = rospy.Time.now()
+            self.pub.publish(flag)
+        if previous != selected:
+            rospy.loginfo('%s: robot %d -> server %s (ranking %s, ms %s)', self.source, robot,
+                          selected if selected != SelectionFlag.NO_SERVER else 'none',
+                          ranking.ranking, ['%.2f' % (m * 1e3) for m in ranking.means])
+        return True

@@ -1,0 +1,45 @@
+"""Wiring shared by the nodes: parameters read through the table, and the main() skeleton."""
+
+import sys
+
+import rospy
+
+from server_select.core.params import PARAMS, REQUIRED, ParamError
+
+
+def param(name, default=None, parse=None):
+    """The private parameter ``~name``, parsed, with its default from the table.
+
+    ``default`` and ``parse`` override the table's (for a default that depends on another
+    parameter, e.g. ``~seed`` defaults to ``~robot_id``). A missing required parameter or
+    a value the parser refuses raises :class:`ParamError` naming ``~name``.
+    """
+    spec = PARAMS[name]
+    default = spec.default if default is None else default
+    private = '~' + name
+    if default is REQUIRED and not rospy.has_param(private):
+        raise ParamError('%s: required parameter is not set (resolved: %s)'
+                         % (private, rospy.resolve_name(private)))
+    value = rospy.get_param(private, default)
+    if value is None:
+        return None
+    return (parse or spec.parse)(private, value)
+
+
+def run(node_name, node_class, argv=None):
+    """Initialise the node, build ``node_class()``, start it and spin until shutdown.
+
+    A ParamError becomes one ``logfatal`` line and exit status 2, so that a launch file
+    with a bad ``<arg>`` fails loudly instead of running half-configured.
+    """
+    rospy.init_node(node_name, argv=argv)
+    try:
+        node = node_class()
+    except ParamError as error:
+        rospy.logfatal('invalid parameter: %s', error)
+        rospy.signal_shutdown('invalid parameter')
+        sys.exit(2)
+    start = getattr(node, 'start', None)
+    if start is not None:
+        start()
+    rospy.spin()

@@ -1,0 +1,180 @@
+"""The paper's with/without-selection experiment on the testbed (no rospy).
+
+Each mode runs the same scenario in a fresh testbed: roscore and the manager (or the
+oracle) on the manager host, one server per server host, one robot per robot host, all
+started with the package's own launch files inside the hosts' namespaces, and
+``rosbag record`` on the manager host. Modes:
+
+- ``select``: the system (manager + robots following its flag);
+- ``fixed``: the paper's baseline, every robot pinned to one server;
+- ``oracle``: robots follow the truly nearest server per the scenario file.
+
+The bags (with a ``<bag>.json`` of run metadata beside each) are the only input of the
+analysis (:mod:`server_select.testbed.bag_analysis`).
+"""
+
+import argparse
+import json
+import os
+import sys
+
+from server_select.core.params import default
+from server_select.core.procs import wait_until
+from server_select.testbed.linkemu import EmulatorError
+from server_select.testbed.scenario import Scenario, ScenarioError
+from server_select.testbed.netns import Testbed
+
+MODES = ('select', 'fixed', 'oracle')
+MASTER_PORT = 11311
+RECORDED = '/(latency_R[0-9]+S[0-9]+|server_select_flag|data|processed_data|task_report)'
+
+
+class RunOptions(object):
+    """What a run does besides the scenario (the nodes' defaults reproduce the paper)."""
+
+    def __init__(self, fixed_server=1, window=default('window'), task_rate=default('task_rate'),
+                 task_size=default('task_size'), probe_rate=default('probe_rate'),
+                 probe_timeout=default('probe_timeout'), task_timeout=default('task_timeout'),
+                 start_delay=5.0, hysteresis=default('hysteresis'), prefix='ssb'):
+        self.fixed_server = fixed_server
+        self.window = window
+        self.task_rate = task_rate
+        self.task_size = task_size
+        self.probe_rate = probe_rate
+        self.probe_timeout = probe_timeout
+        self.task_timeout = task_timeout
+        self.start_delay = start_delay
+        self.hysteresis = hysteresis
+        self.prefix = prefix
+
+
+def _ids(hosts):
+    return ','.join(str(h.id) for h in sorted(hosts, key=lambda h: h.id))
+
+
+class _Run(object):
+    """One mode of one scenario on an up testbed: environments and launches per host."""
+
+    def __init__(self, tb, scenario, run_dir):
+        self.tb = tb
+        self.scenario = scenario
+        self.run_dir = run_dir
+        self.master = 'http://%s:%d' % (tb.address(scenario.manager.name), MASTER_PORT)
+
+    def env(self, host):
+        env = dict(os.environ, ROS_MASTER_URI=self.master, ROS_IP=self.tb.address(host),
+                   ROS_HOME=os.path.join(self.run_dir, 'ros_home', host))
+        env.pop('ROS_HOSTNAME', None)
+        return env
+
+    def popen(self, host, argv, log):
+        return self.tb.popen(host, argv, env=self.env(host),
+                             log=os.path.join(self.run_dir, '%s.log' % log))
+
+    def launch(self, host, name, *args):
+        return self.popen(host, ['roslaunch', '--wait', 'server_select', name] + list(args)
+                          + ['output:=log'], host)
+
+    def start_master(self):
+        manager = self.scenario.manager.name
+        self.popen(manager, ['roscore', '-p', str(MASTER_PORT)], 'roscore')
+        up = wait_until(lambda: self.tb.run(manager, ['rostopic', 'list'], env=self.env(manager),
+                                            timeout=10).returncode == 0, 30.0, period=0.3)
+        if not up:
+            raise EmulatorError('roscore on %s did not come up within 30 s' % manager)
+
+    def start_nodes(self, mode, options, bag):
+        scenario, manager = self.scenario, self.scenario.manager.name
+        servers, robots = scenario.of_role('server'), scenario.of_role('robot')
+        if mode == 'oracle':
+            self.launch(manager, 'oracle.launch', 'scenario:=%s' % scenario.source,
+                        't0:=%.6f' % self.tb.t0, 'robots:=%s' % _ids(robots))
+        else:
+            self.launch(manager, 'manager.launch', 'robots:=%s' % _ids(robots),
+                        'servers:=%s' % _ids(servers), 'window:=%g' % options.window,
+                        'hysteresis:=%g' % options.hysteresis)
+        self.popen(manager, ['rosbag', 'record', '--tcpnodelay', '-O', bag, '-e', RECORDED],
+                   'rosbag')
+        for server in servers:
+            self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id)
+        for robot in robots:
+            self.launch(robot.name, 'robot.launch', 'robot_id:=%d' % robot.id,
+                        'servers:=%s' % _ids(servers),
+                        'mode:=%s' % ('fixed' if mode == 'fixed' else 'select'),
+                        'fixed_server:=%d' % options.fixed_server,
+                        'probe_rate:=%g' % options.probe_rate,
+                        'probe_timeout:=%g' % options.probe_timeout,
+                        'task_rate:=%g' % options.task_rate, 'task_size:=%d' % options.task_size,
+                        'task_timeout:=%g' % options.task_timeout,
+                        'start_delay:=%g' % options.start_delay)
+
+
+def run_mode(scenario_path, mode, out_dir, options=None, log=print):
+    """Run ``mode`` on the scenario; return the path of the recorded bag."""
+    if mode not in MODES:
+        raise ValueError('unknown mode %r, expected one of %s' % (mode, ', '.join(MODES)))
+    options = options or RunOptions()
+    scenario_path = os.path.abspath(scenario_path)
+    scenario = Scenario.load(scenario_path)
+    if mode == 'fixed' and options.fixed_server not in [s.id for s in scenario.of_role('server')]:
+        raise ScenarioError('fixed server %d is not a server of %s'
+                            % (options.fixed_server, scenario_path))
+    run_dir = os.path.abspath(os.path.join(out_dir, mode))
+    os.makedirs(run_dir, exist_ok=True)
+    bag = os.path.join(out_dir, '%s.bag' % mode)
+    if os.path.exists(bag):
+        os.unlink(bag)
+    with Testbed(scenario, scenario_path, run_dir, prefix=options.prefix) as tb:
+        run = _Run(tb, scenario, run_dir)
+        run.start_master()
+        run.start_nodes(mode, options, bag)
+        log('%s: %s running until scenario time %.0f s (%s)'
+            % (scenario.name, mode, scenario.duration, run_dir))
+        tb.sleep_until(scenario.duration)
+        meta = {'scenario': scenario_path, 'scenario_name': scenario.name,
+                'mode': mode, 't0': tb.t0, 'duration': scenario.duration,
+                'end': tb.scenario_time(), 'hosts': tb.hosts, 'options': vars(options)}
+    with open(bag + '.json', 'w') as stream:
+        json.dump(meta, stream, indent=1)
+    if not os.path.exists(bag):
+        raise EmulatorError('no bag was written for %s (see %s/rosbag.log)' % (mode, run_dir))
+    return bag
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        description='Run the selection experiment on the testbed and analyse the bags.')
+    parser.add_argument('--scenario', required=True, help='scenario YAML file')
+    parser.add_argument('--modes', default='select,fixed,oracle',
+                        help='comma-separated modes (default: select,fixed,oracle)')
+    parser.add_argument('--out', default='results/eval', help='output folder')
+    parser.add_argument('--fixed-server', type=int, default=1)
+    parser.add_argument('--task-rate', type=float, default=default('task_rate'))
+    parser.add_argument('--task-size', type=int, default=default('task_size'))
+    parser.add_argument('--window', type=float, default=default('window'))
+    parser.add_argument('--hysteresis', type=float, default=default('hysteresis'))
+    parser.add_argument('--analyze-only', action='store_true',
+                        help='do not run: analyse the bags already in --out')
+    args = parser.parse_args(argv)
+    modes = [m for m in args.modes.split(',') if m]
+    bad = [m for m in modes if m not in MODES]
+    if bad or not modes:
+        parser.error('unknown modes %s (expected %s)' % (bad, ', '.join(MODES)))
+    out = os.path.join(args.out, Scenario.load(args.scenario).name)
+    options = RunOptions(fixed_server=args.fixed_server, window=args.window,
+                         task_rate=args.task_rate, task_size=args.task_size,
+                         hysteresis=args.hysteresis)
+    try:
+        if not args.analyze_only:
+            for mode in modes:
+                run_mode(args.scenario, mode, out, options)
+    except (EmulatorError, ScenarioError) as error:
+        print('evaluate: %s' % error, file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print('evaluate: interrupted; the testbed was torn down', file=sys.stderr)
+        return 130
+    from server_select.testbed import bag_analysis
+    report = bag_analysis.analyze(out, modes)
+    print(report)
+    return 0

@@ -1,0 +1,222 @@
+"""Testbed hosts in network namespaces joined by the link emulator (no rospy).
+
+A :class:`Testbed` gives every host of a scenario its own network namespace
+``<prefix>-<host>`` and address ``<subnet>.<n>``, starts :mod:`server_select.testbed.linkemu`
+between them, runs commands inside hosts, and tears everything down on exit, Ctrl-C or
+error. A later run removes what a crashed one left (namespaces with its prefix and the
+processes inside them, a stale emulator). Needs root and /dev/net/tun.
+"""
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+from server_select.core.procs import stop_group
+from server_select.testbed.linkemu import EmulatorError
+
+STATE_DIR = '/run/server_select-testbed'
+
+
+def check_privileges():
+    """Raise EmulatorError with a clear reason when the testbed cannot run here."""
+    if os.geteuid() != 0:
+        raise EmulatorError('the testbed needs root (network namespaces, TUN devices): '
+                            'run as root, e.g. with sudo')
+    if not os.path.exists('/dev/net/tun'):
+        raise EmulatorError('the testbed needs TUN support: /dev/net/tun is missing')
+    if shutil.which('ip') is None:
+        raise EmulatorError('the testbed needs the "ip" command (Debian package iproute2)')
+
+
+def available():
+    """(True, '') when the testbed can run here, else (False, reason)."""
+    try:
+        check_privileges()
+    except EmulatorError as error:
+        return False, str(error)
+    return True, ''
+
+
+def _netns_list():
+    out = subprocess.run(['ip', 'netns', 'list'], stdout=subprocess.PIPE,
+                         universal_newlines=True, check=False).stdout
+    return [line.split()[0] for line in out.splitlines() if line.strip()]
+
+
+def _netns_pids(netns):
+    out = subprocess.run(['ip', 'netns', 'pids', netns], stdout=subprocess.PIPE,
+                         stderr=subprocess.DEVNULL, universal_newlines=True, check=False).stdout
+    return [int(p) for p in out.split()]
+
+
+def _kill_all(pids, grace=5.0):
+    """SIGTERM, then SIGKILL what is left after ``grace`` seconds."""
+    for pid in pids:
+        try:
+            os.kill(pid, signal.SIGTERM)
+        except ProcessLookupError:
+            pass
+    deadline = time.monotonic() + grace
+    while time.monotonic() < deadline and any(_alive(p) for p in pids):
+        time.sleep(0.05)
+    for pid in pids:
+        if _alive(pid):
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:  # a zombie child counts as gone
+        with open('/proc/%d/stat' % pid) as stream:
+            return stream.read().split(')')[-1].split()[0] != 'Z'
+    except OSError:
+        return False
+
+
+def cleanup(prefix):
+    """Remove the namespaces, processes and emulator a run with ``prefix`` left behind."""
+    removed = []
+    state = os.path.join(STATE_DIR, prefix + '.json')
+    if os.path.exists(state):
+        try:
+            with open(state) as stream:
+                pid = json.load(stream).get('emulator_pid')
+            if pid and _alive(pid):
+                _kill_all([pid])
+                removed.append('emulator %d' % pid)
+        except (OSError, ValueError):
+            pass
+        os.unlink(state)
+    for netns in _netns_list():
+        if netns.startswith(prefix + '-'):
+            _kill_all(_netns_pids(netns))
+            subprocess.run(['ip', 'netns', 'del', netns], check=False)
+            removed.append(netns)
+    return removed
+
+
+def leftovers(prefix):
+    """What of a testbed with ``prefix`` still exists (for tests of the teardown)."""
+    found = [n for n in _netns_list() if n.startswith(prefix + '-')]
+    links = subprocess.run(['ip', '-o', 'link'], stdout=subprocess.PIPE,
+                           universal_newlines=True, check=False).stdout
+    found += [x.split(':')[1].strip() for x in links.splitlines()
+              if x.split(':')[1].strip().startswith(prefix)]
+    if os.path.exists(os.path.join(STATE_DIR, prefix + '.json')):
+        found.append('state file')
+    return found
+
+
+class Testbed(object):
+    """The hosts of one scenario, up between ``__enter__`` and ``__exit__``."""
+
+    def __init__(self, scenario, scenario_path, run_dir, prefix='ssb', subnet='10.231.0',
+                 seed=0):
+        self.scenario = scenario
+        self.scenario_path = os.path.abspath(scenario_path)
+        self.run_dir = os.path.abspath(run_dir)
+        self.prefix = prefix
+        self.seed = seed
+        self.hosts = {}
+        for index, name in enumerate(scenario.hosts, start=1):
+            self.hosts[name] = {'netns': '%s-%s' % (prefix, name),
+                                'address': '%s.%d' % (subnet, index),
+                                'device': '%s%d' % (prefix, index)}
+        self.emulator = None
+        self.t0 = None
+        self.processes = []
+        self._old_handlers = {}
+
+    def address(self, host):
+        return self.hosts[host]['address']
+
+    def __enter__(self):
+        self.up()
+        return self
+
+    def __exit__(self, *exc):
+        self.down()
+        return False
+
+    def up(self):
+        check_privileges()
+        cleanup(self.prefix)
+        os.makedirs(self.run_dir, exist_ok=True)
+        for sig in (signal.SIGTERM, signal.SIGHUP):
+            self._old_handlers[sig] = signal.signal(sig, self._on_signal)
+        try:
+            for host in self.hosts.values():
+                netns = host['netns']
+                subprocess.run(['ip', 'netns', 'add', netns], check=True)
+                subprocess.run(['ip', '-n', netns, 'link', 'set', 'lo', 'up'], check=True)
+                subprocess.run(['ip', 'netns', 'exec', netns, 'sysctl', '-q', '-w',
+                                'net.ipv6.conf.all.disable_ipv6=1'], check=True)
+            hosts_file = os.path.join(self.run_dir, 'hosts.json')
+            with open(hosts_file, 'w') as stream:
+                json.dump(self.hosts, stream, indent=1)
+            self.emulator = subprocess.Popen(
+                [sys.executable, '-m', 'server_select.testbed.linkemu',
+                 '--scenario', self.scenario_path, '--hosts', hosts_file, '--seed', str(self.seed),
+                 '--stats', os.path.join(self.run_dir, 'link_stats.json')],
+                stdout=subprocess.PIPE, universal_newlines=True, start_new_session=True)
+            os.makedirs(STATE_DIR, exist_ok=True)
+            with open(os.path.join(STATE_DIR, self.prefix + '.json'), 'w') as stream:
+                json.dump({'emulator_pid': self.emulator.pid, 'run_dir': self.run_dir}, stream)
+            line = self.emulator.stdout.readline().split()
+            if len(line) != 2 or line[0] != 'ready':
+                raise EmulatorError('link emulator did not start (exit %s)' % self.emulator.wait())
+            self.t0 = float(line[1])
+        except BaseException:
+            self.down()
+            raise
+
+    def _on_signal(self, signum, _frame):
+        raise KeyboardInterrupt('signal %d' % signum)
+
+    def scenario_time(self):
+        return time.time() - self.t0
+
+    def sleep_until(self, t):
+        """Sleep until scenario time ``t``."""
+        while self.scenario_time() < t:
+            time.sleep(min(0.2, max(0.0, t - self.scenario_time())))
+
+    def popen(self, host, argv, env=None, log=None, **kwargs):
+        """Start ``argv`` inside ``host``; it is stopped by :meth:`down`."""
+        stream = open(log, 'w') if log else subprocess.DEVNULL
+        proc = subprocess.Popen(['ip', 'netns', 'exec', self.hosts[host]['netns']] + list(argv),
+                                env=env, stdout=stream, stderr=subprocess.STDOUT,
+                                start_new_session=True, **kwargs)
+        self.processes.append(proc)
+        return proc
+
+    def run(self, host, argv, env=None, timeout=60, **kwargs):
+        """Run ``argv`` inside ``host`` to completion; return the CompletedProcess."""
+        return subprocess.run(['ip', 'netns', 'exec', self.hosts[host]['netns']] + list(argv),
+                              env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              universal_newlines=True, timeout=timeout, **kwargs)
+
+    def down(self):
+        """Stop everything started, the emulator, and delete the namespaces."""
+        for proc in reversed(self.processes):
+            stop_group(proc)
+        self.processes = []
+        if self.emulator is not None:
+            stop_group(self.emulator, signal.SIGTERM, 5.0)
+            self.emulator = None
+        cleanup(self.prefix)
+        for sig, handler in self._old_handlers.items():
+            signal.signal(sig, handler)
+        self._old_handlers = {}

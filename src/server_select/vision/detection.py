@@ -1,0 +1,120 @@
+"""Target detection in camera frames with OpenCV (no rospy): Haar cascades or HOG people."""
+
+import collections
+import os
+
+import cv2
+import numpy as np
+
+from server_select.core.params import default
+from server_select.vision.image_codec import ImageError, to_array, to_gray
+
+Box = collections.namedtuple('Box', 'x y width height label score')
+
+# Where Debian's opencv-data installs the cascades (its python3-opencv has no cv2.data).
+DEBIAN_CASCADES = '/usr/share/opencv4/haarcascades'
+
+
+class DetectorError(ValueError):
+    """A detector configuration that cannot be used."""
+
+
+def cascade_dir():
+    """The folder of OpenCV's Haar cascades: ``cv2.data.haarcascades`` (pip wheels) or
+    Debian's opencv-data folder; DetectorError when neither exists."""
+    data = getattr(cv2, 'data', None)
+    for folder in (getattr(data, 'haarcascades', None), DEBIAN_CASCADES):
+        if folder and os.path.isdir(folder):
+            return folder
+    raise DetectorError('no Haar cascades found: neither cv2.data.haarcascades nor %s '
+                        '(Debian package opencv-data)' % DEBIAN_CASCADES)
+
+
+def make_detector(param):
+    """The detector the ``detector``, ``cascade``, ``scale_factor``, ``min_neighbors`` and
+    ``min_size`` parameters describe; ``param(name)`` reads one (the server and a robot in
+    local mode build theirs here, so both do the same work)."""
+    return Detector(kind=param('detector'), cascade=param('cascade'),
+                    scale_factor=param('scale_factor'), min_neighbors=param('min_neighbors'),
+                    min_size=param('min_size'))
+
+
+class Detector(object):
+    """``detect(frame)`` -> list of :class:`Box`.
+
+    ``kind`` ``haar``: a cascade of :func:`cascade_dir` (by file name) or a path;
+    ``kind`` ``hog``: OpenCV's default HOG people detector.
+    """
+
+    def __init__(self, kind=default('detector'), cascade=default('cascade'),
+                 scale_factor=default('scale_factor'), min_neighbors=default('min_neighbors'),
+                 min_size=default('min_size'), label=None):
+        self.kind = kind
+        self.scale_factor = float(scale_factor)
+        self.min_neighbors = int(min_neighbors)
+        self.min_size = int(min_size)
+        if kind == 'haar':
+            folder = None if os.path.isabs(cascade) else cascade_dir()
+            path = os.path.join(folder, cascade) if folder else cascade
+            if not os.path.isfile(path):
+                available = sorted(f for f in os.listdir(folder or os.path.dirname(path))
+                                   if f.endswith('.xml')) if folder else []
+                raise DetectorError('no cascade %r (%s has: %s)'
+                                    % (cascade, folder or 'path', ', '.join(available)))
+            self.classifier = cv2.CascadeClassifier(path)
+            if self.classifier.empty():
+                raise DetectorError('cannot load cascade %s' % path)
+            name = os.path.basename(path)[len('haarcascade_'):-len('.xml')] \
+                if os.path.basename(path).startswith('haarcascade_') else 'target'
+            self.label = label or ('face' if 'face' in name else name)
+        elif kind == 'hog':
+            self.hog = cv2.HOGDescriptor()
+            self.hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+            self.label = label or 'person'
+        else:
+            raise DetectorError('unknown detector %r (expected haar or hog)' % kind)
+
+    def detect(self, frame):
+        if self.kind == 'haar':
+            boxes, _, weights = self.classifier.detectMultiScale3(
+                to_gray(frame), scaleFactor=self.scale_factor, minNeighbors=self.min_neighbors,
+                minSize=(self.min_size, self.min_size), outputRejectLevels=True)
+            return [Box(int(x), int(y), int(w), int(h), self.label, float(s))
+                    for (x, y, w, h), s in zip(boxes, np.ravel(weights))]
+        image = frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+        boxes, weights = self.hog.detectMultiScale(image, winStride=(8, 8), padding=(8, 8),
+                                                   scale=1.05)
+        return [Box(int(x), int(y), int(w), int(h), self.label, float(s))
+                for (x, y, w, h), s in zip(boxes, np.ravel(weights))]
+
+
+def annotate(frame, boxes):
+    """A BGR copy of ``frame`` with the boxes drawn and labelled."""
+    image = frame.copy() if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+    for b in boxes:
+        cv2.rectangle(image, (b.x, b.y), (b.x + b.width, b.y + b.height), (0, 255, 0), 2)
+        cv2.putText(image, '%s %.1f' % (b.label, b.score), (b.x, max(12, b.y - 4)),
+                    cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 255, 0), 1)
+    return image
+
+
+def iou(a, b):
+    """Intersection over union of two boxes (x, y, width, height ...)."""
+    x1, y1 = max(a[0], b[0]), max(a[1], b[1])
+    x2, y2 = min(a[0] + a[2], b[0] + b[2]), min(a[1] + a[3], b[1] + b[3])
+    inter = max(0, x2 - x1) * max(0, y2 - y1)
+    union = a[2] * a[3] + b[2] * b[3] - inter
+    return inter / float(union) if union else 0.0
+
+
+def search_frame(detector, encoding, height, width, step, data, max_pixels):
+    """The work of one image task: decode the frame, detect, annotate.
+
+    Returns ``(boxes, annotated BGR array)``; a frame that is too large or cannot be
+    decoded raises :class:`~server_select.vision.image_codec.ImageError`.
+    """
+    if height * width > max_pixels:
+        raise ImageError('frame of %dx%d exceeds max_image_pixels %d' % (width, height, max_pixels))
+    frame = to_array(encoding, height, width, step, data)
+    boxes = detector.detect(frame)
+    return boxes, annotate(frame, boxes)

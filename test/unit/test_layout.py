@@ -1,0 +1,65 @@
+"""The package's shape: ROS-free layers stay ROS-free, modules and functions stay small."""
+
+import ast
+import os
+import subprocess
+import sys
+
+import pytest
+
+SRC = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'src', 'server_select')
+MAX_MODULE_LINES = 250
+MAX_FUNCTION_LINES = 50
+
+
+def modules(*layers):
+    for layer in layers or ('',):
+        for root, _, files in os.walk(os.path.join(SRC, layer)):
+            for name in sorted(files):
+                if name.endswith('.py'):
+                    yield os.path.join(root, name)
+
+
+def module_name(path):
+    rel = os.path.relpath(path, os.path.join(SRC, '..'))
+    return rel[:-3].replace(os.sep, '.').replace('.__init__', '')
+
+
+@pytest.mark.parametrize('layer', ['core', 'vision'])
+def test_ros_free_layers_import_no_rospy(layer):
+    """Importing every module of the layer (in a fresh interpreter) loads no rospy."""
+    names = [module_name(p) for p in modules(layer)]
+    code = ('import sys\nfor m in %r:\n    __import__(m)\n'
+            'print(sorted(m for m in sys.modules if m == "rospy" or m.startswith("rospy.")))'
+            % names)
+    out = subprocess.run([sys.executable, '-c', code], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, universal_newlines=True, check=False,
+                         env=dict(os.environ, PYTHONPATH=os.pathsep.join(
+                             [os.environ.get('PYTHONPATH', ''), os.path.dirname(SRC)])))
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == '[]', '%s imports rospy: %s' % (layer, out.stdout)
+
+
+def test_modules_are_short():
+    long = dict((module_name(p), n) for p in modules()
+                for n in [sum(1 for _ in open(p))] if n > MAX_MODULE_LINES)
+    assert long == {}
+
+
+def test_functions_are_short():
+    long = {}
+    for path in modules():
+        with open(path) as stream:
+            tree = ast.parse(stream.read(), path)
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                length = node.end_lineno - node.lineno + 1
+                if length > MAX_FUNCTION_LINES:
+                    long['%s.%s' % (module_name(path), node.name)] = length
+    assert long == {}
+
+
+def test_nothing_finds_files_above_the_package():
+    """Installed packages have no ``../../config``: files are found through the package."""
+    offenders = [module_name(p) for p in modules() if "'..', '..'" in open(p).read()]
+    assert offenders == []
