@@ -19,6 +19,7 @@ import sys
 import threading
 import time
 
+from server_select.core.procs import wait_until
 from server_select.bench.netbench import connect, recv_frame, send_frame
 
 STAMP = struct.Struct('!d')
@@ -71,10 +72,7 @@ def sender(port, count, size, interval, warmup=20):
     from server_select.msg import BenchPayload
     rospy.init_node('latency_bench_sender', anonymous=True, disable_signals=True)
     pub = rospy.Publisher(TOPIC, BenchPayload, queue_size=count + warmup + 10)
-    deadline = time.monotonic() + 30
-    while pub.get_num_connections() == 0 and time.monotonic() < deadline:
-        time.sleep(0.01)
-    if pub.get_num_connections() == 0:
+    if not wait_until(lambda: pub.get_num_connections() > 0, 30.0, period=0.01):
         raise RuntimeError('no subscriber connected to %s' % TOPIC)
     sock = connect('127.0.0.1', port)
     payload = bytes(size)

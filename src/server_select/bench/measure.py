@@ -86,6 +86,7 @@ def bench_table1(tiny, log, area):
         result[label] = dict(
             ('%s_%s' % (who, what), statistics.median(s[who][what] for s in samples))
             for who in ('robot', 'server') for what in ('cpu_percent', 'rss_mb'))
+        result[label + '_runs'] = samples     # every run, for the spread
     return result
 
 

@@ -18,6 +18,7 @@ import struct
 import sys
 import time
 
+from server_select.core.procs import wait_until
 HEADER = struct.Struct('!I')
 
 
@@ -67,15 +68,18 @@ def echo_server(port, host='0.0.0.0', nodelay=True, ready=None, max_connections=
 
 
 def connect(host, port, timeout=10.0, nodelay=True):
-    deadline = time.monotonic() + timeout
-    while True:
+    """A connection to host:port, retried until ``timeout`` (the server may be starting)."""
+    sockets = []
+
+    def attempt():
         try:
-            sock = socket.create_connection((host, port), timeout=timeout)
-            break
+            sockets.append(socket.create_connection((host, port), timeout=timeout))
         except OSError:
-            if time.monotonic() > deadline:
-                raise
-            time.sleep(0.05)
+            return False
+        return True
+    if not wait_until(attempt, timeout):
+        raise ConnectionError('cannot connect to %s:%d within %.0f s' % (host, port, timeout))
+    sock = sockets[0]
     sock.settimeout(None)
     if nodelay:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)

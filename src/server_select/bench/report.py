@@ -47,17 +47,21 @@ def emulated(em):
 
 
 def table1(t1):
+    def cpu(label, who):
+        runs = [run[who]['cpu_percent'] for run in t1.get(label + '_runs', [])]
+        spread = ' (%.1f-%.1f)' % (min(runs), max(runs)) if len(runs) > 1 else ''
+        return '%.1f%s' % (t1[label][who + '_cpu_percent'], spread)
     rows = []
     for label in ('local', 'offload'):
         r, p = t1[label], PAPER_TABLE1[label]
         rows.append(('robot detects itself' if label == 'local' else 'offloaded to the server',
-                     '%.1f' % r['robot_cpu_percent'], '%.1f' % r['server_cpu_percent'],
+                     cpu(label, 'robot'), cpu(label, 'server'),
                      '%.0f' % r['robot_rss_mb'], '%.0f' % r['server_rss_mb'],
                      '%.1f' % p['robot_cpu'], '%.1f' % p['server_cpu']))
     return ['## Table 1: CPU with and without offloading', '',
             'Robot handling 640x480 frames at %d fps (Haar face cascade, the same detector '
-            'settings on robot and server); CPU%% over %.0f s (100 = one core), median of %d '
-            'runs.' % (t1['frame_rate'], t1['window_s'], t1['repeats']), '',
+            'settings on robot and server); CPU%% over %.0f s (100 = one core), median (min-max) '
+            'of %d runs.' % (t1['frame_rate'], t1['window_s'], t1['repeats']), '',
             markdown_table(('', 'robot CPU % (here)', 'server CPU % (here)', 'robot RSS MiB',
                             'server RSS MiB', 'robot CPU % (paper)', 'server CPU % (paper)'),
                            rows)]

@@ -71,14 +71,19 @@ def parse_positive(name, value, integer=False):
     return number
 
 
+def _float(name, value, kind):
+    """``value`` as a float, or ParamError saying a ``kind`` number was expected."""
+    if isinstance(value, bool):
+        raise ParamError('%s: expected a %s number, got %r' % (name, kind, value))
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ParamError('%s: expected a %s number, got %r' % (name, kind, value))
+
+
 def parse_non_negative(name, value):
     """A finite number >= 0."""
-    if isinstance(value, bool):
-        raise ParamError('%s: expected a non-negative number, got %r' % (name, value))
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ParamError('%s: expected a non-negative number, got %r' % (name, value))
+    number = _float(name, value, 'non-negative')
     if not 0 <= number < float('inf'):
         raise ParamError('%s: expected a non-negative number, got %r' % (name, value))
     return number
@@ -119,12 +124,7 @@ def parse_count(name, value):
 
 def parse_number(name, value):
     """Any finite number."""
-    if isinstance(value, bool):
-        raise ParamError('%s: expected a number, got %r' % (name, value))
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ParamError('%s: expected a number, got %r' % (name, value))
+    number = _float(name, value, 'finite')
     if not math.isfinite(number):
         raise ParamError('%s: expected a finite number, got %r' % (name, value))
     return number

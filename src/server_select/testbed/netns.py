@@ -15,7 +15,7 @@ import subprocess
 import sys
 import time
 
-from server_select.core.procs import stop_group
+from server_select.core.procs import stop_group, wait_until
 from server_select.testbed.linkemu import EmulatorError
 
 STATE_DIR = '/run/server_select-testbed'
@@ -60,9 +60,7 @@ def _kill_all(pids, grace=5.0):
             os.kill(pid, signal.SIGTERM)
         except ProcessLookupError:
             pass
-    deadline = time.monotonic() + grace
-    while time.monotonic() < deadline and any(_alive(p) for p in pids):
-        time.sleep(0.05)
+    wait_until(lambda: not any(_alive(p) for p in pids), grace)
     for pid in pids:
         if _alive(pid):
             try:
