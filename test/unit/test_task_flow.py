@@ -1,11 +1,13 @@
-"""The robot's task path without a master: every task ends in exactly one report."""
+"""The robot's task path without a master: every task ends in exactly one report, and a
+task whose server does not answer goes to the next candidate."""
 
 import itertools
 
 import pytest
 
-from server_select.core.task_flow import (DUPLICATE, LATE, LOCAL, NO_SERVER, UNKNOWN,
-                                          TaskFlow)
+from server_select.core.attempts import AttemptClock
+from server_select.core.task_flow import (DUPLICATE, FOREIGN, LATE, LOCAL, NO_SERVER, RETRIED,
+                                          UNKNOWN, TaskFlow)
 from server_select.msg import SelectionFlag, TaskReport
 
 
@@ -18,18 +20,24 @@ class Clock(object):
 
 
 class World(object):
-    """What a TaskFlow is handed: a target, a wire, a checker and a report sink."""
+    """What a TaskFlow is handed: candidates, a wire, a checker, evidence and report sinks."""
 
-    def __init__(self, target=3, timeout=2.0, ids=None):
+    def __init__(self, candidates=(3,), timeout=2.0, ids=None, first=0.5, **kwargs):
         self.clock = Clock()
-        self.target = target
+        self.candidates = list(candidates)
         self.published, self.reports, self.local_runs = [], [], []
-        self.flow = TaskFlow('sort', timeout, lambda: self.target, self.make,
-                             self.published.append, self.check, self.reports.append,
-                             run_local=self.run_local, ids=ids, clock=self.clock)
+        self.failures, self.successes = [], []
+        self.flow = TaskFlow(
+            'sort', timeout, lambda: list(self.candidates), self.make,
+            lambda request, server: self.published.append((request, server)), self.check,
+            self.reports.append, run_local=self.run_local,
+            on_failure=lambda server, why: self.failures.append(server),
+            on_success=self.successes.append,
+            deadlines=AttemptClock(timeout, first=first, floor=0.1, min_samples=1),
+            ids=ids, clock=self.clock, **kwargs)
 
-    def make(self, task_id, server, stamp):
-        return ('request', task_id, server, stamp), 'context %d' % task_id
+    def make(self, task_id, stamp):
+        return ('request', task_id, stamp), 'context %d' % task_id
 
     def check(self, result, context):
         return None if result == 'good ' + context else 'wrong result'
@@ -37,6 +45,10 @@ class World(object):
     def run_local(self, task_id, stamp):
         self.local_runs.append(task_id)
         return None if task_id % 2 else 'local failure'
+
+    def answer(self, task_id, server, good=True):
+        return self.flow.resolve(task_id, server, True, '',
+                                 'good context %d' % task_id if good else 'garbage')
 
 
 def test_no_server_and_local_are_the_message_constants():
@@ -46,70 +58,104 @@ def test_no_server_and_local_are_the_message_constants():
 
 def test_send_then_answer_gives_one_checked_report_with_the_round_trip():
     w = World()
-    task_id = w.flow.send_next('stamp-1')
-    assert w.published == [('request', 1, 3, 'stamp-1')] and task_id == 1
-    assert len(w.flow) == 1 and w.reports == []
+    assert w.flow.send_next('stamp-1') == 1
+    assert w.published == [(('request', 1, 'stamp-1'), 3)]
     w.clock.now += 0.25
-    outcome = w.flow.resolve(1, 3, True, '', 'good context 1')
-    assert w.reports == [outcome]
-    assert outcome == (1, 'sort', 'stamp-1', 3, 3, True, '', pytest.approx(0.25))
+    outcome = w.answer(1, 3)
+    assert w.reports == [outcome] and w.successes == [3]
+    assert outcome == (1, 'sort', 'stamp-1', 3, 3, True, '', pytest.approx(0.25), 1)
     assert (w.flow.sent, w.flow.ok, w.flow.failed, len(w.flow)) == (1, 1, 0, 0)
-    assert list(w.flow.rtts) == [pytest.approx(0.25)]
 
 
-def test_a_wrong_result_or_an_error_result_fails_the_task():
-    w = World()
+def test_an_error_answer_goes_to_the_next_candidate_and_the_server_is_blamed():
+    w = World(candidates=(3, 1))
+    w.flow.send_next('s1')
+    assert w.flow.resolve(1, 3, False, 'server overloaded') == RETRIED
+    assert w.failures == [3] and [s for _, s in w.published] == [3, 1]
+    outcome = w.answer(1, 1)
+    assert (outcome.ok, outcome.server_id, outcome.answered_by, outcome.attempts) == \
+        (True, 3, 1, 2)
+
+
+def test_a_wrong_result_with_no_candidate_left_fails_the_task():
+    w = World(candidates=(3,))
+    w.flow.send_next('s1')
+    outcome = w.answer(1, 3, good=False)
+    assert (outcome.ok, outcome.error, outcome.attempts) == (False, 'wrong result', 1)
+    assert (w.flow.ok, w.flow.failed) == (0, 1) and w.failures == [3]
+
+
+def test_a_silent_server_is_left_at_its_attempt_deadline_and_nothing_is_lost():
+    w = World(candidates=(3, 1, 2), timeout=2.0, first=0.5)
+    w.flow.send_next('s1')
+    w.clock.now += 0.49
+    assert w.flow.tick() == [] and len(w.published) == 1
+    w.clock.now += 0.01
+    w.flow.tick()
+    assert [s for _, s in w.published] == [3, 1] and w.failures == [3]
+    # the first server answers after all: first answer wins, the second is a duplicate
+    w.clock.now += 0.1
+    outcome = w.answer(1, 3)
+    assert (outcome.ok, outcome.answered_by, outcome.attempts) == (True, 3, 2)
+    assert outcome.rtt == pytest.approx(0.6)
+    assert w.answer(1, 1) == DUPLICATE
+    assert len(w.reports) == 1
+
+
+def test_deadlines_follow_each_servers_round_trips():
+    clock = AttemptClock(2.0, factor=5.0, floor=0.25, first=1.0, min_samples=3)
+    assert clock.seconds(1) == 1.0
+    for rtt in (0.010, 0.012, 0.011):
+        clock.add(1, rtt)
+    assert clock.seconds(1) == 0.25                 # 5 x 12 ms is under the floor
+    for rtt in (0.2, 0.3, 0.3):
+        clock.add(2, rtt)
+    assert clock.seconds(2) == pytest.approx(1.5)
+    clock.add(2, 0.9)
+    assert clock.seconds(2) == 2.0                  # never past the task timeout
+
+
+def test_when_every_candidate_was_tried_the_task_fails_at_its_timeout():
+    w = World(candidates=(3, 1), timeout=2.0, first=0.5)
+    w.flow.send_next('s1')
+    for _ in range(30):
+        w.clock.now += 0.1
+        w.flow.tick()
+    (outcome,) = w.reports
+    assert (outcome.ok, outcome.answered_by, outcome.attempts, outcome.stamp) == \
+        (False, NO_SERVER, 2, 's1')
+    assert 'task_timeout 2 s (2 attempts: servers 3, 1)' in outcome.error
+    assert w.failures == [3, 1]
+    assert w.answer(1, 1) == LATE
+
+
+def test_duplicate_late_unknown_and_foreign_results_are_ignored_and_counted():
+    w = World(timeout=1.0, first=1.0)
     w.flow.send_next('s1')
     w.flow.send_next('s2')
-    wrong = w.flow.resolve(1, 3, True, '', 'garbage')
-    refused = w.flow.resolve(2, 3, False, 'empty task')
-    assert (wrong.ok, wrong.error) == (False, 'wrong result')
-    assert (refused.ok, refused.error, refused.answered_by) == (False, 'empty task', 3)
-    assert (w.flow.ok, w.flow.failed) == (0, 2) and list(w.flow.rtts) == []
-
-
-def test_deadline_expires_oldest_first_and_keeps_the_send_stamp():
-    w = World(timeout=2.0)
-    w.flow.send_next('s1')
+    w.flow.send_next('s3')
+    w.answer(1, 3)
+    assert w.answer(1, 3) == DUPLICATE
+    assert w.answer(3, 7) == FOREIGN               # never sent to server 7
     w.clock.now += 1.0
-    w.flow.send_next('s2')
-    w.clock.now += 0.999
-    assert w.flow.expire() == []
-    w.clock.now += 0.001
-    (first,) = w.flow.expire()
-    assert (first.task_id, first.stamp, first.server_id, first.answered_by, first.ok,
-            first.rtt) == (1, 's1', 3, NO_SERVER, False, None)
-    assert 'task_timeout 2 s' in first.error
-    w.clock.now += 1.0
-    assert [o.task_id for o in w.flow.expire()] == [2]
-    assert [r.task_id for r in w.reports] == [1, 2] and len(w.flow) == 0
-
-
-def test_duplicate_late_and_unknown_results_are_ignored_and_counted():
-    w = World(timeout=1.0)
-    w.flow.send_next('s1')
-    w.flow.send_next('s2')
-    w.flow.resolve(1, 3, True, '', 'good context 1')
-    assert w.flow.resolve(1, 3, True, '', 'good context 1') == DUPLICATE
-    w.clock.now += 1.0
-    w.flow.expire()
-    assert w.flow.resolve(2, 3, True, '', 'good context 2') == LATE
-    assert w.flow.resolve(99, 3, True, '', 'x') == UNKNOWN
-    assert [(r.task_id, r.ok) for r in w.reports] == [(1, True), (2, False)]
-    assert w.flow.ignored == {DUPLICATE: 1, LATE: 1, UNKNOWN: 1}
+    w.flow.tick()
+    assert w.answer(2, 3) == LATE
+    assert w.answer(99, 3) == UNKNOWN
+    assert [(r.task_id, r.ok) for r in w.reports] == [(1, True), (2, False), (3, False)]
+    assert w.flow.ignored == {DUPLICATE: 1, LATE: 1, UNKNOWN: 1, FOREIGN: 1}
 
 
 def test_no_server_selected_is_reported_at_once_and_nothing_is_published():
-    w = World(target=NO_SERVER)
+    w = World(candidates=())
     w.flow.send_next('s1')
     (report,) = w.reports
-    assert (report.server_id, report.answered_by, report.ok, report.error, report.stamp) == \
-        (NO_SERVER, NO_SERVER, False, 'no server selected', 's1')
+    assert (report.server_id, report.answered_by, report.ok, report.error, report.stamp,
+            report.attempts) == (NO_SERVER, NO_SERVER, False, 'no server selected', 's1', 0)
     assert w.published == [] and len(w.flow) == 0
 
 
 def test_local_work_is_run_in_the_robot_and_reported_as_local():
-    w = World(target=LOCAL)
+    w = World(candidates=(LOCAL,))
     w.flow.send_next('s1')
     w.flow.send_next('s2')
     assert w.local_runs == [1, 2] and w.published == []
@@ -123,24 +169,22 @@ def test_task_ids_are_shared_across_flows_of_one_robot():
     assert [a.flow.send_next('s'), b.flow.send_next('s'), a.flow.send_next('s')] == [1, 2, 3]
 
 
-def test_the_target_is_asked_at_send_time():
-    w = World(target=1)
+def test_candidates_are_asked_at_send_time_and_switches_counted():
+    w = World(candidates=(1,))
     w.flow.send_next('s1')
-    w.target = 2
+    w.candidates = [2, 1]
     w.flow.send_next('s2')
-    assert [p[2] for p in w.published] == [1, 2]
-    assert w.flow.resolve(2, 2, True, '', 'good context 2').server_id == 2
+    w.flow.send_next('s3')
+    assert [s for _, s in w.published] == [1, 2, 2] and w.flow.switches == 1
+    assert w.answer(2, 2).server_id == 2
 
 
-def test_remembered_ids_are_bounded():
-    w = World()
-    w.flow = TaskFlow('sort', 1.0, lambda: 3, w.make, w.published.append, w.check,
-                      w.reports.append, clock=w.clock, remember=5, keep_rtts=3)
+def test_remembered_ids_and_round_trips_are_bounded():
+    w = World(remember=5, keep_rtts=3)
     for _ in range(10):
-        task_id = w.flow.send_next('s')
-        w.flow.resolve(task_id, 3, True, '', 'good context %d' % task_id)
+        w.answer(w.flow.send_next('s'), 3)
     assert len(w.flow._ended) == 5 and len(w.flow.rtts) == 3
-    assert w.flow.resolve(1, 3, True, '', 'x') == UNKNOWN   # forgotten: no longer a duplicate
+    assert w.answer(1, 3) == UNKNOWN   # forgotten: no longer a duplicate
 
 
 @pytest.mark.parametrize('bad', [0, -1, float('nan')])

@@ -156,6 +156,12 @@ def parse_names(name, value):
     return value
 
 
+def parse_publisher(name, value):
+    """The name of the one node whose messages count; ``*`` (or empty) for any: None."""
+    value = parse_text(name, value).strip()
+    return None if value in ('', '*') else value
+
+
 def one_of(*choices):
     """A parser accepting one of ``choices`` (strings)."""
     def parse(name, value):
@@ -209,6 +215,21 @@ PARAMS = {
     'update_rate': Param(10.0, parse_positive, 're-evaluation rate between samples (Hz)'),
     'hysteresis': Param(0.0, parse_non_negative, 'keep the current server while within this '
                         'of the best (s); 0: the paper'),
+    'manager_timeout': Param(3.0, parse_positive, 'a flag older than this is stale: the robot '
+                             'ranks its servers itself (s)'),
+    'eject_time': Param(1.0, parse_positive, 'first ejection of a failing server (s); doubles '
+                        'with each ejection in a row'),
+    'eject_max': Param(30.0, parse_positive, 'longest ejection (s)'),
+    'probation_probes': Param(2, parse_count, 'good probes before an ejected server takes a '
+                              'task again'),
+    'retry_factor': Param(5.0, parse_positive, "an attempt's deadline: this x the server's "
+                          'recent p99 task round trip'),
+    'retry_floor': Param(0.25, parse_positive, "shortest attempt deadline (s)"),
+    'manager_node': Param('manager', parse_publisher, 'flags count only from this node '
+                          '(*: from any)'),
+    'robot_node': Param('robot{id}', parse_publisher, 'samples of robot {id} count only from '
+                        'this node (*: from any)'),
+    'master_check': Param(1.0, parse_positive, 'period of the check for a restarted roscore (s)'),
     'scenario': Param(REQUIRED, parse_text, 'scenario YAML file'),
     't0': Param(REQUIRED, parse_number, 'scenario time zero (epoch s)'),
     'duration': Param(30.0, parse_positive, 'how long to listen or measure (s)'),

@@ -1,61 +1,100 @@
-"""Which server a robot's next task goes to (no rospy).
+"""Which servers a robot's next task may go to, best first (no rospy).
 
-``select`` follows the manager's flags, ``fixed`` always names one server (the paper's
-baseline), ``local`` keeps the work in the robot.
+``select`` follows the manager's ranking while its flags are fresh, and ranks the servers
+itself from its own probe samples, with the manager's policy, when they are stale or name
+no server; ``fixed`` always names one server (the paper's baseline); ``local`` keeps the
+work in the robot. In ``select`` mode the robot's own evidence comes first: servers its
+:class:`~server_select.core.health.ServerHealth` has ejected are skipped.
 """
 
 import threading
+import time
 
-from server_select.core.task_flow import LOCAL, NO_SERVER
+from server_select.core.ranking import NO_SERVER, choose, rank_servers
+from server_select.core.task_flow import LOCAL
+from server_select.core.window import LatencyWindow
 
 MODES = ('select', 'fixed', 'local')
 
 
 class Selection(object):
-    """The robot's current target and the switches it made.
+    """The robot's view of where tasks go. Thread-safe."""
 
-    Thread-safe: the flag subscriber writes, the task timers read.
-    """
-
-    def __init__(self, robot_id, mode, fixed_server=None):
+    def __init__(self, robot_id, servers, mode, fixed_server=None, health=None, window=5.0,
+                 hysteresis=0.0, manager_timeout=3.0, clock=time.monotonic):
         if mode not in MODES:
             raise ValueError('unknown mode %r' % (mode,))
-        self.robot_id = robot_id
-        self.mode = mode
+        self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
         self.fixed_server = fixed_server
+        self.health = health
+        self.hysteresis, self.manager_timeout = hysteresis, manager_timeout
+        self.window = LatencyWindow(window)
+        self._clock = clock
         self._lock = threading.Lock()
-        self._selected = NO_SERVER
-        self._seen = False
-        self.switches = 0
+        self._flag = None          # (receive time, selected, ranking) of the last good flag
+        self._local = None         # the robot's own last choice
 
-    def on_flag(self, robot_id, server_id):
-        """A flag arrived; returns True when it changed this robot's selection."""
+    def on_flag(self, robot_id, server_id, ranking):
+        """A flag arrived: None if it is for another robot or taken, else why it is refused."""
         if robot_id != self.robot_id:
-            return False
+            return None
+        named = list(ranking) + ([server_id] if server_id != NO_SERVER else [])
+        unknown = sorted(set(named) - set(self.servers))
+        if unknown:
+            return 'names servers %s, not in this robot\'s servers %s' % (unknown, self.servers)
+        if server_id != NO_SERVER and server_id not in ranking:
+            return 'selects server %d, which its ranking %s lacks' % (server_id, list(ranking))
         with self._lock:
-            self._seen = True
-            if server_id == self._selected:
-                return False
-            if self._selected != NO_SERVER:
-                self.switches += 1
-            self._selected = server_id
-            return True
+            self._flag = (self._clock(), server_id, list(ranking))
+        return None
+
+    def on_sample(self, server, ok, rtt):
+        """One of the robot's own probe samples (ValueError for an impossible round trip)."""
+        self.window.add(self.robot_id, server, self._clock(), ok, rtt)
+
+    def manager_ranking(self):
+        """The fresh manager ranking (selected server first), or None when the last flag is
+        older than ``manager_timeout`` s or ranks no server."""
+        with self._lock:
+            flag = self._flag
+        if flag is None or self._clock() - flag[0] > self.manager_timeout or not flag[2]:
+            return None
+        _, selected, ranking = flag
+        return [selected] + [s for s in ranking if s != selected]
+
+    def own_ranking(self):
+        """The robot's own ranking from its probe samples, by the manager's policy."""
+        ranking = rank_servers(self.window.robot_stats(self.robot_id, self.servers,
+                                                       self._clock()))
+        with self._lock:
+            self._local = choose(ranking, self._local, self.hysteresis)
+            selected = self._local
+        return [s for s in [selected] if s != NO_SERVER] + \
+            [s for s in ranking.ranking if s != selected]
+
+    def deciding_locally(self):
+        return self.mode == 'select' and self.manager_ranking() is None
+
+    def candidates(self):
+        """Where a task may go now, best first: ``[LOCAL]``, ``[fixed server]``, or the
+        (manager's or own) ranking without the servers the robot's evidence ejected."""
+        if self.mode == 'local':
+            return [LOCAL]
+        if self.mode == 'fixed':
+            return [self.fixed_server]
+        ranking = self.manager_ranking()
+        if ranking is None:
+            ranking = self.own_ranking()
+        return self.health.order(ranking) if self.health is not None else ranking
 
     def target(self):
-        """The server a task sent now goes to: a server id, NO_SERVER or LOCAL."""
-        if self.mode == 'local':
-            return LOCAL
-        if self.mode == 'fixed':
-            return self.fixed_server
-        with self._lock:
-            return self._selected
+        """The first candidate, or NO_SERVER."""
+        candidates = self.candidates()
+        return candidates[0] if candidates else NO_SERVER
 
     def ready(self, answered):
-        """Whether tasks may start: the target is known to be up. ``answered`` is the set of
-        servers that have answered a probe (what fixed mode waits for)."""
-        if self.mode == 'local':
-            return True
+        """Whether tasks may start: ``answered`` is the set of servers that have answered a
+        probe (what fixed mode waits for)."""
         if self.mode == 'fixed':
             return self.fixed_server in answered
-        with self._lock:
-            return self._seen and self._selected != NO_SERVER
+        return self.mode == 'local' or bool(self.candidates())

@@ -1,15 +1,18 @@
-"""The robot's task path without ROS: make, send, check and track tasks, report each once.
+"""The robot's task path without ROS: make, send, re-send, check, report each task once.
 
 A :class:`TaskFlow` is handed callables for everything outside it (where to send, how to
-make and publish a request, how to check a result, where reports go, the clock), so it is
-tested without a master. It goes forward only::
+make and publish a request, how to check a result, where evidence and reports go, the
+clock), so it is tested without a master. It goes forward only::
 
-    send_next(stamp) -> target() -> make(task_id, server, stamp) -> publish(request)
-    resolve(result)  -> check(result, context) -> report(Outcome)     # an answer
-    expire()         -> report(Outcome)                               # the deadline
+    send_next(stamp) -> candidates() -> make(task_id, stamp) -> publish(request, server)
+    tick()           -> an attempt's deadline passed: on_failure(server), publish to the next
+                        candidate; the task's timeout passed: report(Outcome)
+    resolve(result)  -> check(result, context) -> on_success(server) -> report(Outcome)
 
-Every task sent yields exactly one :class:`Outcome`: answered (checked), failed (error
-result, wrong result, no answer within ``timeout``) or not sent at all (no server).
+Tasks are idempotent and carry their id: a task without an answer by its attempt deadline
+(a multiple of that server's recent round trips) is sent again to the next candidate it
+has not tried, and the first answer from any server it was sent to wins; later ones are
+counted as duplicates. Every task yields exactly one :class:`Outcome`.
 """
 
 import collections
@@ -17,57 +20,68 @@ import itertools
 import threading
 import time
 
+from server_select.core.attempts import AttemptClock
 from server_select.msg import TaskReport
 
 NO_SERVER = TaskReport.NO_SERVER
 LOCAL = TaskReport.LOCAL
 
-Pending = collections.namedtuple('Pending', 'task_id server_id stamp sent_at context')
-Pending.__doc__ = """A task in flight: where it went, its send stamp (for the report header),
-its send time on the flow's clock, and what ``check`` needs to judge the answer."""
-
 Outcome = collections.namedtuple(
-    'Outcome', 'task_id kind stamp server_id answered_by ok error rtt')
-Outcome.__doc__ = """How one task ended, as published on ``task_report`` (``rtt`` is None
-when no answer arrived)."""
+    'Outcome', 'task_id kind stamp server_id answered_by ok error rtt attempts')
+Outcome.__doc__ = """How one task ended, as published on ``task_report``: ``server_id`` is
+the first server it was sent to, ``rtt`` None when no answer arrived."""
 
 # What became of a result that resolves nothing.
-DUPLICATE, LATE, UNKNOWN = 'duplicate', 'late', 'unknown'
+DUPLICATE, LATE, UNKNOWN, FOREIGN, RETRIED = 'duplicate', 'late', 'unknown', 'foreign', 'retried'
+
+
+class _Pending(object):
+    """A task in flight: its request, check context, and the attempts made so far."""
+    __slots__ = ('task_id', 'stamp', 'request', 'context', 'started', 'attempts', 'deadline')
+
+    def __init__(self, task_id, stamp, request, context, started):
+        self.task_id, self.stamp, self.request, self.context = task_id, stamp, request, context
+        self.started, self.attempts, self.deadline = started, [], started
+
+    def sent_at(self, server):
+        return next((t for s, t in reversed(self.attempts) if s == server), None)
 
 
 class TaskFlow(object):
     """One stream of tasks of one robot, from creation to its one report.
 
-    :param kind: task type name (``sort``, ``image``) carried in every report.
-    :param timeout: seconds a task may wait for its answer.
-    :param target: ``() -> server id``, ``NO_SERVER`` or ``LOCAL`` (process it here).
-    :param make: ``(task_id, server_id, stamp) -> (request, context)``.
-    :param publish: ``(request) -> None``.
+    :param candidates: ``() -> [server ids]`` in order of preference, ``[LOCAL]`` to work
+        in the robot, ``[]`` when there is none.
+    :param make: ``(task_id, stamp) -> (request, context)``.
+    :param publish: ``(request, server_id) -> None``.
     :param check: ``(result, context) -> error string or None`` for a result reported ok.
     :param report: ``(Outcome) -> None``, called once per task.
-    :param run_local: ``(task_id, stamp) -> error or None``: the work done in the robot
-        when ``target()`` says ``LOCAL``.
+    :param run_local: ``(task_id, stamp) -> error or None``: the work done in the robot.
+    :param on_failure, on_success: ``(server, why)`` / ``(server)``: evidence about servers.
+    :param deadlines: an :class:`~server_select.core.attempts.AttemptClock`.
     :param ids: iterator of task ids (shared by the robot's streams: ids are per robot).
     """
 
-    def __init__(self, kind, timeout, target, make, publish, check, report, run_local=None,
-                 ids=None, clock=time.monotonic, remember=10000, keep_rtts=10000):
+    def __init__(self, kind, timeout, candidates, make, publish, check, report, run_local=None,
+                 on_failure=None, on_success=None, deadlines=None, ids=None,
+                 clock=time.monotonic, remember=10000, keep_rtts=10000):
         if not timeout > 0:
             raise ValueError('timeout must be positive, got %r' % (timeout,))
-        self.kind = kind
-        self.timeout = float(timeout)
-        self._target, self._make, self._publish = target, make, publish
+        self.kind, self.timeout = kind, float(timeout)
+        self._candidates, self._make, self._publish = candidates, make, publish
         self._check, self._report, self._run_local = check, report, run_local
+        self._on_failure = on_failure or (lambda server, why: None)
+        self._on_success = on_success or (lambda server: None)
+        self.deadlines = deadlines or AttemptClock(self.timeout)
         self._ids = ids if ids is not None else itertools.count(1)
         self._clock = clock
-        self._lock = threading.Lock()
-        self._pending = collections.OrderedDict()     # task id -> Pending, oldest first
-        self._ended = collections.OrderedDict()       # task id -> True (answered) / False
+        self._lock = threading.RLock()
+        self._pending = collections.OrderedDict()     # task id -> _Pending, oldest first
+        self._ended = collections.OrderedDict()       # task id -> answered (bool)
         self._remember = remember
-        self.sent = 0
-        self.ok = 0
-        self.failed = 0
-        self.ignored = collections.Counter()          # DUPLICATE / LATE / UNKNOWN results
+        self.sent = self.ok = self.failed = self.resent = self.switches = 0
+        self._last_first = None
+        self.ignored = collections.Counter()          # DUPLICATE / LATE / UNKNOWN / FOREIGN
         self.rtts = collections.deque(maxlen=keep_rtts)   # recent answered round trips
 
     def __len__(self):
@@ -75,57 +89,100 @@ class TaskFlow(object):
             return len(self._pending)
 
     def send_next(self, stamp):
-        """Make one task now and send it where ``target()`` says; returns its id."""
+        """Make one task now and send it to the first candidate; returns its id."""
         task_id = next(self._ids)
-        server = self._target()
+        candidates = self._candidates()
         with self._lock:
             self.sent += 1
-        if server == NO_SERVER:
-            self._end(Outcome(task_id, self.kind, stamp, NO_SERVER, NO_SERVER, False,
-                              'no server selected', None))
-        elif server == LOCAL:
+        if not candidates:
+            return self._end(Outcome(task_id, self.kind, stamp, NO_SERVER, NO_SERVER, False,
+                                     'no server selected', None, 0)).task_id
+        if candidates[0] == LOCAL:
             start = self._clock()
             error = self._run_local(task_id, stamp)
-            self._end(Outcome(task_id, self.kind, stamp, LOCAL, LOCAL, not error, error or '',
-                              self._clock() - start))
-        else:
-            request, context = self._make(task_id, server, stamp)
-            with self._lock:
-                self._pending[task_id] = Pending(task_id, server, stamp, self._clock(), context)
-            self._publish(request)
+            return self._end(Outcome(task_id, self.kind, stamp, LOCAL, LOCAL, not error,
+                                     error or '', self._clock() - start, 1)).task_id
+        request, context = self._make(task_id, stamp)
+        with self._lock:
+            pending = self._pending[task_id] = _Pending(task_id, stamp, request, context,
+                                                        self._clock())
+            if candidates[0] != self._last_first and self._last_first is not None:
+                self.switches += 1
+            self._last_first = candidates[0]
+            self._attempt(pending, candidates[0])
         return task_id
 
+    def _attempt(self, pending, server):
+        now = self._clock()
+        pending.attempts.append((server, now))
+        pending.deadline = min(pending.started + self.timeout,
+                               now + self.deadlines.seconds(server))
+        self._publish(pending.request, server)
+
+    def _next(self, pending):
+        """Send ``pending`` to the next candidate it has not tried; False if there is none."""
+        tried = set(s for s, _ in pending.attempts)
+        untried = [s for s in self._candidates() if s not in tried and s != LOCAL]
+        if not untried:
+            return False
+        self.resent += 1
+        self._attempt(pending, untried[0])
+        return True
+
     def resolve(self, task_id, answered_by, ok, error='', result=None):
-        """An answer for ``task_id``: its Outcome, or DUPLICATE / LATE / UNKNOWN."""
+        """An answer for ``task_id`` from ``answered_by``: its Outcome, RETRIED (an error
+        answer, the task went to the next candidate), or DUPLICATE / LATE / UNKNOWN /
+        FOREIGN (ignored: not from a server the task was sent to)."""
         now = self._clock()
         with self._lock:
-            pending = self._pending.pop(task_id, None)
+            pending = self._pending.get(task_id)
             if pending is None:
                 why = UNKNOWN if task_id not in self._ended else (
                     DUPLICATE if self._ended[task_id] else LATE)
                 self.ignored[why] += 1
                 return why
+            sent_at = pending.sent_at(answered_by)
+            if sent_at is None:
+                self.ignored[FOREIGN] += 1
+                return FOREIGN
+            if ok:
+                error = self._check(result, pending.context) or ''
+                ok = not error
+            if ok:
+                del self._pending[task_id]
+                self.deadlines.add(answered_by, now - sent_at)
+            else:
+                self._on_failure(answered_by, error)
+                if self._next(pending):
+                    return RETRIED
+                del self._pending[task_id]
         if ok:
-            error = self._check(result, pending.context) or ''
-            ok = not error
-        return self._end(Outcome(task_id, self.kind, pending.stamp, pending.server_id,
-                                 answered_by, bool(ok), error, now - pending.sent_at))
+            self._on_success(answered_by)
+        return self._end(Outcome(task_id, self.kind, pending.stamp, pending.attempts[0][0],
+                                 answered_by, ok, error, now - pending.started,
+                                 len(pending.attempts)))
 
-    def expire(self):
-        """Report the tasks whose deadline has passed (oldest first); returns them."""
+    def tick(self):
+        """Act on passed deadlines: re-send, or report tasks out of time. Returns the
+        Outcomes reported."""
         now = self._clock()
-        expired = []
+        ended = []
         with self._lock:
-            while self._pending:
-                pending = next(iter(self._pending.values()))
-                if now - pending.sent_at < self.timeout:
-                    break
-                del self._pending[pending.task_id]
-                expired.append(pending)
-        return [self._end(Outcome(p.task_id, self.kind, p.stamp, p.server_id, NO_SERVER,
-                                  False, 'no result within task_timeout %.3g s' % self.timeout,
-                                  None))
-                for p in expired]
+            for pending in list(self._pending.values()):
+                if now - pending.started >= self.timeout:
+                    del self._pending[pending.task_id]
+                    ended.append(pending)
+                elif now >= pending.deadline:
+                    server = pending.attempts[-1][0]
+                    self._on_failure(server, 'no answer within %.3g s'
+                                     % (now - pending.attempts[-1][1]))
+                    if not self._next(pending):   # nobody left: wait for any late answer
+                        pending.deadline = pending.started + self.timeout
+        return [self._end(Outcome(
+            p.task_id, self.kind, p.stamp, p.attempts[0][0], NO_SERVER, False,
+            'no result within task_timeout %.3g s (%d attempts: servers %s)'
+            % (self.timeout, len(p.attempts), ', '.join(str(s) for s, _ in p.attempts)),
+            None, len(p.attempts))) for p in ended]
 
     def _end(self, outcome):
         with self._lock:

@@ -1,10 +1,17 @@
 """Sliding windows of latency samples, one per (robot, server) pair."""
 
 import collections
+import math
 import threading
 
 Sample = collections.namedtuple('Sample', 'time ok rtt')
 PairStats = collections.namedtuple('PairStats', 'mean ok_count failed_count')
+
+
+def valid_rtt(rtt):
+    """Whether ``rtt`` can be a measured round trip: a finite number >= 0."""
+    return isinstance(rtt, (int, float)) and not isinstance(rtt, bool) and \
+        math.isfinite(rtt) and rtt >= 0
 
 
 class LatencyWindow(object):
@@ -22,7 +29,10 @@ class LatencyWindow(object):
         self._samples = collections.defaultdict(collections.deque)
 
     def add(self, robot_id, server_id, now, ok, rtt):
-        """Record one sample; failed samples carry no latency."""
+        """Record one sample; failed samples carry no latency. A successful sample whose
+        ``rtt`` is not a finite number >= 0 raises ValueError (and is not recorded)."""
+        if ok and not valid_rtt(rtt):
+            raise ValueError('round trip %r is not a finite number >= 0' % (rtt,))
         with self._lock:
             samples = self._samples[(robot_id, server_id)]
             samples.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')))

@@ -3,10 +3,12 @@
 import rospy
 
 from server_select.core import names
+from server_select.core.params import ParamError
 from server_select.core.ranking import choose, rank_servers
-from server_select.core.window import LatencyWindow
+from server_select.core.window import LatencyWindow, valid_rtt
 from server_select.msg import LatencySample
 from server_select.ros.flags import FlagPublisher
+from server_select.ros.graph import publisher_of
 from server_select.ros.node import param, run
 
 
@@ -20,7 +22,10 @@ class ManagerNode(object):
     of servers it ranks changes. Rankings are re-evaluated on every sample and every
     ``1/~update_rate`` s, so a server drops out as soon as its last good sample leaves the
     window. Window times are the manager's receive times: robot and manager clocks are
-    not shared.
+    not shared. A robot gets no flag before its first sample (a restarted manager does not
+    publish an empty ranking over a robot's working choice). Samples claiming another
+    pair, with an impossible round trip, or not published by ``~robot_node`` are ignored
+    with a throttled warning naming the publisher.
 
     :ROS Parameters:
         - ``~robots`` (list of int, required), ``~servers`` (list of int, required)
@@ -29,6 +34,8 @@ class ManagerNode(object):
         - ``~update_rate`` (Hz, 10.0): rate of re-evaluation between samples.
         - ``~hysteresis`` (s, 0.0): keep the current server while its mean is within this
           of the best one (0: always the best, as in the paper).
+        - ``~robot_node`` (``robot{id}``): the node whose samples count for robot {id}
+          (resolved in the manager's namespace; empty: any publisher).
     :ROS Subscribers:
         - ``latency_R<r>S<s>`` (server_select/LatencySample) for every robot r and server s.
     :ROS Publishers:
@@ -42,6 +49,15 @@ class ManagerNode(object):
         self.publish_rate = param('publish_rate')
         self.update_rate = param('update_rate')
         self.hysteresis = param('hysteresis')
+        pattern = param('robot_node')
+        try:
+            self.robot_node = dict(   # None: any publisher
+                (r, rospy.resolve_name(pattern.format(id=r)) if pattern else None)
+                for r in self.robots)
+        except (KeyError, IndexError, ValueError) as error:
+            raise ParamError('~robot_node: %r is not a node name with {id}: %s'
+                             % (pattern, error))
+        self.heard = set()
         self.flags = FlagPublisher(self.robots, 'manager')
         self.sample_subs = []
         self.timers = []
@@ -58,17 +74,30 @@ class ManagerNode(object):
                       self.robots, self.servers, self.window.window)
 
     def on_sample(self, sample, pair):
-        if (sample.robot_id, sample.server_id) != pair:
-            rospy.logwarn_throttle(
-                10.0, 'manager: ignoring sample for unknown pair robot %d / server %d on the '
-                'topic of robot %d / server %d' % ((sample.robot_id, sample.server_id) + pair))
+        why = self.refuse(sample, pair)
+        if why:
+            rospy.logwarn_throttle(5.0, 'manager: ignored a sample on %s published by %s: %s'
+                                   % (names.sample_topic(*pair), publisher_of(sample), why))
             return
         self.window.add(pair[0], pair[1], rospy.get_time(), sample.ok, sample.rtt)
+        self.heard.add(pair[0])
         self.update(pair[0], only_on_change=True)
+
+    def refuse(self, sample, pair):
+        """Why ``sample``, received on the topic of ``pair``, must be ignored (or None)."""
+        if (sample.robot_id, sample.server_id) != pair:
+            return 'it claims robot %d / server %d' % (sample.robot_id, sample.server_id)
+        if sample.ok and not valid_rtt(sample.rtt):
+            return 'round trip %r is not a finite number >= 0' % sample.rtt
+        expected = self.robot_node.get(pair[0])
+        if expected is not None and publisher_of(sample) != expected:
+            return 'robot %d is %s' % (pair[0], expected)
+        return None
 
     def update_all(self, only_on_change):
         for robot in self.robots:
-            self.update(robot, only_on_change)
+            if robot in self.heard:   # silent for a robot until it has sent samples
+                self.update(robot, only_on_change)
 
     def update(self, robot, only_on_change):
         """Rank ``robot``'s servers now; publish unless unchanged and ``only_on_change``."""

@@ -6,10 +6,13 @@ import time
 import rospy
 
 from server_select.core import names
+from server_select.core.attempts import AttemptClock
+from server_select.core.health import ServerHealth
 from server_select.core.params import ParamError, parse_fixed_server
 from server_select.core.selection import Selection
 from server_select.core.task_flow import LOCAL, NO_SERVER
 from server_select.msg import SelectionFlag
+from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.node import param, run
 from server_select.ros.prober import Prober
 from server_select.ros.search import SearchParticipant
@@ -66,10 +69,16 @@ class RobotNode(object):
         mode = param('mode')
         fixed = param('fixed_server', default=servers[0],
                       parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
-        self.selection = Selection(self.robot_id, mode, fixed)
-        self.prober = Prober(self.robot_id, servers, param('probe_rate'), param('probe_timeout'))
+        self.health = ServerHealth(servers, param('eject_time'), param('eject_max'),
+                                   param('probation_probes'))
+        self.selection = Selection(self.robot_id, servers, mode, fixed, self.health,
+                                   param('window'), param('hysteresis'),
+                                   param('manager_timeout'))
+        self.prober = Prober(self.robot_id, servers, param('probe_rate'), param('probe_timeout'),
+                             on_sample=self.on_sample)
         self.start_delay = param('start_delay')
         self.summary_period = param('summary_period')
+        self.manager_node = param('manager_node')
         self.search = None
         kinds = []
         if param('sort_tasks'):
@@ -79,11 +88,17 @@ class RobotNode(object):
             kinds.append((self._image_kind(mode), param('frame_rate')))
         if not kinds:
             raise ParamError('~sort_tasks is false and ~image_source is empty: no tasks to send')
-        ids = itertools.count(1)   # task ids are unique per robot, across its streams
-        self.streams = [TaskStream(self.robot_id, kind, rate, param('tasks'),
-                                   param('task_timeout'), self.selection.target, self.ready,
-                                   ids, local=mode == 'local') for kind, rate in kinds]
+        flow_args = dict(timeout=param('task_timeout'), candidates=self.selection.candidates,
+                         on_failure=self.on_failure, on_success=self.health.task_ok,
+                         ids=itertools.count(1))    # task ids are per robot, across streams
+        retry = dict(factor=param('retry_factor'), floor=param('retry_floor'))
+        self.streams = [
+            TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready,
+                       dict(flow_args, deadlines=AttemptClock(flow_args['timeout'], **retry)),
+                       local=mode == 'local', expected_publisher=self.server_node)
+            for kind, rate in kinds]
         self._start_after = None
+        self._local_decision = False
         self.timers = []
 
     def _image_kind(self, mode):
@@ -105,6 +120,7 @@ class RobotNode(object):
 
     def start(self):
         self._start_after = time.monotonic() + self.start_delay
+        self.providers = ServiceProviders(rospy.get_name())
         self.flag_sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
                                          queue_size=100, tcp_nodelay=True)
         if self.search is not None:
@@ -113,7 +129,8 @@ class RobotNode(object):
             stream.start()
         self.prober.start()
         self.timers = [rospy.Timer(rospy.Duration(self.summary_period),
-                                   lambda _e: rospy.loginfo(self.summary()))]
+                                   lambda _e: rospy.loginfo(self.summary())),
+                       rospy.Timer(rospy.Duration(0.5), self.on_decision_timer)]
         rospy.on_shutdown(self.on_shutdown)
         selection = self.selection
         rospy.loginfo('robot %d: mode %s%s, probing servers %s at %.3g Hz, tasks: %s',
@@ -127,17 +144,63 @@ class RobotNode(object):
         return (time.monotonic() >= self._start_after
                 and self.selection.ready(self.prober.answered))
 
+    def server_node(self, server):
+        """The node serving ``latency_S<server>`` (the only one whose results count)."""
+        service = rospy.resolve_name(names.probe_service(server))
+        node = self.providers.node(service)
+        return node if node is not None else self.providers.node(service, refresh=True)
+
+    # -- evidence ----------------------------------------------------------------------------
+
+    def on_sample(self, server, ok, rtt, error):
+        try:
+            self.selection.on_sample(server, ok, rtt)
+        except ValueError as err:
+            rospy.logwarn_throttle(5.0, 'robot %d: own probe of server %d: %s'
+                                   % (self.robot_id, server, err))
+        if ok:
+            self.health.probe_ok(server)
+        else:
+            self.on_failure(server, 'probe failed: %s' % error)
+
+    def on_failure(self, server, why):
+        ejection = self.health.failure(server, why)
+        if ejection is not None:
+            rospy.logwarn('robot %d: server %d ejected for %.3g s: %s', self.robot_id,
+                          server, ejection.seconds, why)
+
     def on_flag(self, flag):
-        if self.selection.on_flag(flag.robot_id, flag.server_id):
-            rospy.loginfo('robot %d: selected server %s (ranking %s)', self.robot_id,
-                          flag.server_id if flag.server_id != NO_SERVER else 'none',
-                          list(flag.ranking))
+        if flag.robot_id != self.robot_id:
+            return
+        sender = publisher_of(flag)
+        manager = rospy.resolve_name(self.manager_node) if self.manager_node else None
+        if manager is not None and sender != manager:
+            rospy.logwarn_throttle(5.0, 'robot %d: ignored a flag published by %s (the manager '
+                                   'is %s)' % (self.robot_id, sender, manager))
+            return
+        refused = self.selection.on_flag(flag.robot_id, flag.server_id, flag.ranking)
+        if refused:
+            rospy.logwarn_throttle(5.0, 'robot %d: ignored a flag of %s: it %s'
+                                   % (self.robot_id, sender, refused))
+
+    def on_decision_timer(self, _event):
+        local = self.selection.deciding_locally()
+        if local != self._local_decision:
+            self._local_decision = local
+            if local:
+                rospy.logwarn('robot %d: no fresh flag from %s for %.3g s: ranking servers '
+                              'from its own probes', self.robot_id, self.manager_node or
+                              'the manager', self.selection.manager_timeout)
+            else:
+                rospy.loginfo('robot %d: following the manager again', self.robot_id)
 
     def summary(self):
         target = self.selection.target()
-        return 'robot %d: %s; server %s, %d switches' % (
+        return 'robot %d: %s; server %s%s, %d switches' % (
             self.robot_id, '; '.join(s.summary() for s in self.streams),
-            {NO_SERVER: 'none', LOCAL: 'local'}.get(target, target), self.selection.switches)
+            {NO_SERVER: 'none', LOCAL: 'local'}.get(target, target),
+            ' (own decision)' if self._local_decision else '',
+            sum(s.flow.switches for s in self.streams))
 
     def on_shutdown(self):
         for timer in self.timers:

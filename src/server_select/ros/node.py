@@ -5,6 +5,7 @@ import sys
 import rospy
 
 from server_select.core.params import PARAMS, REQUIRED, ParamError
+from server_select.ros.master_watch import MasterWatch
 
 
 def param(name, default=None, parse=None):
@@ -30,11 +31,13 @@ def run(node_name, node_class, argv=None):
     """Initialise the node, build ``node_class()``, start it and spin until shutdown.
 
     A ParamError becomes one ``logfatal`` line and exit status 2, so that a launch file
-    with a bad ``<arg>`` fails loudly instead of running half-configured.
+    with a bad ``<arg>`` fails loudly instead of running half-configured. Every node
+    registers again with a restarted roscore (:class:`MasterWatch`, ``~master_check``).
     """
     rospy.init_node(node_name, argv=argv)
     try:
         node = node_class()
+        watch = MasterWatch(param('master_check'))
     except ParamError as error:
         rospy.logfatal('invalid parameter: %s', error)
         rospy.signal_shutdown('invalid parameter')
@@ -42,4 +45,5 @@ def run(node_name, node_class, argv=None):
     start = getattr(node, 'start', None)
     if start is not None:
         start()
+    watch.start()
     rospy.spin()

@@ -17,15 +17,16 @@ class Prober(object):
     Each server is probed from its own worker thread over a persistent connection, every
     call bounded by ``timeout``; a server whose previous probe is still running gets a
     failed sample instead of a second call. ``answered`` is the set of servers that have
-    answered at least once.
+    answered at least once; ``on_sample(server, ok, rtt, error)`` hears every sample.
     """
 
-    def __init__(self, robot_id, servers, rate, timeout):
+    def __init__(self, robot_id, servers, rate, timeout, on_sample=None):
         self.robot_id = robot_id
         self.servers = list(servers)
         self.rate = rate
         self.timeout = timeout
         self.answered = set()
+        self.on_sample = on_sample or (lambda server, ok, rtt, error: None)
         self._seq = itertools.count(1)
         self._inflight = {}
         self._pubs = dict(
@@ -76,6 +77,7 @@ class Prober(object):
         if error:
             rospy.logdebug('robot %d: probe of server %d failed: %s', self.robot_id, server, error)
         self._pubs[server].publish(sample)
+        self.on_sample(server, not error, rtt, error)
 
     def shutdown(self):
         if self._timer is not None:

@@ -1,7 +1,8 @@
 """What a robot's task streams send: sort tasks and camera frames, as ROS messages.
 
 Each kind gives :class:`~server_select.core.task_flow.TaskFlow` its ``make``, ``check``
-and ``run_local``, and the adapter its topics and message types.
+and ``run_local``, and the adapter its topics and message types. A request names no server:
+the adapter stamps ``server_id`` on each attempt (a task may be sent again elsewhere).
 """
 
 import time
@@ -29,10 +30,9 @@ class SortKind(object):
         self.size = size
         self.rng = np.random.default_rng(seed)
 
-    def make(self, task_id, server_id, stamp):
+    def make(self, task_id, stamp):
         values = make_values(self.rng, self.size)
-        task = SortTask(robot_id=self.robot_id, task_id=task_id, server_id=server_id,
-                        data=values)
+        task = SortTask(robot_id=self.robot_id, task_id=task_id, data=values)
         task.header.stamp = stamp
         return task, fingerprint(values)
 
@@ -68,13 +68,12 @@ class ImageKind(object):
             self.search.remember(task_id, where)
         return image_codec.from_array(frame, self.encoding)
 
-    def make(self, task_id, server_id, stamp):
+    def make(self, task_id, stamp):
         encoding, height, width, step, data = self.capture(task_id)
         image = Image(height=height, width=width, encoding=encoding, step=step, data=data)
         image.header.stamp = stamp
         image.header.frame_id = 'robot%d_camera' % self.robot_id
-        task = ImageTask(robot_id=self.robot_id, task_id=task_id, server_id=server_id,
-                         image=image)
+        task = ImageTask(robot_id=self.robot_id, task_id=task_id, image=image)
         task.header.stamp = stamp
         return task, None
 

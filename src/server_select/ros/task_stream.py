@@ -11,8 +11,9 @@ import rospy
 
 from server_select.core import names
 from server_select.core.stats import format_ms, summarize
-from server_select.core.task_flow import TaskFlow
+from server_select.core.task_flow import RETRIED, TaskFlow
 from server_select.msg import TaskReport
+from server_select.ros.graph import publisher_of
 
 
 class TaskStream(object):
@@ -20,19 +21,19 @@ class TaskStream(object):
 
     The stream waits until ``ready()`` and, unless the robot works ``local``ly, until its
     task and result topics are connected; then it sends a task every ``1/rate`` s (at most
-    ``limit``, 0: no limit) and publishes one ``task_report`` per task.
+    ``limit``, 0: no limit) and publishes one ``task_report`` per task. A result counts
+    only if ``expected_publisher(server)`` (None: no check) published it.
     """
 
-    def __init__(self, robot_id, kind, rate, limit, timeout, target, ready, ids, local=False):
-        self.robot_id = robot_id
-        self.kind = kind
-        self.rate = rate
-        self.limit = limit
-        self.ready = ready
-        self.local = local
+    def __init__(self, robot_id, kind, rate, limit, ready, flow_args, local=False,
+                 expected_publisher=None):
+        self.robot_id, self.kind, self.rate, self.limit = robot_id, kind, rate, limit
+        self.ready, self.local = ready, local
+        self.expected_publisher = expected_publisher
         self.started = False
-        self.flow = TaskFlow(kind.kind, timeout, target, kind.make, self._publish_task,
-                             kind.check, self._report, kind.run_local, ids, clock=time.monotonic)
+        self.flow = TaskFlow(kind.kind, make=kind.make, publish=self._publish_task,
+                             check=kind.check, report=self._report, run_local=kind.run_local,
+                             clock=time.monotonic, **flow_args)
         self.task_pub = self.result_sub = self.report_pub = None
         self.timers = []
 
@@ -45,7 +46,7 @@ class TaskStream(object):
                 self.kind.result_topic, self.kind.result_type, self.on_result, queue_size=100,
                 tcp_nodelay=True, buff_size=1 << 24)
         self.timers = [rospy.Timer(rospy.Duration(1.0 / self.rate), self.on_timer),
-                       rospy.Timer(rospy.Duration(0.05), lambda _e: self.flow.expire())]
+                       rospy.Timer(rospy.Duration(0.02), lambda _e: self.flow.tick())]
 
     def wired(self):
         return self.local or (self.task_pub.get_num_connections() > 0
@@ -63,26 +64,37 @@ class TaskStream(object):
             rospy.loginfo('robot %d: sending %s tasks', self.robot_id, self.flow.kind)
         self.flow.send_next(rospy.Time.now())
 
-    def _publish_task(self, request):
+    def _publish_task(self, request, server):
+        request.server_id = server
         self.task_pub.publish(request)
 
     def on_result(self, result):
         if result.robot_id != self.robot_id:
             return
+        sender = publisher_of(result)
+        expected = self.expected_publisher(result.server_id) if self.expected_publisher else None
+        if expected is not None and sender != expected:
+            rospy.logwarn_throttle(
+                5.0, 'robot %d: ignored a %s result for task %d claiming server %d, published '
+                'by %s (server %d is %s)' % (self.robot_id, self.flow.kind, result.task_id,
+                                             result.server_id, sender, result.server_id, expected))
+            return
         outcome = self.flow.resolve(result.task_id, result.server_id, result.ok, result.error,
                                     result)
-        if isinstance(outcome, str):
+        if outcome == RETRIED:
+            rospy.logwarn('robot %d: %s task %d failed on server %d (%s): sent to the next '
+                          'server', self.robot_id, self.flow.kind, result.task_id,
+                          result.server_id, result.error)
+        elif isinstance(outcome, str):
             rospy.logwarn_throttle(
-                5.0, 'robot %d: ignored %s %s result for task %d from server %d'
-                % (self.robot_id, outcome, self.flow.kind, result.task_id, result.server_id))
-        elif outcome.answered_by != outcome.server_id:
-            rospy.logwarn('robot %d: task %d sent to server %d was answered by server %d',
-                          self.robot_id, result.task_id, outcome.server_id, outcome.answered_by)
+                5.0, 'robot %d: ignored %s %s result for task %d from server %d (%s)'
+                % (self.robot_id, outcome, self.flow.kind, result.task_id, result.server_id,
+                   sender))
 
     def _report(self, outcome):
         msg = TaskReport(robot_id=self.robot_id, task_id=outcome.task_id, kind=outcome.kind,
                          server_id=outcome.server_id, answered_by=outcome.answered_by,
-                         ok=outcome.ok, error=outcome.error,
+                         ok=outcome.ok, error=outcome.error, attempts=outcome.attempts,
                          rtt=outcome.rtt if outcome.rtt is not None else math.nan)
         msg.header.stamp = outcome.stamp
         if not outcome.ok:
@@ -92,8 +104,10 @@ class TaskStream(object):
 
     def summary(self):
         flow = self.flow
-        return '%s: %d sent, %d ok, %d failed, %d pending, round trip %s' % (
-            flow.kind, flow.sent, flow.ok, flow.failed, len(flow),
+        ignored = sum(flow.ignored.values())
+        return '%s: %d sent, %d ok, %d failed, %d pending, %d re-sent%s, round trip %s' % (
+            flow.kind, flow.sent, flow.ok, flow.failed, len(flow), flow.resent,
+            ', %d results ignored' % ignored if ignored else '',
             format_ms(summarize(list(flow.rtts)), ('median', 'p99', 'max')))
 
     def shutdown(self):

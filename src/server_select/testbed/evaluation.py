@@ -106,7 +106,8 @@ class _Run(object):
                         'probe_timeout:=%g' % options.probe_timeout,
                         'task_rate:=%g' % options.task_rate, 'task_size:=%d' % options.task_size,
                         'task_timeout:=%g' % options.task_timeout,
-                        'start_delay:=%g' % options.start_delay)
+                        'start_delay:=%g' % options.start_delay,
+                        'manager_node:=%s' % ('oracle' if mode == 'oracle' else 'manager'))
 
 
 def run_mode(scenario_path, mode, out_dir, options=None, log=print):

@@ -1,0 +1,28 @@
+"""How long one attempt of a task may take on a server, from that server's round trips."""
+
+import collections
+import threading
+
+
+class AttemptClock(object):
+    """Per-server attempt deadlines: ``factor`` x the p99 of the server's last ``keep``
+    task round trips, at least ``floor`` s and at most the task ``timeout``; ``first`` s
+    (capped by the timeout) while a server has fewer than ``min_samples``."""
+
+    def __init__(self, timeout, factor=5.0, floor=0.25, first=1.0, keep=100, min_samples=5):
+        self.timeout, self.factor, self.floor = float(timeout), float(factor), float(floor)
+        self.first, self.keep, self.min_samples = float(first), keep, min_samples
+        self._lock = threading.Lock()
+        self._rtts = collections.defaultdict(lambda: collections.deque(maxlen=self.keep))
+
+    def add(self, server, rtt):
+        with self._lock:
+            self._rtts[server].append(rtt)
+
+    def seconds(self, server):
+        with self._lock:
+            rtts = sorted(self._rtts.get(server, ()))
+        if len(rtts) < self.min_samples:
+            return min(self.timeout, max(self.floor, self.first))
+        p99 = rtts[min(len(rtts) - 1, int(0.99 * len(rtts)))]
+        return min(self.timeout, max(self.floor, self.factor * p99))

@@ -1,0 +1,87 @@
+"""A robot's own evidence about its servers (no rospy): eject on failure, probation on return.
+
+A failed probe, a task without answer by its deadline or an error result ejects that
+server from the robot's candidates at once, for an ejection time that doubles with each
+ejection in a row (``base`` s, at most ``longest`` s; as Envoy's outlier detection). When
+the time is over the server is on probation: it becomes a candidate again after
+``probation_probes`` good probes, and its first good task makes it healthy (the ejection
+time starts from ``base`` again); a failure on probation ejects it for twice as long.
+"""
+
+import collections
+import threading
+import time
+
+HEALTHY, EJECTED, PROBATION = 'healthy', 'ejected', 'probation'
+
+Ejection = collections.namedtuple('Ejection', 'server seconds why')
+
+
+class _Server(object):
+    __slots__ = ('state', 'until', 'ejections', 'good_probes')
+
+    def __init__(self):
+        self.state, self.until, self.ejections, self.good_probes = HEALTHY, 0.0, 0, 0
+
+
+class ServerHealth(object):
+    """Health of each of a robot's servers; thread-safe."""
+
+    def __init__(self, servers, base=1.0, longest=30.0, probation_probes=2,
+                 clock=time.monotonic):
+        if not 0 < base <= longest:
+            raise ValueError('need 0 < base <= longest, got %r, %r' % (base, longest))
+        self.base, self.longest = float(base), float(longest)
+        self.probation_probes = int(probation_probes)
+        self._clock = clock
+        self._lock = threading.Lock()
+        self._servers = dict((s, _Server()) for s in servers)
+
+    def _get(self, server, now):
+        entry = self._servers.get(server)
+        if entry is not None and entry.state == EJECTED and now >= entry.until:
+            entry.state, entry.good_probes = PROBATION, 0
+        return entry
+
+    def failure(self, server, why=''):
+        """Evidence that ``server`` failed: an :class:`Ejection` if this ejects it, else None
+        (an unknown server, or one already ejected)."""
+        with self._lock:
+            entry = self._get(server, self._clock())
+            if entry is None or entry.state == EJECTED:
+                return None
+            entry.ejections += 1
+            seconds = min(self.longest, self.base * 2 ** (entry.ejections - 1))
+            entry.state, entry.until, entry.good_probes = EJECTED, self._clock() + seconds, 0
+            return Ejection(server, seconds, why)
+
+    def probe_ok(self, server):
+        with self._lock:
+            entry = self._get(server, self._clock())
+            if entry is not None and entry.state == PROBATION:
+                entry.good_probes += 1
+
+    def task_ok(self, server):
+        """A good answer; True when it ends ``server``'s probation."""
+        with self._lock:
+            entry = self._get(server, self._clock())
+            if entry is None or entry.state != PROBATION:
+                return False
+            entry.state, entry.ejections = HEALTHY, 0
+            return True
+
+    def state(self, server):
+        with self._lock:
+            entry = self._get(server, self._clock())
+            return entry.state if entry is not None else None
+
+    def usable(self, server):
+        """Whether tasks may go to ``server`` now."""
+        with self._lock:
+            entry = self._get(server, self._clock())
+            return entry is not None and (entry.state == HEALTHY or (
+                entry.state == PROBATION and entry.good_probes >= self.probation_probes))
+
+    def order(self, ranking):
+        """``ranking`` without the servers tasks may not go to now (order kept)."""
+        return [s for s in ranking if self.usable(s)]

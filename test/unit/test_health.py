@@ -1,0 +1,61 @@
+from server_select.core.health import EJECTED, HEALTHY, PROBATION, ServerHealth
+
+
+class Clock(object):
+    now = 0.0
+
+    def __call__(self):
+        return self.now
+
+
+def make(**kwargs):
+    clock = Clock()
+    return ServerHealth([1, 2, 3], clock=clock, **kwargs), clock
+
+
+def test_a_failure_ejects_at_once_and_only_that_server():
+    h, clock = make(base=1.0)
+    ejection = h.failure(2, 'task timeout')
+    assert ejection == (2, 1.0, 'task timeout')
+    assert h.order([3, 2, 1]) == [3, 1]
+    assert h.failure(2, 'again') is None          # already ejected: no second ejection
+    assert h.failure(9, 'unknown server') is None
+    assert h.state(1) == HEALTHY and h.state(2) == EJECTED and h.state(9) is None
+
+
+def test_probation_needs_good_probes_then_one_good_task():
+    h, clock = make(base=1.0, probation_probes=2)
+    h.failure(1)
+    clock.now = 0.999
+    assert h.state(1) == EJECTED
+    clock.now = 1.0
+    assert h.state(1) == PROBATION and not h.usable(1)
+    h.probe_ok(1)
+    assert not h.usable(1)
+    h.probe_ok(1)
+    assert h.usable(1) and h.order([1, 2]) == [1, 2]
+    assert h.task_ok(1) is True and h.state(1) == HEALTHY
+    assert h.task_ok(1) is False                 # already healthy
+
+
+def test_ejection_time_doubles_in_a_row_up_to_the_longest_and_resets_when_healthy():
+    h, clock = make(base=1.0, longest=3.0, probation_probes=0)
+    times = []
+    for _ in range(4):
+        ejection = h.failure(1)
+        times.append(ejection.seconds)
+        clock.now += ejection.seconds              # back on probation...
+        assert h.state(1) == PROBATION             # ... and failing again
+    assert times == [1.0, 2.0, 3.0, 3.0]
+    h.task_ok(1)
+    assert h.failure(1).seconds == 1.0
+
+
+def test_probes_while_ejected_do_not_count_toward_probation():
+    h, clock = make(base=1.0, probation_probes=1)
+    h.failure(3)
+    h.probe_ok(3)
+    clock.now = 1.0
+    assert not h.usable(3)
+    h.probe_ok(3)
+    assert h.usable(3)
