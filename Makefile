@@ -17,8 +17,8 @@ DEMO_DURATION ?= 30
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
-.PHONY: all deps build demo demo-loopback search-demo evaluate bench bench-emulator test unit-test testbed-test \
-  rostest lint clean
+.PHONY: all deps build demo demo-loopback search-demo evaluate bench bench-emulator bench-memory \
+  test unit-test testbed-test fault-test rostest lint clean
 all: build
 
 $(BUILD)/.apt-stamp: Makefile
@@ -87,6 +87,10 @@ evaluate: build
 bench: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.run --out results/bench
 
+# RSS of every demo node over 10 minutes at 20 sort tasks/s per robot.
+bench-memory: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.memory --out results/bench
+
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.emulator --out results/bench
@@ -104,12 +108,18 @@ LINT := catkin_lint -W2 --strict --ignore package_path_name $(TOP) && \
 lint: build
 	@$(ROSENV) cd $(TOP) && $(LINT)
 
-# Lint first, then unit tests (no master), the testbed tests (root and TUN; reported as
-# skipped elsewhere), the benchmarks' smoke run, then the launch-level rostests; the last line printed is the rostest
-# tally "rostest: N passed, N failed".
+# Lint first, then unit tests (no master), the fault tests (a roscore of their own, real
+# signals; they print their counts), the testbed tests (root and TUN; reported as skipped
+# elsewhere), the benchmarks' smoke run, then the launch-level rostests; the last line
+# printed is the rostest tally "rostest: N passed, N failed".
 test: build
 	@$(ROSENV) cd $(TOP) && $(LINT) \
-	  && $(PY) -m pytest -q -rs test/unit test/testbed test/bench && bash test/run_rostests.sh
+	  && $(PY) -m pytest -q -rs -s -p no:logging test/unit test/fault test/testbed test/bench \
+	  && bash test/run_rostests.sh
+
+# Servers killed and stopped, manager and roscore killed, forged input: counts printed.
+fault-test: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q -s -p no:logging test/fault
 
 testbed-test: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q -rs test/testbed

@@ -72,6 +72,11 @@ class Selection(object):
         return [s for s in [selected] if s != NO_SERVER] + \
             [s for s in ranking.ranking if s != selected]
 
+    def flagged(self):
+        """Whether a flag has ever been taken."""
+        with self._lock:
+            return self._flag is not None
+
     def deciding_locally(self):
         return self.mode == 'select' and self.manager_ranking() is None
 

@@ -185,6 +185,9 @@ class RobotNode(object):
 
     def on_decision_timer(self, _event):
         local = self.selection.deciding_locally()
+        starting = time.monotonic() < self._start_after + self.selection.manager_timeout
+        if local and starting and not self.selection.flagged():
+            return   # no flag yet at start-up: nothing to warn about
         if local != self._local_decision:
             self._local_decision = local
             if local:

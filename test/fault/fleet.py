@@ -1,0 +1,120 @@
+"""What the fault tests drive: a demo fleet under roslaunch, and a recorder of its topics."""
+
+import collections
+import os
+import signal
+import subprocess
+import threading
+import time
+
+import rospy
+from rosgraph_msgs.msg import Log
+
+from server_select.core import names
+from server_select.core.procs import stop_group, wait_until
+from server_select.msg import SelectionFlag, TaskReport
+from server_select.ros.graph import node_pid, publisher_of
+
+Received = collections.namedtuple('Received', 'time msg sender')
+
+
+class Recorder(object):
+    """Task reports, flags and log lines of the fleet, with receive times (monotonic)."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.reports, self.flags, self.logs = [], [], []
+        self.subs = [
+            rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, self._add, self.reports,
+                             queue_size=10000, tcp_nodelay=True),
+            rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self._add, self.flags,
+                             queue_size=10000, tcp_nodelay=True),
+            rospy.Subscriber('/rosout', Log, self._add, self.logs, queue_size=10000)]
+
+    def _add(self, msg, store):
+        with self.lock:
+            store.append(Received(time.monotonic(), msg, publisher_of(msg)))
+
+    def clear(self):
+        with self.lock:
+            for store in (self.reports, self.flags, self.logs):
+                del store[:]
+
+    def of(self, store, robot=None, since=0.0):
+        with self.lock:
+            return [r for r in store if r.time >= since
+                    and (robot is None or getattr(r.msg, 'robot_id', robot) == robot)]
+
+    def log_lines(self, node, text):
+        with self.lock:
+            return [r.msg.msg for r in self.logs if r.msg.name == node and text in r.msg.msg]
+
+    def outcome(self, robot, timeout):
+        """Counts of ``robot``'s tasks so far, once every task up to the last reported one
+        has had ``timeout`` to be reported: tasks, failed, never answered, duplicates."""
+        reports = self.of(self.reports, robot)
+        last = max((r.msg.task_id for r in reports), default=0)
+        time.sleep(timeout + 0.5)
+        counts = collections.Counter(r.msg.task_id for r in self.of(self.reports, robot))
+        failed = [r.msg for r in self.of(self.reports, robot) if not r.msg.ok]
+        return {'tasks': last,
+                'failed': len(failed),
+                'never answered': sum(1 for i in range(1, last + 1) if counts[i] == 0),
+                'duplicates': sum(1 for n in counts.values() if n > 1),
+                'errors': collections.Counter(m.error.split(' (')[0] for m in failed)}
+
+
+class Fleet(object):
+    """``demo.launch`` with ``args`` (3 servers, 2 robots by default), under one roslaunch."""
+
+    def __init__(self, log, **args):
+        self.log, self.args = log, args
+        self.extra = []
+
+    def __enter__(self):
+        with open(self.log, 'a') as stream:
+            self.proc = subprocess.Popen(
+                ['roslaunch', 'server_select', 'demo.launch', 'output:=log']
+                + ['%s:=%s' % kv for kv in sorted(self.args.items())],
+                stdout=stream, stderr=subprocess.STDOUT, start_new_session=True)
+        nodes = ['/manager', '/server1', '/server2', '/server3', '/robot1', '/robot2']
+        assert wait_until(lambda: all(self.pid(n) for n in nodes), 60.0, period=0.5), \
+            'the fleet did not come up (%s)' % self.log
+        return self
+
+    def __exit__(self, *exc):
+        for proc in self.extra:
+            stop_group(proc)
+        stop_group(self.proc)
+        return False
+
+    @staticmethod
+    def pid(node):
+        try:
+            return node_pid(node, rospy.get_name())
+        except Exception:  # not registered (yet), or the master is away
+            return None
+
+    def signal(self, node, sig):
+        os.kill(self.pid(node), sig)
+
+    def start(self, *argv):
+        """Start one more process (a node run by hand); stopped with the fleet."""
+        with open(self.log, 'a') as stream:
+            self.extra.append(subprocess.Popen(list(argv), stdout=stream,
+                                               stderr=subprocess.STDOUT,
+                                               start_new_session=True))
+        return self.extra[-1]
+
+    def restart_server(self, server):
+        return self.start('rosrun', 'server_select', 'server', '_server_id:=%d' % server,
+                          '__name:=server%d' % server)
+
+    def restart_manager(self):
+        return self.start('rosrun', 'server_select', 'manager', '_robots:=1,2',
+                          '_servers:=1,2,3', '__name:=manager',
+                          '_hysteresis:=%s' % self.args.get('hysteresis', 0.0))
+
+
+def kill(fleet, node):
+    fleet.signal(node, signal.SIGKILL)

@@ -1,0 +1,53 @@
+#!/usr/bin/env python3
+"""A careless (or hostile) node: fake samples, flags and results for robot 1.
+
+    spoofer.py SERVER SECONDS
+
+publishes at 20 Hz a 0.1 us round trip for robot 1 / SERVER on latency_R1S<SERVER>, a flag
+sending robot 1 to SERVER, and, for every sort task robot 1 sends, a "result" claiming the
+addressed server with wrong data; prints what it sent as one line of JSON.
+"""
+
+import json
+import sys
+import time
+
+import numpy as np
+import rospy
+from rospy.numpy_msg import numpy_msg
+
+from server_select.core import names
+from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask
+
+
+def main():
+    server, seconds = int(sys.argv[1]), float(sys.argv[2])
+    rospy.init_node('spoofer', disable_signals=True)
+    sent = {'samples': 0, 'flags': 0, 'results': 0}
+    samples = rospy.Publisher(names.sample_topic(1, server), LatencySample, queue_size=10)
+    flags = rospy.Publisher(names.SELECTION_TOPIC, SelectionFlag, queue_size=10)
+    results = rospy.Publisher(names.SORT_RESULT_TOPIC, numpy_msg(SortResult), queue_size=100)
+
+    def forge(task):
+        if task.robot_id == 1:
+            results.publish(SortResult(header=task.header, robot_id=1, task_id=task.task_id,
+                                       server_id=task.server_id, ok=True,
+                                       data=np.zeros(len(task.data), dtype=np.int32)))
+            sent['results'] += 1
+    rospy.Subscriber(names.SORT_TASK_TOPIC, numpy_msg(SortTask), forge, tcp_nodelay=True)
+    time.sleep(1.0)   # let the connections come up
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        sample = LatencySample(robot_id=1, server_id=server, ok=True, rtt=1e-7)
+        sample.header.stamp = rospy.Time.now()
+        samples.publish(sample)
+        flags.publish(SelectionFlag(robot_id=1, server_id=server, ranking=[server],
+                                    mean_latency=[1e-7], sample_count=[1]))
+        sent['samples'] += 1
+        sent['flags'] += 1
+        time.sleep(0.05)
+    print(json.dumps(sent), flush=True)
+
+
+if __name__ == '__main__':
+    main()

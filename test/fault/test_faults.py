@@ -1,0 +1,242 @@
+"""Fault tests: a real roscore and the demo fleet (manager, 3 servers, 2 robots, sort tasks
+at 5 Hz), faults injected with real signals. Each test prints its counts.
+
+The kill / stop / spoof tests run with ``hysteresis:=0.01``: on loopback every server is
+equally near, and without it the selection flaps between them by itself, which would hide
+whether the robot moved because of the fault.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import xmlrpc.client
+
+import pytest
+import rosgraph
+import rospy
+
+from server_select.bench.harness import Roscore
+from server_select.core.procs import stop_group, wait_until
+from server_select.ros.master_watch import MasterWatch
+
+from fleet import Fleet, Recorder, kill
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+TASK_TIMEOUT = 2.0   # the robots' default
+STABLE = {'task_rate': 5, 'hysteresis': 0.01}
+
+
+@pytest.fixture(scope='module')
+def ros(tmp_path_factory):
+    log_dir = str(tmp_path_factory.mktemp('faults'))
+    core = Roscore(log_dir)
+    core.__enter__()
+    rospy.init_node('fault_tests', disable_signals=True)
+    watch = MasterWatch(0.5)
+    watch.start()
+    state = {'core': core, 'log': os.path.join(log_dir, 'fleet.log'), 'rec': Recorder()}
+    yield state
+    rospy.signal_shutdown('fault tests done')
+    state['core'].__exit__()
+
+
+def current_server(rec, robot):
+    answered = [r.msg.answered_by for r in rec.of(rec.reports, robot) if r.msg.ok]
+    return answered[-1] if answered else None
+
+
+def first_elsewhere(rec, robot, victim, since, timeout=10.0):
+    """Seconds from ``since`` to the first answer of ``robot``'s tasks by another server."""
+    def found():
+        return next((r for r in rec.of(rec.reports, robot, since)
+                     if r.msg.ok and r.msg.answered_by != victim), None)
+    wait_until(lambda: found() is not None, timeout)
+    hit = found()
+    return hit.time - since if hit else None
+
+
+def warm_up(rec, robots=(1, 2), tasks=10):
+    assert wait_until(lambda: all(sum(1 for r in rec.of(rec.reports, robot) if r.msg.ok)
+                                  >= tasks for robot in robots), 40.0), 'no tasks answered'
+
+
+def show(title, rows):
+    print('\n%s' % title)
+    for row in rows:
+        print('  ' + ', '.join('%s %s' % kv for kv in row.items()))
+
+
+@pytest.mark.parametrize('how', ['SIGKILL', 'SIGSTOP'])
+def test_selected_server_fails_three_times(ros, how):
+    rec = ros['rec']
+    rec.clear()
+    cycles = []
+    with Fleet(ros['log'], **STABLE) as fleet:
+        warm_up(rec)
+        for cycle in range(3):
+            victim = current_server(rec, 1)
+            node = '/server%d' % victim
+            pid = fleet.pid(node)
+            t_fault = time.monotonic()
+            os.kill(pid, signal.SIGKILL if how == 'SIGKILL' else signal.SIGSTOP)
+            moved = first_elsewhere(rec, 1, victim, t_fault)
+            time.sleep(max(0.0, t_fault + 15.0 - time.monotonic()))
+            if how == 'SIGKILL':
+                fleet.restart_server(victim)
+            else:
+                os.kill(pid, signal.SIGCONT)
+            assert wait_until(lambda: fleet.pid(node) not in (None, pid if how == 'SIGKILL'
+                                                              else None), 20.0)
+            time.sleep(3.0)
+            cycles.append({'cycle': cycle + 1, 'server': victim,
+                           'first answer elsewhere after s': '%.3f' % moved
+                           if moved is not None else 'never'})
+        outcomes = dict((robot, rec.outcome(robot, TASK_TIMEOUT)) for robot in (1, 2))
+    show('%s of robot 1\'s server, 3 cycles:' % how, cycles)
+    show('tasks:', [dict(robot=r, **o) for r, o in outcomes.items()])
+    for outcome in outcomes.values():
+        assert (outcome['never answered'], outcome['duplicates']) == (0, 0), outcome
+        assert outcome['failed'] == 0, outcome
+    assert all(c['first answer elsewhere after s'] != 'never' for c in cycles), cycles
+    assert max(float(c['first answer elsewhere after s']) for c in cycles) <= 1.0, cycles
+
+
+def test_manager_gone_then_the_selected_server_dies(ros):
+    rec = ros['rec']
+    rec.clear()
+    with Fleet(ros['log'], **STABLE) as fleet:
+        warm_up(rec)
+        kill(fleet, '/manager')
+        time.sleep(4.0)                      # past the robots' manager_timeout (3 s)
+        victim = current_server(rec, 1)
+        t_kill = time.monotonic()
+        kill(fleet, '/server%d' % victim)
+        moved = first_elsewhere(rec, 1, victim, t_kill)
+        time.sleep(5.0)
+        fleet.restart_manager()
+        t_back = time.monotonic()
+
+        def flagged(robot):
+            return any(r.sender == '/manager' for r in rec.of(rec.flags, robot, t_back))
+        assert wait_until(lambda: flagged(1) and flagged(2), 10.0), 'no flag from the new manager'
+        back = max(min(r.time for r in rec.of(rec.flags, robot, t_back)) for robot in (1, 2))
+        time.sleep(5.0)
+        outcomes = dict((robot, rec.outcome(robot, TASK_TIMEOUT)) for robot in (1, 2))
+    own = [rec.log_lines('/robot%d' % robot, 'ranking servers from its own probes')
+           for robot in (1, 2)]
+    show('manager killed, then server %d (robot 1\'s):' % victim, [{
+        'first answer elsewhere after s': '%.3f' % moved if moved is not None else 'never',
+        'every robot flagged by the new manager after s': '%.2f' % (back - t_back),
+        'robots that said they decide alone': sum(1 for lines in own if lines)}])
+    show('tasks:', [dict(robot=r, **o) for r, o in outcomes.items()])
+    for outcome in outcomes.values():
+        assert (outcome['never answered'], outcome['duplicates'], outcome['failed']) == \
+            (0, 0, 0), outcome
+        assert 'no server selected' not in outcome['errors']
+    assert all(own), 'each robot logs once that it decides locally'
+    assert back - t_back <= 5.0          # within one window
+
+
+def test_forged_samples_flags_and_results_change_nothing(ros):
+    rec = ros['rec']
+    rec.clear()
+    with Fleet(ros['log'], **STABLE):
+        warm_up(rec)
+        ours = current_server(rec, 1)
+        forged = [s for s in (1, 2, 3) if s != ours][0]
+        t_spoof = time.monotonic()
+        out = subprocess.run([sys.executable, os.path.join(HERE, 'spoofer.py'), str(forged),
+                              '8'], stdout=subprocess.PIPE, universal_newlines=True,
+                             timeout=60, check=True)
+        sent = json.loads(out.stdout.strip().splitlines()[-1])
+        t_end = time.monotonic()
+        during = [r.msg for r in rec.of(rec.reports, 1, t_spoof) if r.time <= t_end]
+        means = [m for r in rec.of(rec.flags, 1, t_spoof) if r.sender == '/manager'
+                 for s, m in zip(r.msg.ranking, r.msg.mean_latency) if s == forged]
+        outcome = rec.outcome(1, TASK_TIMEOUT)
+    warnings = {'manager': rec.log_lines('/manager', '/spoofer'),
+                'robot 1': rec.log_lines('/robot1', '/spoofer')}
+    show('spoofer (as server %d; robot 1 uses server %d):' % (forged, ours), [
+        dict(('forged ' + k, v) for k, v in sent.items()),
+        {'robot 1 tasks meanwhile': len(during),
+         'sent to the forged server': sum(1 for m in during if m.server_id == forged),
+         'failed': sum(1 for m in during if not m.ok),
+         'lowest mean the manager published for it, ms': '%.3f' % (min(means) * 1e3)
+         if means else '-',
+         'warnings naming /spoofer (manager, robot 1)': '%d, %d' % (
+             len(warnings['manager']), len(warnings['robot 1']))}])
+    assert min(sent['samples'], sent['flags']) > 100 and sent['results'] > 20
+    assert len(during) >= 30
+    assert [m.server_id for m in during if m.server_id == forged] == []
+    assert [m for m in during if not m.ok] == [] and outcome['failed'] == 0
+    assert all(m > 1e-5 for m in means), means   # the 0.1 us samples never entered a mean
+    assert warnings['manager'] and warnings['robot 1'], warnings
+
+
+def system_state():
+    return rosgraph.Master('/fault_tests').getSystemState()
+
+
+def fleet_whole():
+    """Every fleet registration is back at the master, and server 3 (restarted after the
+    master) has its /data connections from both robots."""
+    try:
+        return _fleet_whole()
+    except (OSError, xmlrpc.client.Error, rosgraph.MasterError):
+        return False   # e.g. the master still names the killed server 3
+
+
+def _fleet_whole():
+    pubs, subs, _ = system_state()
+    pubs, subs = dict(pubs), dict(subs)
+    if not {'/robot1', '/robot2'} <= set(pubs.get('/data', ())) or \
+            set(pubs.get('/server_select_flag', ())) != {'/manager'} or \
+            not {'/server1', '/server2', '/server3'} <= set(subs.get('/data', ())):
+        return False
+    uri = rosgraph.Master('/fault_tests').lookupNode('/server3')
+    _, _, bus = xmlrpc.client.ServerProxy(uri).getBusInfo('/fault_tests')
+    master = rosgraph.Master('/fault_tests')
+    robots = set(master.lookupNode(r) for r in ('/robot1', '/robot2'))
+    inbound = set(b[1] for b in bus if b[4] == '/data' and b[2] == 'i' and b[5])
+    return robots <= inbound
+
+
+def test_roscore_restart(ros):
+    rec = ros['rec']
+    rec.clear()
+    core = ros['core']
+    with Fleet(ros['log'], task_rate=5) as fleet:
+        warm_up(rec)
+        master_pid = rosgraph.Master('/fault_tests').getPid()
+        stop_group(core.proc, signal.SIGKILL)
+        os.kill(master_pid, signal.SIGKILL)
+        t_down = time.monotonic()
+        time.sleep(6.0)
+        while_down = [r.msg for r in rec.of(rec.reports, since=t_down)]
+        core.proc = subprocess.Popen(['roscore', '-p', str(core.port)],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                     start_new_session=True)
+        t_up = time.monotonic()
+        nodes = ['/manager', '/server1', '/server2', '/server3', '/robot1', '/robot2']
+        assert wait_until(lambda: all(fleet.pid(n) for n in nodes), 20.0), system_state()
+        kill(fleet, '/server3')                # a node that joins the new master
+        fleet.restart_server(3)
+
+        def ranked():
+            return all(any(len(r.msg.ranking) == 3 for r in rec.of(rec.flags, robot, t_up))
+                       for robot in (1, 2))
+        whole = wait_until(lambda: ranked() and fleet_whole(), 30.0, period=0.2)
+        t_whole = time.monotonic()
+        outcomes = dict((robot, rec.outcome(robot, TASK_TIMEOUT)) for robot in (1, 2))
+    show('roscore killed for 6 s, then restarted:', [{
+        'tasks answered while it was down': sum(1 for m in while_down if m.ok),
+        'failed while down': sum(1 for m in while_down if not m.ok),
+        'fleet whole again after s': '%.2f' % (t_whole - t_up) if whole else 'never'}])
+    show('tasks:', [dict(robot=r, **o) for r, o in outcomes.items()])
+    assert sum(1 for m in while_down if m.ok) >= 40 and not any(not m.ok for m in while_down)
+    assert whole, system_state()
+    for outcome in outcomes.values():
+        assert (outcome['never answered'], outcome['duplicates']) == (0, 0), outcome
