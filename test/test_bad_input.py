@@ -13,7 +13,7 @@ import rostest
 from rospy.numpy_msg import numpy_msg
 
 from server_select.core import names
-from server_select.core.procs import wait_until
+from server_select.core.procs import stop_group, wait_until
 from server_select.msg import SortResult, SortTask
 
 ROBOT_OK = ['_robot_id:=1', '_servers:=1,2,3']
@@ -33,6 +33,10 @@ BAD_PARAMS = [
     ('manager', ['_robots:=1', '_servers:=1', '_window:=0'], '~window: expected a positive'),
     ('server', [], '~server_id: required parameter is not set'),
     ('server', ['_server_id:=-3'], '~server_id: ids must be non-negative, got -3'),
+    ('manager', ['_robots:=1', '_servers:=1', '_robot_node:=robot{nr}'],
+     "~robot_node: 'robot{nr}' is not a node name with {id}"),
+    ('robot', ROBOT_OK + ['_manager_timeout:=0'], '~manager_timeout: expected a positive'),
+    ('robot', ROBOT_OK + ['_sort_tasks:=maybe'], '~sort_tasks: expected true or false'),
 ]
 
 
@@ -57,6 +61,26 @@ class BadInputTest(unittest.TestCase):
             self.assertEqual(len(lines), 1, proc.stderr)
             self.assertIn(message, lines[0])
             self.assertNotIn('Traceback', proc.stderr)
+
+    def roslaunch(self, seconds, *args):
+        """Output of ``roslaunch server_select robot.launch ARGS`` stopped after ``seconds``."""
+        proc = subprocess.Popen(['roslaunch', 'server_select', 'robot.launch', 'output:=screen']
+                                + list(args), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                universal_newlines=True, start_new_session=True)
+        time.sleep(seconds)
+        stop_group(proc)
+        return proc.stdout.read()
+
+    def test_launch_arguments_are_checked_by_the_node(self):
+        # select mode with servers that do not include the (old) default fixed server 1
+        out = self.roslaunch(6.0, 'robot_id:=5', 'servers:=2,3')
+        self.assertNotIn('invalid parameter', out)
+        self.assertIn('robot 5: mode select, probing servers [2, 3]', out)
+        out = self.roslaunch(6.0, 'robot_id:=6', 'task_rate:=fast')
+        lines = [x for x in out.splitlines() if 'invalid parameter' in x]
+        self.assertEqual(len(lines), 1, out)
+        self.assertIn('~task_rate: expected a positive number', lines[0])
+        self.assertIn('exit code 2', out)
 
     def send(self, task_id, data, server_id=1):
         task = SortTask(robot_id=77, task_id=task_id, server_id=server_id,

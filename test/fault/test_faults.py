@@ -16,31 +16,14 @@ import xmlrpc.client
 
 import pytest
 import rosgraph
-import rospy
 
-from server_select.bench.harness import Roscore
 from server_select.core.procs import stop_group, wait_until
-from server_select.ros.master_watch import MasterWatch
 
-from fleet import Fleet, Recorder, kill
+from fleet import Fleet, kill
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TASK_TIMEOUT = 2.0   # the robots' default
 STABLE = {'task_rate': 5, 'hysteresis': 0.01}
-
-
-@pytest.fixture(scope='module')
-def ros(tmp_path_factory):
-    log_dir = str(tmp_path_factory.mktemp('faults'))
-    core = Roscore(log_dir)
-    core.__enter__()
-    rospy.init_node('fault_tests', disable_signals=True)
-    watch = MasterWatch(0.5)
-    watch.start()
-    state = {'core': core, 'log': os.path.join(log_dir, 'fleet.log'), 'rec': Recorder()}
-    yield state
-    rospy.signal_shutdown('fault tests done')
-    state['core'].__exit__()
 
 
 def current_server(rec, robot):

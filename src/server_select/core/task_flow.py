@@ -64,7 +64,7 @@ class TaskFlow(object):
 
     def __init__(self, kind, timeout, candidates, make, publish, check, report, run_local=None,
                  on_failure=None, on_success=None, deadlines=None, ids=None,
-                 clock=time.monotonic, remember=10000, keep_rtts=10000):
+                 clock=time.monotonic, remember=2000, keep_rtts=2000):
         if not timeout > 0:
             raise ValueError('timeout must be positive, got %r' % (timeout,))
         self.kind, self.timeout = kind, float(timeout)

@@ -1,0 +1,152 @@
+"""Every subscriber and service callback of the nodes, fed generated messages.
+
+The server, manager and robot objects are built in this process (their parameters are
+this test node's private parameters) and started, so that their callbacks run with real
+publishers; hypothesis then calls each callback with arbitrary messages, from arbitrary
+publishers. No exception may escape, and afterwards each node still serves a good input.
+"""
+
+import math
+import os
+
+import numpy as np
+import pytest
+import rospy
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from sensor_msgs.msg import Image, RegionOfInterest
+
+from server_select.msg import (Detection, Detections, FoundTarget, ImageResult, ImageTask,
+                               LatencySample, SelectionFlag, SortResult, SortTask)
+from server_select.nodes.manager import ManagerNode
+from server_select.nodes.robot import RobotNode
+from server_select.nodes.server import ServerNode
+from server_select.srv import KnownTargetsRequest, LatencyProbeRequest
+
+FUZZ = settings(max_examples=150, deadline=None,
+                suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                       HealthCheck.too_slow])
+uint32 = st.one_of(st.integers(0, 5), st.integers(0, 2 ** 32 - 1))
+int32 = st.one_of(st.integers(-2, 5), st.integers(-2 ** 31, 2 ** 31 - 1))
+floats = st.floats(allow_nan=True, allow_infinity=True)
+# /fault_tests: this process, which serves latency_S1 and so passes the robot's check
+senders = st.sampled_from(['/manager', '/robot1', '/fault_tests', '/spoofer', ''])
+text = st.text(max_size=20)
+AREA = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'search_small.yaml')
+
+
+def sent_by(msg, sender):
+    msg._connection_header = {'callerid': sender} if sender else {}
+    return msg
+
+
+@pytest.fixture(scope='module')
+def nodes(ros):
+    for name, value in {'server_id': 1, 'robot_id': 1, 'robots': '1,2', 'servers': '1,2',
+                        'max_task_len': 2000, 'image_source': 'search:' + AREA,
+                        'frame_rate': 1.0, 'task_rate': 1.0}.items():
+        rospy.set_param('~' + name, value)
+    built = {'server': ServerNode(), 'manager': ManagerNode(), 'robot': RobotNode()}
+    for node in built.values():
+        node.start()
+    return built
+
+
+@FUZZ
+@given(robot=uint32, task=uint32, server=int32, data=st.lists(int32, max_size=2500),
+       sender=senders)
+def test_server_sort_tasks(nodes, robot, task, server, data, sender):
+    nodes['server'].on_sort_task(sent_by(SortTask(robot_id=robot, task_id=task,
+                                                  server_id=server,
+                                                  data=np.asarray(data, np.int32)), sender))
+
+
+@FUZZ
+@given(robot=uint32, server=st.sampled_from([1, 2]), encoding=st.one_of(
+    st.sampled_from(['bgr8', 'rgb8', 'mono8', 'bgra8', '16UC1']), text),
+    height=st.integers(0, 64), width=st.integers(0, 64), step=st.integers(0, 300),
+    data=st.binary(max_size=4000))
+def test_server_image_tasks(nodes, robot, server, encoding, height, width, step, data):
+    nodes['server'].on_image_task(ImageTask(robot_id=robot, task_id=1, server_id=server,
+                                            image=Image(height=height, width=width,
+                                                        encoding=encoding, step=step,
+                                                        data=data)))
+
+
+@FUZZ
+@given(robot=uint32, seq=uint32)
+def test_server_probe_service(nodes, robot, seq):
+    answer = nodes['server'].on_probe(LatencyProbeRequest(robot_id=robot, seq=seq))
+    assert (answer.server_id, answer.seq) == (1, seq)
+
+
+@FUZZ
+@given(claim=st.one_of(st.none(), st.tuples(uint32, uint32)),
+       pair=st.sampled_from([(1, 1), (1, 2), (2, 1), (2, 2)]), ok=st.booleans(), rtt=floats,
+       sender=st.one_of(st.none(), senders))
+def test_manager_samples(nodes, claim, pair, ok, rtt, sender):
+    robot, server = claim or pair           # None: the sample claims its own topic's pair
+    sender = sender if sender is not None else '/robot%d' % pair[0]   # None: the robot
+    nodes['manager'].on_sample(sent_by(LatencySample(robot_id=robot, server_id=server, ok=ok,
+                                                     rtt=rtt), sender), pair)
+    for means in nodes['manager'].window.robot_stats(pair[0], [1, 2], rospy.get_time()).values():
+        assert means.mean is None or (math.isfinite(means.mean) and means.mean >= 0)
+
+
+@FUZZ
+@given(robot=st.sampled_from([1, 2]), server=int32, ranking=st.lists(uint32, max_size=5),
+       sender=senders)
+def test_robot_flags(nodes, robot, server, ranking, sender):
+    robot_node = nodes['robot']
+    robot_node.on_flag(sent_by(SelectionFlag(robot_id=robot, server_id=server,
+                                             ranking=ranking), sender))
+    assert set(robot_node.selection.candidates()) <= {1, 2}
+
+
+@FUZZ
+@given(robot=st.sampled_from([1, 2]), task=uint32, server=int32, ok=st.booleans(),
+       error=text, data=st.lists(int32, max_size=50), width=st.integers(0, 8),
+       sender=senders, kind=st.sampled_from(['sort', 'image']))
+def test_robot_results(nodes, robot, task, server, ok, error, data, width, sender, kind):
+    robot_node = nodes['robot']
+    if robot == 1 and task % 3 == 0:    # often a task in flight, from a server it went to
+        stream = next(s for s in robot_node.streams if s.flow.kind == kind)
+        pending = list(stream.flow._pending.values())
+        if pending:
+            task, server = pending[0].task_id, pending[0].attempts[-1][0]
+    if kind == 'sort':
+        result = SortResult(robot_id=robot, task_id=task, server_id=server, ok=ok, error=error,
+                            data=np.asarray(data, np.int32))
+    else:
+        result = ImageResult(robot_id=robot, task_id=task, server_id=server, ok=ok,
+                             error=error, image=Image(width=width))
+    stream = next(s for s in robot_node.streams if s.flow.kind == kind)
+    stream.on_result(sent_by(result, sender))
+
+
+@FUZZ
+@given(robot=st.sampled_from([1, 2]), task=uint32, boxes=st.lists(
+    st.tuples(uint32, uint32, uint32, uint32, text, floats), max_size=4), x=floats, y=floats,
+    label=text)
+def test_robot_search_callbacks(nodes, robot, task, boxes, x, y, label):
+    search = nodes['robot'].search
+    search.on_detections(Detections(robot_id=robot, task_id=task, detections=[
+        Detection(roi=RegionOfInterest(x_offset=a, y_offset=b, width=c, height=d), label=e,
+                  score=f) for a, b, c, d, e, f in boxes]))
+    search.on_found(FoundTarget(robot_id=robot, task_id=task, label=label, x=x, y=y))
+    search.on_known_targets(KnownTargetsRequest())
+
+
+def test_every_node_still_serves(nodes):
+    server = nodes['server']
+    done = server.tasks_done
+    server.on_sort_task(SortTask(robot_id=5, task_id=1, server_id=1,
+                                 data=np.asarray([3, 1, 2], np.int32)))
+    assert server.tasks_done == done + 1
+    manager = nodes['manager']
+    manager.on_sample(sent_by(LatencySample(robot_id=1, server_id=1, ok=True, rtt=0.002),
+                              '/robot1'), (1, 1))
+    assert manager.window.stats(1, 1, rospy.get_time()).ok_count >= 1
+    robot = nodes['robot']
+    robot.on_flag(sent_by(SelectionFlag(robot_id=1, server_id=2, ranking=[2, 1]), '/manager'))
+    assert robot.selection.candidates()[0] == 2 or robot.health.state(2) != 'healthy'
