@@ -1,15 +1,10 @@
 from server_select.core.health import EJECTED, HEALTHY, PROBATION, ServerHealth
 
-
-class Clock(object):
-    now = 0.0
-
-    def __call__(self):
-        return self.now
+from fake_clock import Clock
 
 
 def make(**kwargs):
-    clock = Clock()
+    clock = Clock(0.0)
     return ServerHealth([1, 2, 3], clock=clock, **kwargs), clock
 
 

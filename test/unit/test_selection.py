@@ -6,12 +6,7 @@ from server_select.core.health import ServerHealth
 from server_select.core.selection import Selection
 from server_select.core.task_flow import LOCAL, NO_SERVER
 
-
-class Clock(object):
-    now = 50.0
-
-    def __call__(self):
-        return self.now
+from fake_clock import Clock
 
 
 def select(**kwargs):

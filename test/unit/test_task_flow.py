@@ -10,13 +10,7 @@ from server_select.core.task_flow import (DUPLICATE, FOREIGN, LATE, LOCAL, NO_SE
                                           UNKNOWN, TaskFlow)
 from server_select.msg import SelectionFlag, TaskReport
 
-
-class Clock(object):
-    def __init__(self):
-        self.now = 100.0
-
-    def __call__(self):
-        return self.now
+from fake_clock import Clock
 
 
 class World(object):
