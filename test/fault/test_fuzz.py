@@ -49,7 +49,10 @@ def nodes(ros):
     built = {'server': ServerNode(), 'manager': ManagerNode(), 'robot': RobotNode()}
     for node in built.values():
         node.start()
-    return built
+    yield built
+    built['robot'].on_shutdown()       # its timers, streams and prober
+    for timer in built['manager'].timers:
+        timer.shutdown()
 
 
 @FUZZ
