@@ -144,11 +144,9 @@ class RobotNode(object):
         return (time.monotonic() >= self._start_after
                 and self.selection.ready(self.prober.answered))
 
-    def server_node(self, server):
+    def server_node(self, server, refresh=False):
         """The node serving ``latency_S<server>`` (the only one whose results count)."""
-        service = rospy.resolve_name(names.probe_service(server))
-        node = self.providers.node(service)
-        return node if node is not None else self.providers.node(service, refresh=True)
+        return self.providers.node(rospy.resolve_name(names.probe_service(server)), refresh)
 
     # -- evidence ----------------------------------------------------------------------------
 

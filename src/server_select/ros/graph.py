@@ -27,23 +27,24 @@ class ServiceProviders(object):
     """Which node provides each service, as the master says; looked up again at most every
     ``period`` s when asked to (a server may have been restarted elsewhere)."""
 
-    def __init__(self, caller_id, period=1.0, clock=time.monotonic):
-        self.caller_id, self.period, self._clock = caller_id, period, clock
+    def __init__(self, caller_id, period=1.0, clock=time.monotonic, system_state=None):
+        self.period, self._clock = period, clock
+        self._system_state = system_state or (
+            lambda: rosgraph.Master(caller_id).getSystemState())
         self._lock = threading.Lock()
         self._nodes = {}
         self._looked_up = -float('inf')
 
     def node(self, service, refresh=False):
-        """The node providing resolved ``service`` (None if none, or the master is away)."""
+        """The node providing resolved ``service`` (None if unknown). The master is asked
+        again when ``refresh`` or the service is unknown, at most every ``period`` s."""
         with self._lock:
-            stale = refresh and self._clock() - self._looked_up >= self.period
-            if service in self._nodes and not stale:
-                return self._nodes[service]
-            if stale or service not in self._nodes:
+            due = self._clock() - self._looked_up >= self.period
+            if due and (refresh or service not in self._nodes):
                 self._looked_up = self._clock()
                 try:
-                    _, _, services = rosgraph.Master(self.caller_id).getSystemState()
+                    _, _, services = self._system_state()
+                    self._nodes = dict((name, nodes[0]) for name, nodes in services if nodes)
                 except (rosgraph.MasterError, OSError):
-                    return self._nodes.get(service)
-                self._nodes = dict((name, nodes[0]) for name, nodes in services if nodes)
+                    pass   # the master is away: keep what was known
             return self._nodes.get(service)

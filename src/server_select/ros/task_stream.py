@@ -22,7 +22,7 @@ class TaskStream(object):
     The stream waits until ``ready()`` and, unless the robot works ``local``ly, until its
     task and result topics are connected; then it sends a task every ``1/rate`` s (at most
     ``limit``, 0: no limit) and publishes one ``task_report`` per task. A result counts
-    only if ``expected_publisher(server)`` (None: no check) published it.
+    only if the node ``expected_publisher(server, refresh=False)`` names published it.
     """
 
     def __init__(self, robot_id, kind, rate, limit, ready, flow_args, local=False,
@@ -72,7 +72,7 @@ class TaskStream(object):
         if result.robot_id != self.robot_id:
             return
         sender = publisher_of(result)
-        expected = self.expected_publisher(result.server_id) if self.expected_publisher else None
+        expected = self.expected(result.server_id, sender)
         if expected is not None and sender != expected:
             rospy.logwarn_throttle(
                 5.0, 'robot %d: ignored a %s result for task %d claiming server %d, published '
@@ -90,6 +90,16 @@ class TaskStream(object):
                 5.0, 'robot %d: ignored %s %s result for task %d from server %d (%s)'
                 % (self.robot_id, outcome, self.flow.kind, result.task_id, result.server_id,
                    sender))
+
+    def expected(self, server, sender):
+        """The node whose results count for ``server`` (None: no check). A result from
+        another node makes it look again (a server may have been restarted elsewhere)."""
+        if self.expected_publisher is None:
+            return None
+        expected = self.expected_publisher(server)
+        if sender != expected:
+            expected = self.expected_publisher(server, refresh=True)
+        return expected
 
     def _report(self, outcome):
         msg = TaskReport(robot_id=self.robot_id, task_id=outcome.task_id, kind=outcome.kind,
