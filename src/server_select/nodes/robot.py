@@ -69,8 +69,11 @@ class RobotNode(object):
         mode = param('mode')
         fixed = param('fixed_server', default=servers[0],
                       parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
-        self.health = ServerHealth(servers, param('eject_time'), param('eject_max'),
-                                   param('probation_probes'))
+        eject_time, eject_max = param('eject_time'), param('eject_max')
+        if eject_time > eject_max:
+            raise ParamError('~eject_time %g is longer than ~eject_max %g'
+                             % (eject_time, eject_max))
+        self.health = ServerHealth(servers, eject_time, eject_max, param('probation_probes'))
         self.selection = Selection(self.robot_id, servers, mode, fixed, self.health,
                                    param('window'), param('hysteresis'),
                                    param('manager_timeout'))
@@ -78,7 +81,9 @@ class RobotNode(object):
                              on_sample=self.on_sample)
         self.start_delay = param('start_delay')
         self.summary_period = param('summary_period')
-        self.manager_node = param('manager_node')
+        manager = param('manager_node')   # None: flags from any node
+        self.manager_node = rospy.resolve_name(manager) if manager else None
+        self.providers = ServiceProviders(rospy.get_name())
         self.search = None
         kinds = []
         if param('sort_tasks'):
@@ -120,7 +125,6 @@ class RobotNode(object):
 
     def start(self):
         self._start_after = time.monotonic() + self.start_delay
-        self.providers = ServiceProviders(rospy.get_name())
         self.flag_sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
                                          queue_size=100, tcp_nodelay=True)
         if self.search is not None:
@@ -171,10 +175,9 @@ class RobotNode(object):
         if flag.robot_id != self.robot_id:
             return
         sender = publisher_of(flag)
-        manager = rospy.resolve_name(self.manager_node) if self.manager_node else None
-        if manager is not None and sender != manager:
+        if self.manager_node is not None and sender != self.manager_node:
             rospy.logwarn_throttle(5.0, 'robot %d: ignored a flag published by %s (the manager '
-                                   'is %s)' % (self.robot_id, sender, manager))
+                                   'is %s)' % (self.robot_id, sender, self.manager_node))
             return
         refused = self.selection.on_flag(flag.robot_id, flag.server_id, flag.ranking)
         if refused:
