@@ -37,6 +37,7 @@ BAD_PARAMS = [
      "~robot_node: 'robot{nr}' is not a node name with {id}"),
     ('robot', ROBOT_OK + ['_manager_timeout:=0'], '~manager_timeout: expected a positive'),
     ('robot', ROBOT_OK + ['_sort_tasks:=maybe'], '~sort_tasks: expected true or false'),
+    ('robot', ROBOT_OK + ['_eject_time:=60'], '~eject_time 60 is longer than ~eject_max 30'),
 ]
 
 
