@@ -19,14 +19,22 @@ Sample = collections.namedtuple('Sample', 't robot server ok rtt')
 Run = collections.namedtuple('Run', 'meta flags reports samples')
 
 
+TOPICS = ('task_report', 'server_select_flag', 'latency_R<r>S<s>')
+
+
 def load(bag_path):
-    """A :class:`Run` from a bag and its metadata (times: seconds since scenario t0)."""
+    """A :class:`Run` from any bag holding the package's topics (found by their last name
+    component, so namespaced or remapped recordings work too). Times are seconds since the
+    scenario's t0 when the evaluation's ``<bag>.json`` is beside the bag, else since the
+    bag's first message; ``meta`` is that JSON, or ``{}``."""
     import rosbag  # only here: the pure functions below need no ROS
-    with open(bag_path + '.json') as stream:
-        meta = json.load(stream)
-    t0 = meta['t0']
+    meta = {}
+    if os.path.exists(bag_path + '.json'):
+        with open(bag_path + '.json') as stream:
+            meta = json.load(stream)
     flags, reports, samples = [], [], []
     with rosbag.Bag(bag_path) as bag:
+        t0 = meta.get('t0', bag.get_start_time() if bag.get_message_count() else 0.0)
         for topic, msg, stamp in bag.read_messages():
             t = stamp.to_sec() - t0
             name = topic.rsplit('/', 1)[-1]
@@ -148,59 +156,34 @@ def table(summaries):
          'vs fixed', 'gap to oracle', 'switches', 'reaction mean / max s (missed)'), rows)
 
 
-def plot_task_rtt(runs, path):
-    """Task round trip vs task index, one panel per robot, one line per mode (Fig. 8)."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-    robots = sorted(set(r.robot for run in runs.values() for r in run.reports))
-    fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
-    for ax, robot in zip(axes[:, 0], robots):
-        for mode, run in runs.items():
-            reports = sorted((r for r in run.reports if r.robot == robot), key=lambda r: r.task)
-            ax.plot([r.task for r in reports],
-                    [r.rtt * 1e3 if r.ok else float('nan') for r in reports],
-                    label=mode, linewidth=1)
-        ax.set_title('robot %d' % robot)
-        ax.set_xlabel('task index')
-        ax.set_ylabel('round trip (ms, log)')
-        ax.set_yscale('log')
-        ax.grid(True, alpha=0.3)
-        ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+def summarize_runs(runs, scenario=None, duration=None):
+    """:func:`mode_summary` of each run (``{name: Run}``), compared; with a scenario, the
+    reactions to its changes of the truly nearest server (fixed mode has none)."""
+    changes = None
+    if scenario is not None:
+        robots = [h.id for h in scenario.of_role('robot')]
+        changes = oracle_changes(scenario, robots, 0.0, duration or scenario.duration)
+    return compare(collections.OrderedDict(
+        (name, mode_summary(run.reports, run.flags, changes if name != 'fixed' else None))
+        for name, run in runs.items()))
 
 
-def plot_latency(run, path, title):
-    """Probe round trip per pair over time, the selected server overlaid, per robot."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-    robots = sorted(set(s.robot for s in run.samples) | set(f.robot for f in run.flags))
-    servers = sorted(set(s.server for s in run.samples))
-    colors = dict((s, 'C%d' % i) for i, s in enumerate(servers))
-    fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
-    for ax, robot in zip(axes[:, 0], robots):
-        for server in servers:
-            pts = [(s.t, s.rtt * 1e3) for s in run.samples
-                   if s.robot == robot and s.server == server and s.ok]
-            if pts:
-                ax.plot(*zip(*pts), '.-', color=colors[server], markersize=3, linewidth=0.8,
-                        label='probe S%d' % server)
-        flags = sorted((f for f in run.flags if f.robot == robot), key=lambda f: f.t)
-        for f, g in zip(flags, flags[1:] + [None]):
-            if f.server in colors:
-                ax.axvspan(f.t, g.t if g else f.t + 1.0, color=colors[f.server], alpha=0.12,
-                           linewidth=0)
-        ax.set_title('%s: robot %d (shading: selected server)' % (title, robot))
-        ax.set_xlabel('scenario time (s)')
-        ax.set_ylabel('probe round trip (ms)')
-        ax.grid(True, alpha=0.3)
-        ax.legend(loc='upper left', fontsize='small')
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+def write_report(runs, summaries, out_dir, title, description):
+    """report.md, summary.json and the plots of ``runs`` in ``out_dir``; returns the text."""
+    from server_select.testbed.plots import plot_latency, plot_task_rtt
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, 'summary.json'), 'w') as stream:
+        json.dump(summaries, stream, indent=1)
+    plot_task_rtt(runs, os.path.join(out_dir, 'task_rtt.png'))
+    for name, run in runs.items():
+        plot_latency(run, os.path.join(out_dir, 'latency_%s.png' % name), name)
+    text = ['# %s' % title, '', description, '', table(summaries), '',
+            '![task round trip](task_rtt.png)', '']
+    text += ['![latency %s](latency_%s.png)' % (m, m) for m in runs]
+    report = '\n'.join(text) + '\n'
+    with open(os.path.join(out_dir, 'report.md'), 'w') as stream:
+        stream.write(report)
+    return report
 
 
 def analyze(out_dir, modes):
@@ -214,26 +197,10 @@ def analyze(out_dir, modes):
         raise FileNotFoundError('no bags of modes %s in %s' % (modes, out_dir))
     meta = next(iter(runs.values())).meta
     scenario = Scenario.load(meta['scenario'])
-    robots = [h.id for h in scenario.of_role('robot')]
-    changes = oracle_changes(scenario, robots, 0.0, meta['duration'])
-    summaries = collections.OrderedDict(
-        (mode, mode_summary(run.reports, run.flags, changes if mode != 'fixed' else None))
-        for mode, run in runs.items())
-    compare(summaries)
-    with open(os.path.join(out_dir, 'summary.json'), 'w') as stream:
-        json.dump(summaries, stream, indent=1)
-    plot_task_rtt(runs, os.path.join(out_dir, 'task_rtt.png'))
-    for mode, run in runs.items():
-        plot_latency(run, os.path.join(out_dir, 'latency_%s.png' % mode), mode)
-    text = ['# Evaluation: %s' % scenario.name, '',
-            'Scenario `%s`, %.0f s per mode; task round trip from the robots\' `task_report`; '
-            'improvement and gap by mean round trip; reaction: from a change of the truly '
-            'nearest server to the flag selecting it.'
-            % (os.path.basename(meta['scenario']), meta['duration']), '',
-            table(summaries), '',
-            '![task round trip](task_rtt.png)', '']
-    text += ['![latency %s](latency_%s.png)' % (m, m) for m in runs]
-    report = '\n'.join(text) + '\n'
-    with open(os.path.join(out_dir, 'report.md'), 'w') as stream:
-        stream.write(report)
-    return report
+    summaries = summarize_runs(runs, scenario, meta['duration'])
+    return write_report(
+        runs, summaries, out_dir, 'Evaluation: %s' % scenario.name,
+        'Scenario `%s`, %.0f s per mode; task round trip from the robots\' `task_report`; '
+        'improvement and gap by mean round trip; reaction: from a change of the truly '
+        'nearest server to the flag selecting it.'
+        % (os.path.basename(meta['scenario']), meta['duration']))

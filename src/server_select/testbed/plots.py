@@ -1,0 +1,56 @@
+"""Plots of evaluation runs (matplotlib, imported only here)."""
+
+
+def plot_task_rtt(runs, path):
+    """Task round trip vs task index, one panel per robot, one line per mode (Fig. 8)."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    robots = sorted(set(r.robot for run in runs.values() for r in run.reports))
+    fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
+    for ax, robot in zip(axes[:, 0], robots):
+        for mode, run in runs.items():
+            reports = sorted((r for r in run.reports if r.robot == robot), key=lambda r: r.task)
+            ax.plot([r.task for r in reports],
+                    [r.rtt * 1e3 if r.ok else float('nan') for r in reports],
+                    label=mode, linewidth=1)
+        ax.set_title('robot %d' % robot)
+        ax.set_xlabel('task index')
+        ax.set_ylabel('round trip (ms, log)')
+        ax.set_yscale('log')
+        ax.grid(True, alpha=0.3)
+        ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def plot_latency(run, path, title):
+    """Probe round trip per pair over time, the selected server overlaid, per robot."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    robots = sorted(set(s.robot for s in run.samples) | set(f.robot for f in run.flags))
+    servers = sorted(set(s.server for s in run.samples))
+    colors = dict((s, 'C%d' % i) for i, s in enumerate(servers))
+    fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
+    for ax, robot in zip(axes[:, 0], robots):
+        for server in servers:
+            pts = [(s.t, s.rtt * 1e3) for s in run.samples
+                   if s.robot == robot and s.server == server and s.ok]
+            if pts:
+                ax.plot(*zip(*pts), '.-', color=colors[server], markersize=3, linewidth=0.8,
+                        label='probe S%d' % server)
+        flags = sorted((f for f in run.flags if f.robot == robot), key=lambda f: f.t)
+        for f, g in zip(flags, flags[1:] + [None]):
+            if f.server in colors:
+                ax.axvspan(f.t, g.t if g else f.t + 1.0, color=colors[f.server], alpha=0.12,
+                           linewidth=0)
+        ax.set_title('%s: robot %d (shading: selected server)' % (title, robot))
+        ax.set_xlabel('scenario time (s)')
+        ax.set_ylabel('probe round trip (ms)')
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc='upper left', fontsize='small')
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

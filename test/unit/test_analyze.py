@@ -1,0 +1,54 @@
+"""analyze on bags written here with the rosbag API: any bag with the topics, none without."""
+
+import math
+
+import pytest
+import rosbag
+import rospy
+from std_msgs.msg import String
+
+from server_select.msg import SelectionFlag, TaskReport
+from server_select.testbed.analyze import main
+
+
+def write_bag(path, tasks=10, prefix=''):
+    t0 = 1000.0
+    with rosbag.Bag(str(path), 'w') as bag:
+        for i in range(tasks):
+            t = rospy.Time.from_sec(t0 + 0.5 * i)
+            flag = SelectionFlag(robot_id=1, server_id=2, ranking=[2, 1],
+                                 mean_latency=[0.001, 0.002])
+            bag.write(prefix + '/server_select_flag', flag, t)
+            ok = i != 3
+            bag.write(prefix + '/task_report', TaskReport(
+                robot_id=1, task_id=i + 1, kind='sort', server_id=2, answered_by=2 if ok else -1,
+                ok=ok, rtt=0.001 * (i + 1) if ok else math.nan, attempts=1), t)
+
+
+def test_any_bag_with_the_topics_gives_the_table(tmp_path, capsys):
+    write_bag(tmp_path / 'plain.bag')
+    write_bag(tmp_path / 'fleet.bag', tasks=4, prefix='/robots_ns')  # namespaced recording
+    assert main([str(tmp_path / 'plain.bag'), str(tmp_path / 'fleet.bag'),
+                 '--out', str(tmp_path / 'report')]) == 0
+    out = capsys.readouterr().out
+    rows = [line for line in out.splitlines() if line.startswith('| plain') or
+            line.startswith('| fleet')]
+    assert rows[0].startswith('| plain | 10 | 1 |') and rows[1].startswith('| fleet | 4 | 1 |')
+    assert (tmp_path / 'report' / 'report.md').exists()
+    assert (tmp_path / 'report' / 'task_rtt.png').stat().st_size > 1000
+
+
+def test_a_bag_without_the_topics_is_refused_with_one_line(tmp_path, capsys):
+    path = tmp_path / 'other.bag'
+    with rosbag.Bag(str(path), 'w') as bag:
+        bag.write('/chatter', String(data='hello'), rospy.Time.from_sec(1.0))
+    assert main([str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'has none of the topics task_report' in err[0]
+
+
+@pytest.mark.parametrize('bad', ['missing.bag', 'not_a_bag.bag'])
+def test_unreadable_bags_are_refused_with_one_line(tmp_path, capsys, bad):
+    (tmp_path / 'not_a_bag.bag').write_text('hello')
+    assert main([str(tmp_path / bad)]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
