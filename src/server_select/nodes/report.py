@@ -1,6 +1,8 @@
 """Listens to a run for ``~duration`` seconds, then prints the per-robot summary."""
 
 import json
+import os
+import signal
 
 import rospy
 
@@ -17,6 +19,8 @@ class ReportNode(object):
     :ROS Parameters:
         - ``~duration`` (s, 30.0): how long to listen before printing and exiting.
         - ``~output`` (str, ''): also write the summary as JSON to this path.
+        - ``~end_launch`` (bool, false): then end the roslaunch that started this node
+          cleanly, as Ctrl-C would (the timed demo's end).
         - ``~robots``, ``~servers`` (id lists, optional): also summarise the probe samples
           of these pairs.
     :ROS Subscribers:
@@ -28,6 +32,7 @@ class ReportNode(object):
     def __init__(self):
         duration = param('duration')
         self.output = param('output')
+        self.end_launch = param('end_launch')
         self.report = RunReport()
         self.flag_sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
                                          queue_size=100)
@@ -58,7 +63,24 @@ class ReportNode(object):
             with open(self.output, 'w') as stream:
                 json.dump(self.report.summaries(), stream, indent=2)
             rospy.loginfo('report: summary written to %s', self.output)
-        rospy.signal_shutdown('report done')
+        if not (self.end_launch and end_parent_launch()):
+            rospy.signal_shutdown('report done')
+
+
+def end_parent_launch():
+    """Ask the roslaunch that started this node to shut down, as Ctrl-C would (a clean end,
+    without the "REQUIRED process has died" of a required node that exits by itself). False
+    when the parent is not roslaunch."""
+    parent = os.getppid()
+    try:
+        with open('/proc/%d/cmdline' % parent, 'rb') as stream:
+            argv = stream.read().split(b'\0')
+    except OSError:
+        return False
+    if not any(os.path.basename(a) == b'roslaunch' for a in argv[:2]):
+        return False
+    os.kill(parent, signal.SIGINT)
+    return True
 
 
 def main():

@@ -4,7 +4,8 @@ import sys
 
 import rospy
 
-from server_select.core.params import PARAMS, REQUIRED, ParamError
+from server_select.core.params import ParamError
+from server_select.core.settings import PARAMS, REQUIRED
 from server_select.ros.master_watch import MasterWatch
 
 

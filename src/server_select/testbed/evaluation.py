@@ -18,7 +18,7 @@ import json
 import os
 import sys
 
-from server_select.core.params import default
+from server_select.core.settings import default
 from server_select.core.procs import wait_until
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.scenario import Scenario, ScenarioError

@@ -6,7 +6,7 @@ import os
 import cv2
 import numpy as np
 
-from server_select.core.params import default
+from server_select.core.settings import default
 from server_select.vision.image_codec import ImageError, to_array, to_gray
 
 Box = collections.namedtuple('Box', 'x y width height label score')

@@ -1,0 +1,89 @@
+"""Every node parameter: its default and its parser, in one table (no rospy).
+
+:data:`PARAMS` is the one place a default is written: nodes read parameters through it
+(``server_select.ros.node.param``), launch files leave an argument empty to mean "the
+node's default", and the evaluation takes its defaults from it.
+"""
+
+import collections
+
+from server_select.core.params import (one_of, parse_bool, parse_count, parse_id, parse_id_list,
+                                       parse_mode, parse_names, parse_non_negative,
+                                       parse_number, parse_positive, parse_positive_int,
+                                       parse_publisher, parse_text)
+
+REQUIRED = object()
+
+Param = collections.namedtuple('Param', 'default parse doc')
+
+DEFAULT_CASCADE = 'haarcascade_frontalface_default.xml'
+
+# Every node parameter: default (REQUIRED: none), parser, meaning. A flat table.
+PARAMS = {
+    'robot_id': Param(REQUIRED, parse_id, "this robot's id"),
+    'server_id': Param(REQUIRED, parse_id, "this server's id"),
+    'robots': Param(REQUIRED, parse_id_list, 'ids of the robots'),
+    'servers': Param(REQUIRED, parse_id_list, 'ids of the servers'),
+    'mode': Param('select', parse_mode, 'select (follow the manager), fixed or local'),
+    'fixed_server': Param(None, parse_id, 'target in fixed mode (default: first server)'),
+    'probe_rate': Param(1.0, parse_positive, 'probes per second to each server (Hz)'),
+    'probe_timeout': Param(0.5, parse_positive, 'a probe without answer after this fails (s)'),
+    'sort_tasks': Param(True, parse_bool, 'send sort tasks'),
+    'task_rate': Param(2.0, parse_positive, 'sort tasks per second (Hz)'),
+    'task_size': Param(1000, parse_positive_int, 'values per sort task'),
+    'task_timeout': Param(2.0, parse_positive, 'a task without result after this fails (s)'),
+    'tasks': Param(0, parse_count, 'stop each stream after this many tasks (0: never)'),
+    'start_delay': Param(0.0, parse_non_negative, 'seconds to wait before the first task'),
+    'summary_period': Param(10.0, parse_positive, 'period of the log summary (s)'),
+    'seed': Param(None, parse_id, 'task data random seed (default: the robot id)'),
+    'image_source': Param('', parse_text, 'folder, video file or search:<area.yaml>'),
+    'frame_rate': Param(10.0, parse_positive, 'camera frames offloaded per second (Hz)'),
+    'image_encoding': Param('bgr8', one_of('bgr8', 'rgb8', 'mono8'), 'encoding of sent frames'),
+    'robot_index': Param(0, parse_count, "this robot's strip of a search area"),
+    'robot_count': Param(1, parse_positive_int, 'number of strips of a search area'),
+    'speed': Param(200.0, parse_positive, 'sweep speed over a search area (area pixels/s)'),
+    'merge_radius': Param(150.0, parse_positive, 'detections this close are one target (px)'),
+    'detector': Param('haar', one_of('haar', 'hog'), 'Haar cascade or HOG people detector'),
+    'cascade': Param(DEFAULT_CASCADE, parse_text, 'cascade file name or path'),
+    'scale_factor': Param(1.2, parse_positive, 'cascade scale step'),
+    'min_neighbors': Param(5, parse_positive_int, 'cascade neighbours for a detection'),
+    'min_size': Param(24, parse_positive_int, 'smallest target (px)'),
+    'max_task_len': Param(1000000, parse_positive_int, 'larger sort tasks get an error result'),
+    'queue_size': Param(100, parse_positive_int, 'task subscriber queue length'),
+    'max_image_pixels': Param(1 << 24, parse_positive_int, 'larger frames get an error result'),
+    'window': Param(5.0, parse_positive, 'latency sample window (s)'),
+    'publish_rate': Param(1.0, parse_positive, 'periodic selection flag rate (Hz)'),
+    'update_rate': Param(10.0, parse_positive, 're-evaluation rate between samples (Hz)'),
+    'hysteresis': Param(0.0, parse_non_negative, 'keep the current server while within this '
+                        'of the best (s); 0: the paper'),
+    'manager_timeout': Param(3.0, parse_positive, 'a flag older than this is stale: the robot '
+                             'ranks its servers itself (s)'),
+    'eject_time': Param(1.0, parse_positive, 'first ejection of a failing server (s); doubles '
+                        'with each ejection in a row'),
+    'eject_max': Param(30.0, parse_positive, 'longest ejection (s)'),
+    'probation_probes': Param(2, parse_count, 'good probes before an ejected server takes a '
+                              'task again'),
+    'retry_factor': Param(5.0, parse_positive, "an attempt's deadline: this x the server's "
+                          'recent p99 task round trip'),
+    'retry_floor': Param(0.25, parse_positive, "shortest attempt deadline (s)"),
+    'manager_node': Param('manager', parse_publisher, 'flags count only from this node '
+                          '(*: from any)'),
+    'robot_node': Param('robot{id}', parse_publisher, 'samples of robot {id} count only from '
+                        'this node (*: from any)'),
+    'master_check': Param(1.0, parse_positive, 'period of the check for a restarted roscore (s)'),
+    'scenario': Param(REQUIRED, parse_text, 'scenario YAML file'),
+    't0': Param(REQUIRED, parse_number, 'scenario time zero (epoch s)'),
+    'duration': Param(30.0, parse_positive, 'how long to listen or measure (s)'),
+    'output': Param('', parse_text, 'also write the result as JSON here'),
+    'end_launch': Param(False, parse_bool, 'when done, end the roslaunch that started the node'),
+    'nodes': Param(REQUIRED, parse_names, 'node names to measure'),
+    'delay': Param(5.0, parse_positive, 'wait this long before measuring (s)'),
+    'area': Param(REQUIRED, parse_text, 'search area YAML file'),
+    'radius': Param(150.0, parse_positive, 'a report this close to a target finds it (px)'),
+    'timeout': Param(180.0, parse_positive, 'give up after this long (s)'),
+}
+
+
+def default(name):
+    """The default of parameter ``name`` (KeyError for an unknown name)."""
+    return PARAMS[name].default
