@@ -6,7 +6,7 @@ started with the package's own launch files inside the hosts' namespaces, and
 ``rosbag record`` on the manager host. Modes:
 
 - ``select``: the system (manager + robots following its flag);
-- ``fixed``: the paper's baseline, every robot pinned to one server;
+- ``fixed``: the paper's baseline, every robot pinned to one server (no manager runs);
 - ``oracle``: robots follow the truly nearest server per the scenario file.
 
 The bags (with a ``<bag>.json`` of run metadata beside each) are the only input of the
@@ -89,7 +89,7 @@ class _Run(object):
         if mode == 'oracle':
             self.launch(manager, 'oracle.launch', 'scenario:=%s' % scenario.source,
                         't0:=%.6f' % self.tb.t0, 'robots:=%s' % _ids(robots))
-        else:
+        elif mode == 'select':   # fixed mode has no manager: no flag names an unused server
             self.launch(manager, 'manager.launch', 'robots:=%s' % _ids(robots),
                         'servers:=%s' % _ids(servers), 'window:=%g' % options.window,
                         'hysteresis:=%g' % options.hysteresis)
