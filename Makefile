@@ -11,7 +11,8 @@ APT_PACKAGES := python3-venv python3-rospy python3-rostest python3-roslaunch pyt
   python3-rosservice python3-rostopic python3-rosnode python3-rosmsg python3-roslib \
   catkin catkin-lint ros-message-generation libstd-msgs-dev libsensor-msgs-dev ros-base-dev \
   python3-std-msgs python3-sensor-msgs python3-geometry-msgs \
-  rosbash procps cmake g++ make iproute2 flake8 python3-hypothesis
+  rosbash procps cmake g++ make iproute2 flake8 python3-hypothesis python3-paramiko \
+  python3-rosgraph-msgs
 DEMO_DURATION ?= 30
 # Runs a command with the workspace sourced and the venv's python first on PATH (the
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).

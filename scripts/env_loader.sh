@@ -1,10 +1,21 @@
 #!/usr/bin/env bash
 # roslaunch env-loader for the hosts of a multi-host launch (launch/multihost_example.launch):
-# sets up this package's devel space, its venv and ROS_IP on the remote host, then runs the
-# node command roslaunch passes. Override the locations with SERVER_SELECT_DIR.
-dir=${SERVER_SELECT_DIR:-$HOME/server_select}
-source "$dir/build/devel/setup.bash" || { echo "env_loader: no build in $dir (run make build)" >&2; exit 1; }
-export PATH="$dir/.venv/bin:$PATH"
+# sources the workspace this script belongs to, then runs the node command roslaunch passes.
+# Found from where the script lives: an install or devel space (<prefix>/lib/server_select/),
+# this repository built with make (scripts/ -> build/devel), or a catkin workspace
+# (<ws>/src/server_select/scripts/ -> <ws>/devel). SERVER_SELECT_SETUP names a setup.bash
+# to use instead.
+here=$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")" && pwd)
+setup=${SERVER_SELECT_SETUP:-}
+if [ -z "$setup" ]; then
+  for candidate in "$here/../../setup.bash" "$here/../build/devel/setup.bash" \
+                   "$here/../../../devel/setup.bash"; do
+    [ -f "$candidate" ] && { setup=$candidate; break; }
+  done
+fi
+[ -n "$setup" ] && source "$setup" || { echo "env_loader: no setup.bash found from $here" >&2; exit 1; }
+# the Makefile's venv (pip packages), when the package is used from this repository
+[ -x "$here/../.venv/bin/python3" ] && export PATH="$here/../.venv/bin:$PATH"
 # The address other hosts reach this one at; set ROS_IP in the environment to override.
 export ROS_IP=${ROS_IP:-$(hostname -I | awk '{print $1}')}
 exec "$@"
