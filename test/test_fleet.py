@@ -11,6 +11,7 @@ import subprocess
 import sys
 import unittest
 
+import rosnode
 import rospy
 import rostest
 
@@ -45,6 +46,11 @@ class FleetTest(unittest.TestCase):
             self.assertEqual(len(flag.ranking), len(flag.mean_latency))
             self.assertEqual(list(flag.mean_latency), sorted(flag.mean_latency))
             self.assertTrue(all(0 < m < 1.0 for m in flag.mean_latency), flag.mean_latency)
+
+    def test_robot_nodes_are_where_the_launch_file_put_them(self):
+        expected = rospy.get_param('~robot_nodes', '').split()
+        nodes = rosnode.get_node_names()
+        self.assertEqual([n for n in expected if n not in nodes], [], nodes)
 
     def test_probe_service_answers_rosservice_call(self):
         server = self.servers[-1]

@@ -66,10 +66,11 @@ PARAMS = {
     'retry_factor': Param(5.0, parse_positive, "an attempt's deadline: this x the server's "
                           'recent p99 task round trip'),
     'retry_floor': Param(0.25, parse_positive, "shortest attempt deadline (s)"),
-    'manager_node': Param('manager', parse_publisher, 'flags count only from this node '
+    'manager_node': Param('/manager', parse_publisher, 'flags count only from this node '
                           '(*: from any)'),
-    'robot_node': Param('robot{id}', parse_publisher, 'samples of robot {id} count only from '
+    'robot_node': Param('/robot{id}', parse_publisher, 'samples of robot {id} count only from '
                         'this node (*: from any)'),
+    'fleet_ns': Param('/', parse_text, 'namespace of the fleet-level topics and services'),
     'master_check': Param(1.0, parse_positive, 'period of the check for a restarted roscore (s)'),
     'scenario': Param(REQUIRED, parse_text, 'scenario YAML file'),
     't0': Param(REQUIRED, parse_number, 'scenario time zero (epoch s)'),

@@ -9,7 +9,7 @@ from server_select.core.window import LatencyWindow, valid_rtt
 from server_select.msg import LatencySample
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.graph import publisher_of
-from server_select.ros.node import param, run
+from server_select.ros.node import fleet, owned_by, param, run
 
 
 class ManagerNode(object):
@@ -34,8 +34,9 @@ class ManagerNode(object):
         - ``~update_rate`` (Hz, 10.0): rate of re-evaluation between samples.
         - ``~hysteresis`` (s, 0.0): keep the current server while its mean is within this
           of the best one (0: always the best, as in the paper).
-        - ``~robot_node`` (``robot{id}``): the node whose samples count for robot {id}
-          (resolved in the manager's namespace; empty: any publisher).
+        - ``~robot_node`` (``/robot{id}``): the node, or the namespace of the nodes, whose
+          samples count for robot {id} (``*``: any publisher).
+        - ``~fleet_ns`` (``/``): namespace of the fleet-level topics and services.
     :ROS Subscribers:
         - ``latency_R<r>S<s>`` (server_select/LatencySample) for every robot r and server s.
     :ROS Publishers:
@@ -64,7 +65,7 @@ class ManagerNode(object):
 
     def start(self):
         self.sample_subs = [
-            rospy.Subscriber(names.sample_topic(r, s), LatencySample, self.on_sample,
+            rospy.Subscriber(fleet(names.sample_topic(r, s)), LatencySample, self.on_sample,
                              callback_args=(r, s), queue_size=100, tcp_nodelay=True)
             for r in self.robots for s in self.servers]
         self.timers = [
@@ -90,8 +91,8 @@ class ManagerNode(object):
         if sample.ok and not valid_rtt(sample.rtt):
             return 'round trip %r is not a finite number >= 0' % sample.rtt
         expected = self.robot_node.get(pair[0])
-        if expected is not None and publisher_of(sample) != expected:
-            return 'robot %d is %s' % (pair[0], expected)
+        if expected is not None and not owned_by(publisher_of(sample), expected):
+            return 'robot %d is %s (or a node in its namespace)' % (pair[0], expected)
         return None
 
     def update_all(self, only_on_change):

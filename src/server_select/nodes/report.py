@@ -10,7 +10,7 @@ from server_select.core import names
 from server_select.core.params import parse_id_list
 from server_select.core.report import RunReport
 from server_select.msg import LatencySample, SelectionFlag, TaskReport
-from server_select.ros.node import param, run
+from server_select.ros.node import fleet, param, run
 
 
 class ReportNode(object):
@@ -34,13 +34,13 @@ class ReportNode(object):
         self.output = param('output')
         self.end_launch = param('end_launch')
         self.report = RunReport()
-        self.flag_sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
+        self.flag_sub = rospy.Subscriber(fleet(names.SELECTION_TOPIC), SelectionFlag, self.on_flag,
                                          queue_size=100)
-        self.task_sub = rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, self.on_task,
+        self.task_sub = rospy.Subscriber(fleet(names.TASK_REPORT_TOPIC), TaskReport, self.on_task,
                                          queue_size=1000)
         optional = dict(default='', parse=lambda n, v: parse_id_list(n, v) if v != '' else [])
         self.probe_subs = [
-            rospy.Subscriber(names.sample_topic(r, s), LatencySample, self.on_probe,
+            rospy.Subscriber(fleet(names.sample_topic(r, s)), LatencySample, self.on_probe,
                              queue_size=100)
             for r in param('robots', **optional) for s in param('servers', **optional)]
         self.timer = rospy.Timer(rospy.Duration(duration), self.finish, oneshot=True)

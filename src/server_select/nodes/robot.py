@@ -13,7 +13,7 @@ from server_select.core.selection import Selection
 from server_select.core.task_flow import LOCAL, NO_SERVER
 from server_select.msg import SelectionFlag
 from server_select.ros.graph import ServiceProviders, publisher_of
-from server_select.ros.node import param, run
+from server_select.ros.node import fleet, param, run
 from server_select.ros.prober import Prober
 from server_select.ros.search import SearchParticipant
 from server_select.ros.task_kinds import ImageKind, SortKind
@@ -125,7 +125,7 @@ class RobotNode(object):
 
     def start(self):
         self._start_after = time.monotonic() + self.start_delay
-        self.flag_sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
+        self.flag_sub = rospy.Subscriber(fleet(names.SELECTION_TOPIC), SelectionFlag, self.on_flag,
                                          queue_size=100, tcp_nodelay=True)
         if self.search is not None:
             self.search.start()
@@ -150,7 +150,7 @@ class RobotNode(object):
 
     def server_node(self, server, refresh=False):
         """The node serving ``latency_S<server>`` (the only one whose results count)."""
-        return self.providers.node(rospy.resolve_name(names.probe_service(server)), refresh)
+        return self.providers.node(fleet(names.probe_service(server)), refresh)
 
     # -- evidence ----------------------------------------------------------------------------
 

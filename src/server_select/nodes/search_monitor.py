@@ -9,7 +9,7 @@ from server_select.core import names
 from server_select.core.params import ParamError
 from server_select.core.tables import markdown_table
 from server_select.msg import FoundTarget
-from server_select.ros.node import param, run
+from server_select.ros.node import fleet, param, run
 from server_select.vision.search import SearchError, SearchWorld
 
 
@@ -41,7 +41,7 @@ class SearchMonitorNode(object):
         self.reports = []
         self.false_alarms = []
         self.start = rospy.get_time()
-        self.sub = rospy.Subscriber(names.FOUND_TARGETS_TOPIC, FoundTarget, self.on_found,
+        self.sub = rospy.Subscriber(fleet(names.FOUND_TARGETS_TOPIC), FoundTarget, self.on_found,
                                     queue_size=100)
         self.timer = rospy.Timer(rospy.Duration(timeout), self.finish, oneshot=True)
         rospy.loginfo('search monitor: %d targets to find', len(self.world.targets))

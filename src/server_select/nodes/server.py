@@ -13,7 +13,7 @@ from server_select.core.params import ParamError
 from server_select.core.sort_task import TaskError, sort_values
 from server_select.msg import (Detection, Detections, ImageResult, ImageTask, SortResult,
                                SortTask)
-from server_select.ros.node import param, run
+from server_select.ros.node import fleet, param, run
 from server_select.srv import LatencyProbe, LatencyProbeResponse
 from server_select.vision import image_codec
 from server_select.vision.detection import DetectorError, make_detector, search_frame
@@ -69,19 +69,20 @@ class ServerNode(object):
     def start(self):
         queue = self.queue_size
         self.result_pub = rospy.Publisher(
-            names.SORT_RESULT_TOPIC, numpy_msg(SortResult), queue_size=queue)
-        self.image_pub = rospy.Publisher(names.IMAGE_RESULT_TOPIC, ImageResult, queue_size=queue)
-        self.detections_pub = rospy.Publisher(names.DETECTIONS_TOPIC, Detections,
+            fleet(names.SORT_RESULT_TOPIC), numpy_msg(SortResult), queue_size=queue)
+        self.image_pub = rospy.Publisher(fleet(names.IMAGE_RESULT_TOPIC), ImageResult,
+                                         queue_size=queue)
+        self.detections_pub = rospy.Publisher(fleet(names.DETECTIONS_TOPIC), Detections,
                                               queue_size=queue)
         self.task_sub = rospy.Subscriber(
-            names.SORT_TASK_TOPIC, numpy_msg(SortTask), self.on_sort_task,
+            fleet(names.SORT_TASK_TOPIC), numpy_msg(SortTask), self.on_sort_task,
             queue_size=queue, tcp_nodelay=True, buff_size=1 << 24)
         self.image_sub = rospy.Subscriber(
-            names.IMAGE_TASK_TOPIC, ImageTask, self.on_image_task, queue_size=queue,
+            fleet(names.IMAGE_TASK_TOPIC), ImageTask, self.on_image_task, queue_size=queue,
             tcp_nodelay=True, buff_size=1 << 24)
         # Advertised last: a robot that can probe us finds our task topics wired already.
         self.probe_srv = rospy.Service(
-            names.probe_service(self.server_id), LatencyProbe, self.on_probe)
+            fleet(names.probe_service(self.server_id)), LatencyProbe, self.on_probe)
         rospy.loginfo('server %d: probe service %s, tasks on %s',
                       self.server_id, self.probe_srv.resolved_name, self.task_sub.resolved_name)
         rospy.on_shutdown(self.on_shutdown)

@@ -2,11 +2,14 @@
 
 import sys
 
+import rosgraph.names
 import rospy
 
 from server_select.core.params import ParamError
 from server_select.core.settings import PARAMS, REQUIRED
 from server_select.ros.master_watch import MasterWatch
+
+_FLEET_NS = None
 
 
 def param(name, default=None, parse=None):
@@ -26,6 +29,26 @@ def param(name, default=None, parse=None):
     if value is None:
         return None
     return (parse or spec.parse)(private, value)
+
+
+def fleet(name):
+    """``name`` resolved in the fleet's namespace (``~fleet_ns``, default ``/``), where every
+    fleet-level topic and service lives, wherever the node itself is (a robot in
+    ``robot1/`` finds the servers at the root with no remaps)."""
+    return rosgraph.names.ns_join(_fleet_ns(), name) if not name.startswith('/') else name
+
+
+def _fleet_ns():
+    global _FLEET_NS
+    if _FLEET_NS is None:
+        _FLEET_NS = rospy.resolve_name(param('fleet_ns') or '/')
+    return _FLEET_NS
+
+
+def owned_by(node, owner):
+    """Whether ``node`` is ``owner`` or a node inside ``owner``'s namespace (a robot's
+    nodes may live in ``/robot1/``)."""
+    return node == owner or node.startswith(owner.rstrip('/') + '/')
 
 
 def run(node_name, node_class, argv=None):

@@ -7,6 +7,7 @@ import rospy
 
 from server_select.core import names
 from server_select.msg import LatencySample
+from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
@@ -29,11 +30,11 @@ class Prober(object):
         self.on_sample = on_sample or (lambda server, ok, rtt, error: None)
         self._seq = itertools.count(1)
         self._inflight = {}
-        self._pubs = dict(
-            (s, rospy.Publisher(names.sample_topic(robot_id, s), LatencySample, queue_size=10))
-            for s in self.servers)
-        self._proxies = dict(
-            (s, TimedServiceProxy(names.probe_service(s), LatencyProbe)) for s in self.servers)
+        self._pubs = dict((s, rospy.Publisher(fleet(names.sample_topic(robot_id, s)),
+                                              LatencySample, queue_size=10))
+                          for s in self.servers)
+        self._proxies = dict((s, TimedServiceProxy(fleet(names.probe_service(s)), LatencyProbe))
+                             for s in self.servers)
         self._pool = concurrent.futures.ThreadPoolExecutor(
             max_workers=len(self.servers), thread_name_prefix='probe')
         self._timer = None

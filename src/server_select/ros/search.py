@@ -8,6 +8,7 @@ from std_msgs.msg import Header
 
 from server_select.core import names
 from server_select.msg import Detections, FoundTarget
+from server_select.ros.node import fleet
 from server_select.srv import KnownTargets, KnownTargetsResponse
 from server_select.vision.search import Found, TargetRegistry
 
@@ -31,10 +32,11 @@ class SearchParticipant(object):
         self.found_pub = None
 
     def start(self):
-        self.found_pub = rospy.Publisher(names.FOUND_TARGETS_TOPIC, FoundTarget, queue_size=100)
-        self.found_sub = rospy.Subscriber(names.FOUND_TARGETS_TOPIC, FoundTarget, self.on_found,
-                                          queue_size=100, tcp_nodelay=True)
-        self.detections_sub = rospy.Subscriber(names.DETECTIONS_TOPIC, Detections,
+        found = fleet(names.FOUND_TARGETS_TOPIC)
+        self.found_pub = rospy.Publisher(found, FoundTarget, queue_size=100)
+        self.found_sub = rospy.Subscriber(found, FoundTarget, self.on_found, queue_size=100,
+                                          tcp_nodelay=True)
+        self.detections_sub = rospy.Subscriber(fleet(names.DETECTIONS_TOPIC), Detections,
                                                self.on_detections, queue_size=100,
                                                tcp_nodelay=True)
         self.known_srv = rospy.Service(names.KNOWN_TARGETS_SERVICE, KnownTargets,

@@ -14,6 +14,7 @@ from server_select.core.stats import format_ms, summarize
 from server_select.core.task_flow import RETRIED, TaskFlow
 from server_select.msg import TaskReport
 from server_select.ros.graph import publisher_of
+from server_select.ros.node import fleet
 
 
 class TaskStream(object):
@@ -38,13 +39,14 @@ class TaskStream(object):
         self.timers = []
 
     def start(self):
-        self.report_pub = rospy.Publisher(names.TASK_REPORT_TOPIC, TaskReport, queue_size=100)
+        self.report_pub = rospy.Publisher(fleet(names.TASK_REPORT_TOPIC), TaskReport,
+                                          queue_size=100)
         if not self.local:
-            self.task_pub = rospy.Publisher(self.kind.task_topic, self.kind.task_type,
+            self.task_pub = rospy.Publisher(fleet(self.kind.task_topic), self.kind.task_type,
                                             queue_size=100)
             self.result_sub = rospy.Subscriber(
-                self.kind.result_topic, self.kind.result_type, self.on_result, queue_size=100,
-                tcp_nodelay=True, buff_size=1 << 24)
+                fleet(self.kind.result_topic), self.kind.result_type, self.on_result,
+                queue_size=100, tcp_nodelay=True, buff_size=1 << 24)
         self.timers = [rospy.Timer(rospy.Duration(1.0 / self.rate), self.on_timer),
                        rospy.Timer(rospy.Duration(0.02), lambda _e: self.flow.tick())]
 

@@ -107,7 +107,7 @@ class _Run(object):
                         'task_rate:=%g' % options.task_rate, 'task_size:=%d' % options.task_size,
                         'task_timeout:=%g' % options.task_timeout,
                         'start_delay:=%g' % options.start_delay,
-                        'manager_node:=%s' % ('oracle' if mode == 'oracle' else 'manager'))
+                        'manager_node:=%s' % ('/oracle' if mode == 'oracle' else '/manager'))
 
 
 def run_mode(scenario_path, mode, out_dir, options=None, log=print):
