@@ -12,14 +12,16 @@ APT_PACKAGES := python3-venv python3-rospy python3-rostest python3-roslaunch pyt
   catkin catkin-lint ros-message-generation libstd-msgs-dev libsensor-msgs-dev ros-base-dev \
   python3-std-msgs python3-sensor-msgs python3-geometry-msgs \
   rosbash procps cmake g++ make iproute2 flake8 python3-hypothesis python3-paramiko \
-  python3-rosgraph-msgs
+  python3-rosgraph-msgs \
+  python3-numpy python3-opencv opencv-data python3-yaml python3-psutil python3-matplotlib \
+  python3-skimage python3-rospkg
 DEMO_DURATION ?= 30
 # Runs a command with the workspace sourced and the venv's python first on PATH (the
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate bench bench-emulator bench-memory \
-  test unit-test testbed-test fault-test rostest lint clean
+  test unit-test testbed-test fault-test catkin-test rostest lint clean
 all: build
 
 $(BUILD)/.apt-stamp: Makefile
@@ -109,14 +111,19 @@ LINT := catkin_lint -W2 --strict --ignore package_path_name $(TOP) && \
 lint: build
 	@$(ROSENV) cd $(TOP) && $(LINT)
 
-# Lint first, then unit tests (no master), the fault tests (a roscore of their own, real
-# signals; they print their counts), the testbed tests (root and TUN; reported as skipped
-# elsewhere), the benchmarks' smoke run, then the launch-level rostests; the last line
-# printed is the rostest tally "rostest: N passed, N failed".
+# Lint first, then unit tests (no master), the testbed tests (root and TUN; reported as
+# skipped elsewhere), the benchmarks' smoke run, the fault tests (a roscore of their own,
+# real signals; they print their counts), the package in a fresh catkin workspace, then the
+# launch-level rostests; the last line printed is the rostest tally "rostest: N passed, N failed".
 test: build
 	@$(ROSENV) cd $(TOP) && $(LINT) \
 	  && $(PY) -m pytest -q -rs test/unit test/testbed test/bench \
-	  && $(FAULT_TEST) && bash test/run_rostests.sh
+	  && $(FAULT_TEST) && bash test/catkin_workspace.sh && bash test/run_rostests.sh
+
+# The package in a fresh catkin workspace with Debian's packages only: catkin_make,
+# catkin_make run_tests, the timed demo.
+catkin-test: deps
+	@bash test/catkin_workspace.sh
 
 # Servers killed and stopped, manager and roscore killed, forged input: counts printed.
 # A process of its own: this pytest process is a ROS node of the roscore it starts.

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The ROS way, tested: this package copied into the src/ of a fresh catkin workspace and
+# built there with Debian's packages only (no venv, no pip: PATH is the system's), then
+#   catkin_make, catkin_make run_tests (the rostests), catkin_test_results,
+#   and the timed demo launched from the workspace's devel space.
+# Prints "catkin: N passed, N failed" last; exit status non-zero on any failure.
+set -u
+repo=$(cd "$(dirname "$0")/.." && pwd)
+ws=$(mktemp -d /tmp/server_select_ws.XXXXXX)
+trap 'rm -rf "$ws"' EXIT
+mkdir -p "$ws/src/server_select"
+tar -C "$repo" --exclude=./build --exclude=./.venv --exclude=./results --exclude=./.git \
+  -cf - . | tar -C "$ws/src/server_select" -xf -
+run() {  # a clean environment: Debian's python3 and ROS, nothing of the caller's
+  env -i HOME="$HOME" PATH=/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 \
+    ROS_HOME="$ws/ros_home" ROS_MASTER_URI="http://localhost:${port:-11311}" \
+    bash -c "cd '$ws' && $1"
+}
+passed=0; failed=0
+step() {
+  local name=$1; shift
+  echo "=== catkin workspace: $name"
+  if run "$*" > "$ws/$name.log" 2>&1; then
+    passed=$((passed + 1)); echo "=== $name: ok"
+  else
+    failed=$((failed + 1)); echo "=== $name: FAILED; last lines:"; tail -40 "$ws/$name.log"
+  fi
+}
+step catkin_make "catkin_make"
+step run_tests "catkin_make run_tests && catkin_test_results build/test_results"
+port=$(( 20000 + RANDOM % 20000 ))
+step demo "source devel/setup.bash && roslaunch --port $port server_select demo.launch \
+  duration:=10 output:=log | tee demo.out && grep -q '| R1 | S' demo.out && grep -q '| R2 | S' demo.out"
+echo "catkin: $passed passed, $failed failed"
+[ $failed -eq 0 ]
