@@ -7,7 +7,7 @@
 set -u
 repo=$(cd "$(dirname "$0")/.." && pwd)
 ws=$(mktemp -d /tmp/server_select_ws.XXXXXX)
-trap 'rm -rf "$ws"' EXIT
+trap '[ -n "${KEEP_WS:-}" ] || rm -rf "$ws"' EXIT
 mkdir -p "$ws/src/server_select"
 tar -C "$repo" --exclude=./build --exclude=./.venv --exclude=./results --exclude=./.git \
   -cf - . | tar -C "$ws/src/server_select" -xf -
@@ -27,7 +27,7 @@ step() {
   fi
 }
 step catkin_make "catkin_make"
-step run_tests "catkin_make run_tests && catkin_test_results build/test_results"
+step run_tests "catkin_make run_tests -j1 && catkin_test_results build/test_results"
 port=$(( 20000 + RANDOM % 20000 ))
 step demo "source devel/setup.bash && roslaunch --port $port server_select demo.launch \
   duration:=10 output:=log | tee demo.out && grep -q '| R1 | S' demo.out && grep -q '| R2 | S' demo.out"
