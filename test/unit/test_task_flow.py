@@ -185,3 +185,16 @@ def test_remembered_ids_and_round_trips_are_bounded():
 def test_timeout_must_be_positive(bad):
     with pytest.raises(ValueError):
         World(timeout=bad)
+
+
+def test_a_task_that_cannot_be_made_is_reported_failed_and_not_sent():
+    w = World()
+
+    def broken(task_id, stamp):
+        raise ValueError('frame does not decode')
+    w.flow._make = broken
+    w.flow.send_next('s1')
+    (report,) = w.reports
+    assert (report.ok, report.error, report.attempts) == \
+        (False, 'cannot make the task: frame does not decode', 0)
+    assert w.published == [] and len(w.flow) == 0

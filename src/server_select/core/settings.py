@@ -51,6 +51,10 @@ PARAMS = {
     'max_task_len': Param(1000000, parse_positive_int, 'larger sort tasks get an error result'),
     'queue_size': Param(100, parse_positive_int, 'task subscriber queue length'),
     'max_image_pixels': Param(1 << 24, parse_positive_int, 'larger frames get an error result'),
+    'image_topic': Param('', parse_text, 'camera frames from this sensor_msgs/Image or '
+                         'CompressedImage topic (newest frame wins)'),
+    'image_transport': Param('raw', one_of('raw', 'compressed'), 'how frames travel'),
+    'jpeg_quality': Param(80, parse_count, 'JPEG quality of compressed frames (0-100)'),
     'window': Param(5.0, parse_positive, 'latency sample window (s)'),
     'publish_rate': Param(1.0, parse_positive, 'periodic selection flag rate (Hz)'),
     'update_rate': Param(10.0, parse_positive, 're-evaluation rate between samples (Hz)'),

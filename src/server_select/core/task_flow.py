@@ -52,7 +52,8 @@ class TaskFlow(object):
 
     :param candidates: ``() -> [server ids]`` in order of preference, ``[LOCAL]`` to work
         in the robot, ``[]`` when there is none.
-    :param make: ``(task_id, stamp) -> (request, context)``.
+    :param make: ``(task_id, stamp) -> (request, context)``; a ValueError it raises fails
+        the task (reported, not sent).
     :param publish: ``(request, server_id) -> None``.
     :param check: ``(result, context) -> error string or None`` for a result reported ok.
     :param report: ``(Outcome) -> None``, called once per task.
@@ -102,7 +103,11 @@ class TaskFlow(object):
             error = self._run_local(task_id, stamp)
             return self._end(Outcome(task_id, self.kind, stamp, LOCAL, LOCAL, not error,
                                      error or '', self._clock() - start, 1)).task_id
-        request, context = self._make(task_id, stamp)
+        try:
+            request, context = self._make(task_id, stamp)
+        except ValueError as error:   # e.g. a camera frame that does not decode
+            return self._end(Outcome(task_id, self.kind, stamp, NO_SERVER, NO_SERVER, False,
+                                     'cannot make the task: %s' % error, None, 0)).task_id
         with self._lock:
             pending = self._pending[task_id] = _Pending(task_id, stamp, request, context,
                                                         self._clock())

@@ -12,6 +12,7 @@ from server_select.core.params import ParamError, parse_fixed_server
 from server_select.core.selection import Selection
 from server_select.core.task_flow import LOCAL, NO_SERVER
 from server_select.msg import SelectionFlag
+from server_select.ros.camera import TopicSource
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.node import fleet, param, run
 from server_select.ros.prober import Prober
@@ -42,7 +43,10 @@ class RobotNode(object):
         - ``~sort_tasks`` (true), ``~task_rate`` (Hz, 2.0), ``~task_size`` (1000),
           ``~task_timeout`` (s, 2.0), ``~tasks`` (0: no limit), ``~seed`` (robot id)
         - ``~image_source`` ('': none; a folder, a video file or ``search:<area.yaml>``),
-          ``~frame_rate`` (Hz, 10.0), ``~image_encoding`` (``bgr8``, ``rgb8``, ``mono8``)
+          or ``~image_topic`` (a sensor_msgs/Image or CompressedImage topic, newest frame
+          wins); ``~frame_rate`` (Hz, 10.0), ``~image_encoding`` (``bgr8``, ``rgb8``,
+          ``mono8``), ``~image_transport`` (``raw`` or ``compressed``: JPEG of
+          ``~jpeg_quality``, 80)
         - ``~robot_index``, ``~robot_count`` (0, 1): this robot's strip of a search area;
           ``~speed`` (area px/s, 200), ``~merge_radius`` (px, 150)
         - ``~detector``, ``~cascade``, ``~scale_factor``, ``~min_neighbors``, ``~min_size``
@@ -84,15 +88,16 @@ class RobotNode(object):
         manager = param('manager_node')   # None: flags from any node
         self.manager_node = rospy.resolve_name(manager) if manager else None
         self.providers = ServiceProviders(rospy.get_name())
-        self.search = None
+        self.search = self.camera = None
         kinds = []
         if param('sort_tasks'):
             kinds.append((SortKind(self.robot_id, param('task_size'),
                                    param('seed', default=self.robot_id)), param('task_rate')))
-        if param('image_source'):
+        if param('image_source') or param('image_topic'):
             kinds.append((self._image_kind(mode), param('frame_rate')))
         if not kinds:
-            raise ParamError('~sort_tasks is false and ~image_source is empty: no tasks to send')
+            raise ParamError('~sort_tasks is false and neither ~image_source nor ~image_topic '
+                             'is set: no tasks to send')
         flow_args = dict(timeout=param('task_timeout'), candidates=self.selection.candidates,
                          on_failure=self.on_failure, on_success=self.health.task_ok,
                          ids=itertools.count(1))    # task ids are per robot, across streams
@@ -107,11 +112,16 @@ class RobotNode(object):
         self.timers = []
 
     def _image_kind(self, mode):
-        try:
-            source = open_source(param('image_source'), param('robot_index'),
-                                 param('robot_count'), param('speed'))
-        except (SourceError, SearchError, OSError) as error:
-            raise ParamError('~image_source: %s' % error)
+        if param('image_source') and param('image_topic'):
+            raise ParamError('~image_source and ~image_topic: set one of them, not both')
+        if param('image_topic'):
+            source = self.camera = TopicSource(param('image_topic'), param('max_image_pixels'))
+        else:
+            try:
+                source = open_source(param('image_source'), param('robot_index'),
+                                     param('robot_count'), param('speed'))
+            except (SourceError, SearchError, OSError) as error:
+                raise ParamError('~image_source: %s' % error)
         detector = None
         if mode == 'local':
             try:
@@ -121,7 +131,8 @@ class RobotNode(object):
         self.search = SearchParticipant(self.robot_id, param('merge_radius'),
                                         getattr(source, 'world', None))
         return ImageKind(self.robot_id, source, param('image_encoding'), self.search, detector,
-                         param('max_image_pixels'))
+                         param('max_image_pixels'), param('image_transport'),
+                         param('jpeg_quality'))
 
     def start(self):
         self._start_after = time.monotonic() + self.start_delay
@@ -129,6 +140,8 @@ class RobotNode(object):
                                          queue_size=100, tcp_nodelay=True)
         if self.search is not None:
             self.search.start()
+        if self.camera is not None:
+            self.camera.start()
         for stream in self.streams:
             stream.start()
         self.prober.start()

@@ -6,7 +6,7 @@ import time
 import numpy as np
 import rospy
 from rospy.numpy_msg import numpy_msg
-from sensor_msgs.msg import Image, RegionOfInterest
+from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 
 from server_select.core import names
 from server_select.core.params import ParamError
@@ -31,8 +31,9 @@ class ServerNode(object):
 
     Image tasks are searched for targets with an OpenCV Haar cascade (``~cascade``, a file
     of OpenCV's cascade folder or a path) or the HOG people detector (``~detector:=hog``);
-    frames in ``bgr8``, ``rgb8`` or ``mono8`` (any row padding) are accepted, anything
-    else gets an error result.
+    raw frames in ``bgr8``, ``rgb8`` or ``mono8`` (any row padding) and compressed ones
+    (JPEG, PNG) are accepted, anything else gets an error result; a compressed task gets
+    its annotated frame back as JPEG.
 
     :ROS Parameters:
         - ``~server_id`` (int, required): this server's id.
@@ -42,6 +43,7 @@ class ServerNode(object):
         - ``~cascade`` (str, ``haarcascade_frontalface_default.xml``)
         - ``~scale_factor`` (1.2), ``~min_neighbors`` (5), ``~min_size`` (24 px): cascade settings.
         - ``~max_image_pixels`` (int, 16777216): larger frames get an error result.
+        - ``~jpeg_quality`` (80): of the annotated frame sent back for a compressed task.
     :ROS Services:
         - ``latency_S<server_id>`` (server_select/LatencyProbe): echo for RTT probing.
     :ROS Subscribers:
@@ -58,6 +60,7 @@ class ServerNode(object):
         self.max_task_len = param('max_task_len')
         self.queue_size = param('queue_size')
         self.max_image_pixels = param('max_image_pixels')
+        self.jpeg_quality = param('jpeg_quality')
         try:
             self.detector = make_detector(param)
         except DetectorError as error:
@@ -112,16 +115,16 @@ class ServerNode(object):
         result = ImageResult(header=task.header, robot_id=task.robot_id, task_id=task.task_id,
                              server_id=self.server_id)
         start = time.perf_counter()
-        img = task.image
+        img, packed = task.image, task.compressed
         try:
-            boxes, annotated = search_frame(self.detector, img.encoding, img.height, img.width,
-                                            img.step, img.data, self.max_image_pixels)
+            boxes, annotated = search_frame(
+                self.detector, (img.encoding, img.height, img.width, img.step, img.data),
+                (packed.format, packed.data), self.max_image_pixels)
         except image_codec.ImageError as error:
             self._reject(result, 'frame', task, error)
         else:
-            encoding, height, width, step, data = image_codec.from_array(annotated)
-            result.image = Image(header=img.header, height=height, width=width,
-                                 encoding=encoding, step=step, data=data)
+            self._annotated(result, annotated, img.header if not packed.data else None,
+                            packed.header)
             result.ok = True
             result.detection_count = len(boxes)
             self.detections_pub.publish(Detections(
@@ -133,6 +136,17 @@ class ServerNode(object):
         result.process_time = time.perf_counter() - start
         self.image_pub.publish(result)
         self._count(result.ok)
+
+    def _annotated(self, result, frame, raw_header, compressed_header):
+        """The annotated frame into ``result``: raw for a raw task (``raw_header``), JPEG
+        for a compressed one."""
+        if raw_header is not None:
+            encoding, height, width, step, data = image_codec.from_array(frame)
+            result.image = Image(header=raw_header, height=height, width=width,
+                                 encoding=encoding, step=step, data=data)
+        else:
+            fmt, data = image_codec.encode(frame, self.jpeg_quality)
+            result.compressed = CompressedImage(header=compressed_header, format=fmt, data=data)
 
     def _reject(self, result, what, task, error):
         result.ok = False

@@ -9,7 +9,8 @@ import time
 
 import numpy as np
 from rospy.numpy_msg import numpy_msg
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import CompressedImage, Image
+from std_msgs.msg import Header
 
 from server_select.core import names
 from server_select.core.sort_task import check_sorted, fingerprint, make_values, sort_values
@@ -52,40 +53,50 @@ class ImageKind(object):
     result_topic, result_type = names.IMAGE_RESULT_TOPIC, ImageResult
 
     def __init__(self, robot_id, source, encoding, search=None, detector=None,
-                 max_pixels=1 << 24):
+                 max_pixels=1 << 24, transport='raw', quality=80):
         self.robot_id = robot_id
         self.source = source
         self.encoding = encoding
+        self.transport, self.quality = transport, quality
         self.search = search          # a SearchParticipant, or None
         self.detector = detector      # mode local only
         self.max_pixels = max_pixels
         self.t0 = time.monotonic()
 
+    def ready(self):
+        """Whether a frame is there to send (a camera topic may not have sent one yet)."""
+        return getattr(self.source, 'ready', lambda: True)()
+
     def capture(self, task_id):
-        """A frame from the source, as message fields; the search learns where it was."""
+        """A frame from the source in ``encoding``; the search learns where it was."""
         frame, where = self.source.frame(time.monotonic() - self.t0)
         if self.search is not None:
             self.search.remember(task_id, where)
-        return image_codec.from_array(frame, self.encoding)
+        return image_codec.convert(frame, self.encoding)
 
     def make(self, task_id, stamp):
-        encoding, height, width, step, data = self.capture(task_id)
-        image = Image(height=height, width=width, encoding=encoding, step=step, data=data)
-        image.header.stamp = stamp
-        image.header.frame_id = 'robot%d_camera' % self.robot_id
-        task = ImageTask(robot_id=self.robot_id, task_id=task_id, image=image)
-        task.header.stamp = stamp
+        frame = self.capture(task_id)
+        header = Header(stamp=stamp, frame_id='robot%d_camera' % self.robot_id)
+        task = ImageTask(header=Header(stamp=stamp), robot_id=self.robot_id, task_id=task_id)
+        if self.transport == 'compressed':
+            fmt, data = image_codec.encode(frame, self.quality)
+            task.compressed = CompressedImage(header=header, format=fmt, data=data)
+        else:
+            encoding, height, width, step, data = image_codec.from_array(frame, self.encoding)
+            task.image = Image(header=header, height=height, width=width, encoding=encoding,
+                               step=step, data=data)
         return task, None
 
     def check(self, result, _context):
-        if result.image.width == 0:
+        if result.image.width == 0 and not result.compressed.data:
             return 'result carries no annotated image'
         return None
 
     def run_local(self, task_id, _stamp):
         # The same work a server does for a frame (message fields in, detection,
         # annotation), so that robot CPU with and without offloading compare fairly.
-        boxes, _ = search_frame(self.detector, *self.capture(task_id),
+        boxes, _ = search_frame(self.detector,
+                                image_codec.from_array(self.capture(task_id), self.encoding),
                                 max_pixels=self.max_pixels)
         if self.search is not None:
             self.search.found_in(task_id, [(b.x, b.y, b.width, b.height, b.label)

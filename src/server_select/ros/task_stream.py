@@ -57,6 +57,10 @@ class TaskStream(object):
     def on_timer(self, _event):
         if rospy.is_shutdown() or (self.limit and self.flow.sent >= self.limit):
             return
+        if not getattr(self.kind, 'ready', lambda: True)():
+            rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for input (%s)' % (
+                self.robot_id, self.flow.kind, getattr(self.kind.source, 'topic', '')))
+            return
         if not self.started:
             if not (self.ready() and self.wired()):
                 rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for a server'

@@ -21,7 +21,7 @@ from server_select.testbed.scenario import Scenario, ScenarioError
 
 def main(argv=None):
     parser = argparse.ArgumentParser(
-        prog='analyze', description=__doc__.split('\n\n')[0],
+        prog='analyze', description='The report table of any recorded run of server_select.',
         epilog='Without a scenario (--scenario, or an evaluation bag\'s metadata) the table '
         'has no reaction columns: they need the truly nearest server over time.')
     parser.add_argument('bags', nargs='+', metavar='BAG')

@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 
 from server_select.core.settings import default
-from server_select.vision.image_codec import ImageError, to_array, to_gray
+from server_select.vision.image_codec import task_frame, to_gray
 
 Box = collections.namedtuple('Box', 'x y width height label score')
 
@@ -107,14 +107,13 @@ def iou(a, b):
     return inter / float(union) if union else 0.0
 
 
-def search_frame(detector, encoding, height, width, step, data, max_pixels):
-    """The work of one image task: decode the frame, detect, annotate.
+def search_frame(detector, raw, compressed=('', b''), max_pixels=1 << 24):
+    """The work of one image task: decode the frame (see
+    :func:`~server_select.vision.image_codec.task_frame`), detect, annotate.
 
     Returns ``(boxes, annotated BGR array)``; a frame that is too large or cannot be
     decoded raises :class:`~server_select.vision.image_codec.ImageError`.
     """
-    if height * width > max_pixels:
-        raise ImageError('frame of %dx%d exceeds max_image_pixels %d' % (width, height, max_pixels))
-    frame = to_array(encoding, height, width, step, data)
+    frame = task_frame(raw, compressed, max_pixels)
     boxes = detector.detect(frame)
     return boxes, annotate(frame, boxes)

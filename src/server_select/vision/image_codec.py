@@ -1,7 +1,9 @@
-"""sensor_msgs/Image <-> numpy without cv_bridge (no rospy).
+"""sensor_msgs/Image and CompressedImage <-> numpy without cv_bridge (no rospy).
 
-Supported encodings: ``bgr8``, ``rgb8``, ``mono8``, with any ``step`` (row padding).
-Everything else, and sizes that do not add up, raise :class:`ImageError` with the reason.
+Raw encodings: ``bgr8``, ``rgb8``, ``mono8``, with any ``step`` (row padding); compressed:
+JPEG and PNG (``format`` as image_transport's compressed plugin writes it, e.g.
+``bgr8; jpeg compressed bgr8`` or plain ``jpeg``). Everything else, and sizes that do not
+add up, raise :class:`ImageError` with the reason.
 """
 
 import numpy as np
@@ -68,3 +70,60 @@ def to_gray(array):
         return array
     import cv2
     return cv2.cvtColor(array, cv2.COLOR_BGR2GRAY)
+
+
+def encode(array, quality=80, kind='jpeg'):
+    """``(format, bytes)`` of a BGR or mono array compressed as ``jpeg`` (``quality``
+    0-100) or ``png``; the format string is image_transport's."""
+    import cv2
+    if kind not in ('jpeg', 'png'):
+        raise ImageError('unsupported compression %r (jpeg or png)' % kind)
+    params = [cv2.IMWRITE_JPEG_QUALITY, int(quality)] if kind == 'jpeg' else []
+    ok, data = cv2.imencode('.jpg' if kind == 'jpeg' else '.png', np.asarray(array), params)
+    if not ok:
+        raise ImageError('cannot compress an array of shape %s' % (np.shape(array),))
+    encoding = 'mono8' if np.ndim(array) == 2 else 'bgr8'
+    return '%s; %s compressed %s' % (encoding, kind, encoding), data.tobytes()
+
+
+def decode(fmt, data, max_pixels=1 << 24):
+    """The BGR array of a compressed frame (JPEG or PNG); a frame that does not decode, or
+    decodes to more than ``max_pixels``, raises ImageError."""
+    import cv2
+    if not any(k in fmt.lower() for k in ('jpeg', 'jpg', 'png')):
+        raise ImageError('unsupported compressed format %r (jpeg or png)' % fmt)
+    buffer = np.frombuffer(data, dtype=np.uint8)
+    if buffer.size == 0:
+        raise ImageError('empty compressed frame')
+    header = cv2.imdecode(buffer, cv2.IMREAD_REDUCED_GRAYSCALE_8)
+    if header is None:
+        raise ImageError('compressed frame (%s, %d bytes) does not decode' % (fmt, buffer.size))
+    if header.shape[0] * header.shape[1] * 64 > max_pixels:
+        raise ImageError('compressed frame of about %dx%d exceeds max_image_pixels %d'
+                         % (header.shape[1] * 8, header.shape[0] * 8, max_pixels))
+    frame = cv2.imdecode(buffer, cv2.IMREAD_COLOR)
+    if frame is None:
+        raise ImageError('compressed frame (%s) does not decode' % fmt)
+    return frame
+
+
+def task_frame(raw, compressed, max_pixels=1 << 24):
+    """The array of a task's frame: ``compressed`` = ``(format, data)`` when it has data,
+    else ``raw`` = ``(encoding, height, width, step, data)``. ImageError when it cannot be
+    had or has more than ``max_pixels``."""
+    fmt, blob = compressed
+    if len(blob):
+        return decode(fmt, blob, max_pixels)
+    encoding, height, width, step, data = raw
+    if height * width > max_pixels:
+        raise ImageError('frame of %dx%d exceeds max_image_pixels %d' % (width, height, max_pixels))
+    return to_array(encoding, height, width, step, data)
+
+
+def convert(array, encoding):
+    """``array`` (BGR or mono) with the channels ``encoding`` needs: mono for ``mono8``,
+    BGR otherwise (the message conversion of :func:`from_array` does the rest)."""
+    import cv2
+    if encoding == 'mono8':
+        return to_gray(array)
+    return cv2.cvtColor(array, cv2.COLOR_GRAY2BGR) if np.ndim(array) == 2 else array

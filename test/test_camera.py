@@ -1,0 +1,90 @@
+#!/usr/bin/env python3
+"""Camera topics in, compressed frames on the wire (camera.test).
+
+This node is the cameras: the astronaut photograph at 4 fps on /camera1/image_raw
+(sensor_msgs/Image) and JPEG-compressed on /camera2/image_raw/compressed. Robot 1 sends its
+frames compressed, robot 2 raw; both must find the face where it is, get their annotated
+frame back in the transport they used, and send each camera frame at most once.
+"""
+
+import sys
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from sensor_msgs.msg import CompressedImage, Image
+
+from server_select.msg import Detections, ImageResult, ImageTask, TaskReport
+from server_select.vision.detection import iou
+from server_select.vision.image_codec import encode, from_array
+from server_select.vision.search import sample_image
+
+FACE = (177, 66, 95, 95)
+
+
+class CameraTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('test_camera')
+        cls.lock = threading.Lock()
+        cls.got = {'tasks': [], 'results': [], 'detections': [], 'reports': []}
+        for topic, kind, key in (('/task_image', ImageTask, 'tasks'),
+                                 ('/processed_image', ImageResult, 'results'),
+                                 ('/detections', Detections, 'detections'),
+                                 ('/task_report', TaskReport, 'reports')):
+            rospy.Subscriber(topic, kind, cls.keep, key, buff_size=1 << 24)
+        photo = sample_image('astronaut.png')
+        encoding, height, width, step, data = from_array(photo)
+        cls.raw = Image(height=height, width=width, encoding=encoding, step=step, data=data)
+        fmt, blob = encode(photo, 90)
+        cls.packed = CompressedImage(format=fmt, data=blob)
+        cls.pubs = (rospy.Publisher('/camera1/image_raw', Image, queue_size=1),
+                    rospy.Publisher('/camera2/image_raw/compressed', CompressedImage,
+                                    queue_size=1))
+        cls.published = 0
+
+    @classmethod
+    def keep(cls, msg, key):
+        with cls.lock:
+            cls.got[key].append(msg)
+
+    def of(self, key, robot):
+        with self.lock:
+            return [m for m in self.got[key] if m.robot_id == robot]
+
+    def test_frames_from_camera_topics_are_searched_in_either_transport(self):
+        stop = time.monotonic() + 20.0
+        while time.monotonic() < stop and not rospy.is_shutdown():
+            for pub, msg in zip(self.pubs, (self.raw, self.packed)):
+                msg.header.stamp = rospy.Time.now()
+                pub.publish(msg)
+            self.published += 1
+            if all(len([r for r in self.of('reports', robot) if r.ok]) >= 10 for robot in (1, 2)):
+                break
+            time.sleep(0.25)
+        for robot, transport in ((1, 'compressed'), (2, 'raw')):
+            reports = self.of('reports', robot)
+            self.assertGreaterEqual(len([r for r in reports if r.ok]), 10, reports[-3:])
+            self.assertEqual([r.error for r in reports if not r.ok], [])
+            tasks = self.of('tasks', robot)
+            self.assertLessEqual(len(tasks), self.published)   # each frame at most once
+            compressed = [bool(t.compressed.data) for t in tasks]
+            self.assertEqual(set(compressed), {transport == 'compressed'})
+            results = [r for r in self.of('results', robot) if r.ok]
+            self.assertTrue(all(bool(r.compressed.data) == (transport == 'compressed')
+                                and bool(r.image.width) == (transport == 'raw')
+                                for r in results))
+            found = [d for m in self.of('detections', robot) for d in m.detections]
+            self.assertTrue(found, 'robot %d: no face found' % robot)
+            for d in found:
+                box = (d.roi.x_offset, d.roi.y_offset, d.roi.width, d.roi.height)
+                self.assertGreater(iou(box, FACE), 0.5, (robot, box))
+        sizes = [len(t.compressed.data) for t in self.of('tasks', 1)]
+        self.assertLess(max(sizes), self.raw.step * self.raw.height / 4)
+
+
+if __name__ == '__main__':
+    rostest.rosrun('server_select', 'test_camera', CameraTest, sys.argv)
