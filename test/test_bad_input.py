@@ -38,6 +38,10 @@ BAD_PARAMS = [
     ('robot', ROBOT_OK + ['_manager_timeout:=0'], '~manager_timeout: expected a positive'),
     ('robot', ROBOT_OK + ['_sort_tasks:=maybe'], '~sort_tasks: expected true or false'),
     ('robot', ROBOT_OK + ['_eject_time:=60'], '~eject_time 60 is longer than ~eject_max 30'),
+    ('robot', ROBOT_OK + ['_task_plugins:=no_such_module:Task'],
+     "~task_plugins: cannot load 'no_such_module:Task'"),
+    ('robot', ROBOT_OK + ['_task_plugins:=server_select.tasks.orb:Orb'],
+     '~orb: source: required'),
 ]
 
 

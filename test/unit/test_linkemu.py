@@ -101,3 +101,20 @@ def test_non_ipv4_and_unknown_destinations_are_ignored():
     os.write(pipes['a'][0], bytes(stray))
     emu.receive(emu.fds['a'], now=0.0)
     assert emu.heap == []
+
+
+def test_a_rate_limit_spaces_packets_by_their_size():
+    emu, pipes = emulator([{'at': 0, 'delay': 10, 'rate': 0.001}])   # 1 kB/s each way
+    first, second = packet('a', 'b', b'x' * 80), packet('a', 'b', b'y' * 80)   # 100 bytes
+    for tag in (first, second):              # one packet per read, as from a TUN device
+        os.write(pipes['a'][0], tag)
+        emu.receive(emu.fds['a'], now=1.0)
+    emu.deliver(1.1098)
+    assert delivered(pipes, 'b') == b''
+    emu.deliver(1.1101)                     # 0.1 s on the wire + 10 ms
+    assert delivered(pipes, 'b') == first
+    emu.deliver(1.2098)
+    assert delivered(pipes, 'b') == b''
+    emu.deliver(1.2101)                     # queued behind the first
+    assert delivered(pipes, 'b') == second
+    assert emu.stats['a>b']['bytes'] == 200

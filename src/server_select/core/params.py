@@ -153,6 +153,17 @@ def parse_names(name, value):
     return value
 
 
+def parse_plugins(name, value):
+    """A possibly empty list of ``module:Class`` names (a YAML list, or one string)."""
+    if value in ('', None, []):
+        return []
+    specs = parse_names(name, value)
+    bad = [s for s in specs if s.count(':') != 1 or not all(s.split(':'))]
+    if bad:
+        raise ParamError('%s: expected module:Class names, got %s' % (name, bad))
+    return specs
+
+
 def parse_publisher(name, value):
     """The name of the one node whose messages count; ``*`` (or empty) for any: None."""
     value = parse_text(name, value).strip()

@@ -9,8 +9,8 @@ import collections
 
 from server_select.core.params import (one_of, parse_bool, parse_count, parse_id, parse_id_list,
                                        parse_mode, parse_names, parse_non_negative,
-                                       parse_number, parse_positive, parse_positive_int,
-                                       parse_publisher, parse_text)
+                                       parse_number, parse_plugins, parse_positive,
+                                       parse_positive_int, parse_publisher, parse_text)
 
 REQUIRED = object()
 
@@ -74,6 +74,7 @@ PARAMS = {
                           '(*: from any)'),
     'robot_node': Param('/robot{id}', parse_publisher, 'samples of robot {id} count only from '
                         'this node (*: from any)'),
+    'task_plugins': Param('', parse_plugins, 'task types added by plug-in (module:Class ...)'),
     'fleet_ns': Param('/', parse_text, 'namespace of the fleet-level topics and services'),
     'master_check': Param(1.0, parse_positive, 'period of the check for a restarted roscore (s)'),
     'scenario': Param(REQUIRED, parse_text, 'scenario YAML file'),

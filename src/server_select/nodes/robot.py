@@ -15,6 +15,7 @@ from server_select.msg import SelectionFlag
 from server_select.ros.camera import TopicSource
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.node import fleet, param, run
+from server_select.ros.plugins import load as load_plugin
 from server_select.ros.prober import Prober
 from server_select.ros.search import SearchParticipant
 from server_select.ros.task_kinds import ImageKind, SortKind
@@ -51,6 +52,9 @@ class RobotNode(object):
           ``~speed`` (area px/s, 200), ``~merge_radius`` (px, 150)
         - ``~detector``, ``~cascade``, ``~scale_factor``, ``~min_neighbors``, ``~min_size``
           (as the server's): used in mode ``local`` only.
+        - ``~task_plugins`` ([]): more task types, ``module:Class`` of
+          :class:`~server_select.ros.plugins.TaskPlugin`, each with its settings under
+          ``~<kind>/`` (e.g. ``server_select.tasks.orb:Orb`` and ``~orb/source``).
         - ``~start_delay`` (s, 0.0): wait before the first task, e.g. for a recorder to
           connect (rospy drops messages sent before that); ``~summary_period`` (s, 10)
     :ROS Publishers:
@@ -95,9 +99,11 @@ class RobotNode(object):
                                    param('seed', default=self.robot_id)), param('task_rate')))
         if param('image_source') or param('image_topic'):
             kinds.append((self._image_kind(mode), param('frame_rate')))
+        kinds += [(plugin, plugin.rate) for plugin in
+                  (load_plugin(spec, self.robot_id) for spec in param('task_plugins'))]
         if not kinds:
-            raise ParamError('~sort_tasks is false and neither ~image_source nor ~image_topic '
-                             'is set: no tasks to send')
+            raise ParamError('~sort_tasks is false, and neither ~image_source, ~image_topic '
+                             'nor ~task_plugins is set: no tasks to send')
         flow_args = dict(timeout=param('task_timeout'), candidates=self.selection.candidates,
                          on_failure=self.on_failure, on_success=self.health.task_ok,
                          ids=itertools.count(1))    # task ids are per robot, across streams

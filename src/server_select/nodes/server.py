@@ -14,6 +14,7 @@ from server_select.core.sort_task import TaskError, sort_values
 from server_select.msg import (Detection, Detections, ImageResult, ImageTask, SortResult,
                                SortTask)
 from server_select.ros.node import fleet, param, run
+from server_select.ros.plugins import PluginHandler, load as load_plugin
 from server_select.srv import LatencyProbe, LatencyProbeResponse
 from server_select.vision import image_codec
 from server_select.vision.detection import DetectorError, make_detector, search_frame
@@ -44,6 +45,8 @@ class ServerNode(object):
         - ``~scale_factor`` (1.2), ``~min_neighbors`` (5), ``~min_size`` (24 px): cascade settings.
         - ``~max_image_pixels`` (int, 16777216): larger frames get an error result.
         - ``~jpeg_quality`` (80): of the annotated frame sent back for a compressed task.
+        - ``~task_plugins`` ([]): more task types, ``module:Class`` of
+          :class:`~server_select.ros.plugins.TaskPlugin` (e.g. ``server_select.tasks.orb:Orb``).
     :ROS Services:
         - ``latency_S<server_id>`` (server_select/LatencyProbe): echo for RTT probing.
     :ROS Subscribers:
@@ -65,6 +68,8 @@ class ServerNode(object):
             self.detector = make_detector(param)
         except DetectorError as error:
             raise ParamError('~detector/~cascade: %s' % error)
+        self.plugins = [PluginHandler(self.server_id, load_plugin(spec, None), self.queue_size)
+                        for spec in param('task_plugins')]
         self._lock = threading.Lock()
         self.tasks_done = 0
         self.tasks_failed = 0
@@ -83,6 +88,8 @@ class ServerNode(object):
         self.image_sub = rospy.Subscriber(
             fleet(names.IMAGE_TASK_TOPIC), ImageTask, self.on_image_task, queue_size=queue,
             tcp_nodelay=True, buff_size=1 << 24)
+        for plugin in self.plugins:
+            plugin.start()
         # Advertised last: a robot that can probe us finds our task topics wired already.
         self.probe_srv = rospy.Service(
             fleet(names.probe_service(self.server_id)), LatencyProbe, self.on_probe)

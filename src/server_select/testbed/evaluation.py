@@ -52,7 +52,7 @@ def _ids(hosts):
     return ','.join(str(h.id) for h in sorted(hosts, key=lambda h: h.id))
 
 
-class _Run(object):
+class HostRun(object):
     """One mode of one scenario on an up testbed: environments and launches per host."""
 
     def __init__(self, tb, scenario, run_dir):
@@ -126,7 +126,7 @@ def run_mode(scenario_path, mode, out_dir, options=None, log=print):
     if os.path.exists(bag):
         os.unlink(bag)
     with Testbed(scenario, scenario_path, run_dir, prefix=options.prefix) as tb:
-        run = _Run(tb, scenario, run_dir)
+        run = HostRun(tb, scenario, run_dir)
         run.start_master()
         run.start_nodes(mode, options, bag)
         log('%s: %s running until scenario time %.0f s (%s)'

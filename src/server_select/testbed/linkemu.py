@@ -1,4 +1,5 @@
-"""Userspace link emulator: forwards IPv4 packets between TUN devices with per-pair delay.
+"""Userspace link emulator: forwards IPv4 packets between TUN devices with per-pair delay
+and bandwidth.
 
 The kernel here has no ``netem``. Each testbed host gets one TUN device, moved into the
 host's network namespace; this process keeps the device's file descriptor, reads every
@@ -87,6 +88,7 @@ class LinkEmulator(object):
         self.fd_of_address = {}
         self.heap = []
         self.last_due = {}
+        self.free_at = {}
         self.seq = 0
         self.stats = {}
         self.t0_mono = None
@@ -142,7 +144,12 @@ class LinkEmulator(object):
             delay = state.delay
             if state.jitter:
                 delay = max(0.0, delay + self.rng.uniform(-state.jitter, state.jitter))
-            due = max(now + delay / 1000.0, self.last_due.get((src, dst), 0.0))
+            sent = now
+            if state.rate:   # the link is busy until the packets before this one are out
+                sent = max(now, self.free_at.get((src, dst), 0.0)) + \
+                    len(packet) / (state.rate * 1e6)
+                self.free_at[(src, dst)] = sent
+            due = max(sent + delay / 1000.0, self.last_due.get((src, dst), 0.0))
             self.last_due[(src, dst)] = due
             self.seq += 1
             heapq.heappush(self.heap, (due, self.seq, dst_fd, packet))

@@ -17,8 +17,9 @@ A scenario is a YAML mapping::
         - {at: 90, delay: 5, jitter: 0.5, loss: 0.01}   # up again
 
 Each event may set ``delay`` (ms, a step), ``ramp`` + ``over`` (ms, s: linear change),
-``jitter`` (ms: a packet's delay is uniform in delay +- jitter), ``loss`` (0..1) and
-``down`` (true/false); what an event does not set carries over. Delays are one way and
+``jitter`` (ms: a packet's delay is uniform in delay +- jitter), ``loss`` (0..1),
+``down`` (true/false) and ``rate`` (MB/s each way, 0 = unlimited: a packet leaves after the
+ones before it have, at that rate); what an event does not set carries over. Delays are one way and
 apply to both directions of the pair: a round trip takes twice the delay.
 """
 
@@ -31,7 +32,8 @@ from server_select.core.ranking import NO_SERVER
 
 ROLES = ('manager', 'server', 'robot')
 
-LinkState = collections.namedtuple('LinkState', 'delay jitter loss down')
+LinkState = collections.namedtuple('LinkState', 'delay jitter loss down rate')
+LinkState.__new__.__defaults__ = (0.0,)   # rate: MB/s each way, 0 = unlimited
 Host = collections.namedtuple('Host', 'name role id')
 
 
@@ -55,7 +57,8 @@ class LinkProfile(object):
             here = '%s event %d' % (where, index + 1)
             if not isinstance(event, dict) or 'at' not in event:
                 raise ScenarioError('%s: expected a mapping with "at", got %r' % (here, event))
-            unknown = set(event) - {'at', 'delay', 'ramp', 'over', 'jitter', 'loss', 'down'}
+            unknown = set(event) - {'at', 'delay', 'ramp', 'over', 'jitter', 'loss', 'down',
+                                    'rate'}
             if unknown:
                 raise ScenarioError('%s: unknown keys %s' % (here, sorted(unknown)))
             at = _number(event['at'], here + ' at', minimum=0.0)
@@ -86,7 +89,8 @@ class LinkProfile(object):
             if not isinstance(down, bool):
                 raise ScenarioError('%s: down must be true or false, got %r' % (here, down))
             self.times.append(at)
-            self.states.append(LinkState(delay, jitter, loss, down))
+            rate = _number(event.get('rate', start.rate), here + ' rate', minimum=0.0)
+            self.states.append(LinkState(delay, jitter, loss, down, rate))
             self.ramps.append(ramp)
         self.default = state
 

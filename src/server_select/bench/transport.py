@@ -1,0 +1,112 @@
+"""Raw vs compressed frames over a slow link (testbed, root): bytes, round trip, frames/s.
+
+One robot sends 640x480 camera frames (the search area) at ``--fps`` to one server over a
+link of ``--delay`` ms one way and ``--rate`` MB/s each way, once with
+``image_transport:=raw`` and once with ``compressed`` (JPEG, ``--quality``), ``--runs``
+times each, and prints per transport: frames sent and answered, failed (counted in the
+round trip at the task timeout), achieved frames/s, round trip median and p95, and the
+bytes on the link per frame each way (the emulator counts them).
+"""
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import tempfile
+
+import yaml
+
+from server_select.core.paths import package_file
+from server_select.core.stats import summarize
+from server_select.core.tables import markdown_table
+from server_select.testbed import bag_analysis
+from server_select.testbed.evaluation import HostRun
+from server_select.testbed.netns import Testbed
+from server_select.testbed.scenario import Scenario
+
+TIMEOUT = 5.0
+
+
+def scenario(delay, rate, seconds):
+    return {'name': 'transport', 'duration': seconds + 12,
+            'hosts': {'manager': {'role': 'manager'}, 'server1': {'role': 'server', 'id': 1},
+                      'robot1': {'role': 'robot', 'id': 1}},
+            'default': {'delay': 0.5},
+            'links': {'robot1 server1': [{'at': 0, 'delay': delay, 'rate': rate}]}}
+
+
+def run_once(transport, args, work):
+    data = scenario(args.delay, args.rate, args.seconds)
+    path = os.path.join(work, 'transport.yaml')
+    with open(path, 'w') as stream:
+        yaml.safe_dump(data, stream)
+    run_dir = os.path.join(work, transport)
+    bag = os.path.join(work, '%s.bag' % transport)
+    with Testbed(Scenario(data), path, run_dir, prefix='sstr') as tb:
+        run = HostRun(tb, tb.scenario, run_dir)
+        run.start_master()
+        run.launch('manager', 'manager.launch', 'robots:=1', 'servers:=1')
+        run.popen('manager', ['rosbag', 'record', '--tcpnodelay', '-O', bag, '/task_report'],
+                  'rosbag')
+        run.launch('server1', 'server.launch', 'server_id:=1')
+        run.launch('robot1', 'robot.launch', 'robot_id:=1', 'servers:=1', 'sort_tasks:=false',
+                   'image_source:=search:%s' % package_file('config', 'search_area.yaml'),
+                   'frame_rate:=%g' % args.fps, 'image_transport:=%s' % transport,
+                   'jpeg_quality:=%d' % args.quality, 'task_timeout:=%g' % TIMEOUT,
+                   'start_delay:=2')
+        tb.sleep_until(tb.scenario.duration)
+    with open(os.path.join(run_dir, 'link_stats.json')) as stream:
+        link = json.load(stream)
+    reports = bag_analysis.load(bag).reports
+    window = [r for r in reports if r.t >= tb.scenario.duration - args.seconds - 1]
+    return {'sent': len(window), 'ok': sum(1 for r in window if r.ok),
+            'fps': sum(1 for r in window if r.ok) / args.seconds,
+            'rtt': summarize([r.rtt if r.ok else TIMEOUT for r in window]),
+            'up_bytes': link['robot1>server1']['bytes'] / max(1, len(reports)),
+            'down_bytes': link['server1>robot1']['bytes'] / max(1, len(reports))}
+
+
+def table(results):
+    def spread(runs, key, fmt, scale=1.0):
+        values = [scale * (r[key] if not isinstance(key, tuple) else r[key[0]][key[1]])
+                  for r in runs]
+        text = fmt % statistics.median(values)
+        return text + (' (%s-%s)' % (fmt % min(values), fmt % max(values))
+                       if len(values) > 1 else '')
+    return markdown_table(
+        ('transport', 'frames sent', 'failed', 'frames/s', 'RTT median ms', 'RTT p95 ms',
+         'kB/frame robot->server', 'kB/frame server->robot'),
+        [(transport, spread(runs, 'sent', '%d'),
+          spread([dict(r, failed=r['sent'] - r['ok']) for r in runs], 'failed', '%d'),
+          spread(runs, 'fps', '%.1f'), spread(runs, ('rtt', 'median'), '%.0f', 1e3),
+          spread(runs, ('rtt', 'p95'), '%.0f', 1e3), spread(runs, 'up_bytes', '%.0f', 1e-3),
+          spread(runs, 'down_bytes', '%.0f', 1e-3)) for transport, runs in results.items()])
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--delay', type=float, default=10.0, help='one-way ms (20 ms RTT)')
+    parser.add_argument('--rate', type=float, default=10.0, help='MB/s each way')
+    parser.add_argument('--fps', type=float, default=10.0)
+    parser.add_argument('--quality', type=int, default=80)
+    parser.add_argument('--seconds', type=float, default=20.0, help='measured per run')
+    parser.add_argument('--runs', type=int, default=2)
+    parser.add_argument('--out', default='results/bench')
+    args = parser.parse_args(argv)
+    results = dict((t, []) for t in ('raw', 'compressed'))
+    with tempfile.TemporaryDirectory(prefix='bench_transport') as work:
+        for _ in range(args.runs):
+            for transport in results:
+                results[transport].append(run_once(transport, args, work))
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, 'transport.json'), 'w') as stream:
+        json.dump(results, stream, indent=1)
+    print('\n640x480 frames at %g fps over %g ms one way, %g MB/s each way; median (min-max) '
+          'of %d runs, failed tasks counted at %g s\n\n%s\n'
+          % (args.fps, args.delay, args.rate, args.runs, TIMEOUT, table(results)))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,110 @@
+"""Task types added without editing the nodes: a plug-in class named by parameter.
+
+A task type is a request/result message pair and one class (see :class:`TaskPlugin`),
+named ``module:Class`` in the robot's and the server's ``~task_plugins``. The robot sends
+its tasks through the same :class:`~server_select.core.task_flow.TaskFlow` as sort and image
+tasks (selection, failover, one ``task_report`` each); the server answers them through
+:class:`PluginHandler`. The plug-in's own settings are the private parameters under its
+kind (``~orb/rate``, ``~orb/source``, ...).
+"""
+
+import importlib
+import threading
+import time
+
+import rospy
+
+from server_select.core.params import ParamError
+from server_select.ros.node import fleet
+
+
+class TaskPlugin(object):
+    """What a task type provides. The request message has ``header``, ``robot_id``,
+    ``task_id`` and ``server_id``; the result message copies them and adds ``ok``,
+    ``error`` and ``process_time``; the rest is the plug-in's.
+
+    Robot side (``robot_id`` is an int): ``make``, ``check``, ``run_local``, ``rate``.
+    Server side (``robot_id`` is None): ``handle``.
+    """
+
+    kind = None                          # the name in task reports and of the settings
+    task_type = result_type = None       # the message classes
+    task_topic = result_topic = None     # fleet-level topic names
+
+    def __init__(self, robot_id, settings):
+        self.robot_id, self.settings = robot_id, settings
+
+    @property
+    def rate(self):
+        """Tasks per second a robot sends (setting ``rate``, default 1)."""
+        return float(self.settings.get('rate', 1.0))
+
+    def make(self, task_id, stamp):
+        """``(request, context)``; raise ValueError when no task can be made now."""
+        raise NotImplementedError
+
+    def check(self, result, context):
+        """Why an ``ok`` result is wrong, or None."""
+        return None
+
+    def run_local(self, task_id, stamp):
+        """Do the work in the robot (mode ``local``); an error string or None."""
+        raise NotImplementedError
+
+    def handle(self, task, result):
+        """Fill ``result`` for ``task`` on a server; raise ValueError to reject the task."""
+        raise NotImplementedError
+
+
+def load(spec, robot_id, name='~task_plugins'):
+    """An instance of the plug-in ``module:Class``, with its settings (ParamError if not)."""
+    module_name, _, class_name = spec.partition(':')
+    try:
+        cls = getattr(importlib.import_module(module_name), class_name)
+    except (ImportError, AttributeError, ValueError) as error:
+        raise ParamError('%s: cannot load %r (module:Class): %s' % (name, spec, error))
+    if not (isinstance(cls, type) and issubclass(cls, TaskPlugin)):
+        raise ParamError('%s: %r is not a TaskPlugin' % (name, spec))
+    settings = rospy.get_param('~' + cls.kind, {})
+    if not isinstance(settings, dict):
+        raise ParamError('~%s: expected a mapping of settings, got %r' % (cls.kind, settings))
+    try:
+        return cls(robot_id, settings)
+    except (ValueError, OSError) as error:
+        raise ParamError('~%s: %s' % (cls.kind, error))
+
+
+class PluginHandler(object):
+    """A server's side of one plug-in task type: the tasks addressed to this server, each
+    answered once (an error result when the plug-in rejects it)."""
+
+    def __init__(self, server_id, plugin, queue_size=100):
+        self.server_id, self.plugin, self.queue_size = server_id, plugin, queue_size
+        self._lock = threading.Lock()
+        self.done = self.rejected = 0
+
+    def start(self):
+        self.pub = rospy.Publisher(fleet(self.plugin.result_topic), self.plugin.result_type,
+                                   queue_size=self.queue_size)
+        self.sub = rospy.Subscriber(fleet(self.plugin.task_topic), self.plugin.task_type,
+                                    self.on_task, queue_size=self.queue_size, tcp_nodelay=True,
+                                    buff_size=1 << 24)
+
+    def on_task(self, task):
+        if task.server_id != self.server_id:
+            return
+        result = self.plugin.result_type(header=task.header, robot_id=task.robot_id,
+                                         task_id=task.task_id, server_id=self.server_id)
+        start = time.perf_counter()
+        try:
+            self.plugin.handle(task, result)
+            result.ok = True
+        except ValueError as error:
+            result.ok, result.error = False, str(error)
+            rospy.logerr('server %d: %s task %d of robot %d rejected: %s', self.server_id,
+                         self.plugin.kind, task.task_id, task.robot_id, error)
+        result.process_time = time.perf_counter() - start
+        self.pub.publish(result)
+        with self._lock:
+            self.done += result.ok
+            self.rejected += not result.ok

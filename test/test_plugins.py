@@ -1,0 +1,47 @@
+#!/usr/bin/env python3
+"""plugins.test: ORB tasks, a type added through ~task_plugins, go the same way as the
+built-in ones: selected server, checked results, one task_report each."""
+
+import sys
+import threading
+import unittest
+
+import rospy
+import rostest
+
+from server_select.core.procs import wait_until
+from server_select.msg import OrbResult, TaskReport
+
+
+class PluginTest(unittest.TestCase):
+
+    def test_orb_tasks_are_answered_by_the_servers_plugin(self):
+        rospy.init_node('test_plugins')
+        lock, reports, results = threading.Lock(), [], []
+
+        def keep(store):
+            def add(msg):
+                with lock:
+                    store.append(msg)
+            return add
+        rospy.Subscriber('/task_report', TaskReport, keep(reports))
+        rospy.Subscriber('/processed_orb', OrbResult, keep(results))
+        self.assertTrue(wait_until(lambda: sum(r.ok for r in reports) >= 15, 40.0), reports[-3:])
+        with lock:
+            reports, results = list(reports), list(results)
+        self.assertEqual(set(r.kind for r in reports), {'orb'})
+        self.assertEqual([r.error for r in reports if not r.ok], [])
+        ids = sorted(r.task_id for r in reports)
+        self.assertEqual(ids, list(range(1, len(ids) + 1)))       # each task reported once
+        self.assertTrue(all(r.answered_by in (1, 2) and r.attempts == 1 for r in reports))
+        answered = [r for r in results if r.ok]
+        self.assertTrue(answered)
+        self.assertGreaterEqual(max(r.count for r in answered), 50)   # texture gives features
+        for result in answered:
+            self.assertLessEqual(result.count, 300)
+            self.assertEqual((len(result.points), len(result.descriptors)),
+                             (2 * result.count, 32 * result.count))
+
+
+if __name__ == '__main__':
+    rostest.rosrun('server_select', 'test_plugins', PluginTest, sys.argv)
