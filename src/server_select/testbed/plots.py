@@ -36,9 +36,10 @@ def plot_latency(run, path, title):
     fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
     for ax, robot in zip(axes[:, 0], robots):
         for server in servers:
-            pts = [(s.t, s.rtt * 1e3) for s in run.samples
-                   if s.robot == robot and s.server == server and s.ok]
-            if pts:
+            # a failed probe breaks the line: no round trip is drawn across an outage
+            pts = [(s.t, s.rtt * 1e3 if s.ok else float('nan')) for s in run.samples
+                   if s.robot == robot and s.server == server]
+            if any(s.ok for s in run.samples if s.robot == robot and s.server == server):
                 ax.plot(*zip(*pts), '.-', color=colors[server], markersize=3, linewidth=0.8,
                         label='probe S%d' % server)
         flags = sorted((f for f in run.flags if f.robot == robot), key=lambda f: f.t)
