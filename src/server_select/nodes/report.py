@@ -1,8 +1,6 @@
 """Listens to a run for ``~duration`` seconds, then prints the per-robot summary."""
 
 import json
-import os
-import signal
 
 import rospy
 
@@ -10,7 +8,7 @@ from server_select.core import names
 from server_select.core.params import parse_id_list
 from server_select.core.report import RunReport
 from server_select.msg import LatencySample, SelectionFlag, TaskReport
-from server_select.ros.node import fleet, param, run
+from server_select.ros.node import end_parent_launch, fleet, param, run
 
 
 class ReportNode(object):
@@ -65,22 +63,6 @@ class ReportNode(object):
             rospy.loginfo('report: summary written to %s', self.output)
         if not (self.end_launch and end_parent_launch()):
             rospy.signal_shutdown('report done')
-
-
-def end_parent_launch():
-    """Ask the roslaunch that started this node to shut down, as Ctrl-C would (a clean end,
-    without the "REQUIRED process has died" of a required node that exits by itself). False
-    when the parent is not roslaunch."""
-    parent = os.getppid()
-    try:
-        with open('/proc/%d/cmdline' % parent, 'rb') as stream:
-            argv = stream.read().split(b'\0')
-    except OSError:
-        return False
-    if not any(os.path.basename(a) == b'roslaunch' for a in argv[:2]):
-        return False
-    os.kill(parent, signal.SIGINT)
-    return True
 
 
 def main():

@@ -6,7 +6,7 @@ import rospy
 from server_select.core.procs import measure
 from server_select.core.tables import markdown_table
 from server_select.ros.graph import node_pid
-from server_select.ros.node import param, run
+from server_select.ros.node import end_parent_launch, param, run
 
 
 class UsageNode(object):
@@ -15,12 +15,14 @@ class UsageNode(object):
     :ROS Parameters:
         - ``~nodes`` (list of str, required): node names, e.g. ``[/manager, /server1]``.
         - ``~duration`` (s, 20.0), ``~delay`` (s, 5.0): wait ``~delay``, then measure.
+        - ``~end_launch`` (false): then end the roslaunch that started it, as Ctrl-C would.
     """
 
     def __init__(self):
         self.nodes = [rospy.resolve_name(n) for n in param('nodes')]
         self.duration = param('duration', default=20.0)
         self.delay = param('delay')
+        self.end_launch = param('end_launch')
 
     def start(self):
         self.timer = rospy.Timer(rospy.Duration(self.delay), self.measure, oneshot=True)
@@ -41,7 +43,8 @@ class UsageNode(object):
         table = markdown_table(('node', 'CPU %% (over %.0f s)' % self.duration, 'RSS MiB',
                                 'threads'), rows)
         print('\nnode usage\n\n' + table + '\n', flush=True)
-        rospy.signal_shutdown('usage measured')
+        if not (self.end_launch and end_parent_launch()):
+            rospy.signal_shutdown('usage measured')
 
 
 def main():

@@ -1,5 +1,7 @@
 """Wiring shared by the nodes: parameters read through the table, and the main() skeleton."""
 
+import os
+import signal
 import sys
 
 import rosgraph.names
@@ -49,6 +51,22 @@ def owned_by(node, owner):
     """Whether ``node`` is ``owner`` or a node inside ``owner``'s namespace (a robot's
     nodes may live in ``/robot1/``)."""
     return node == owner or node.startswith(owner.rstrip('/') + '/')
+
+
+def end_parent_launch():
+    """Ask the roslaunch that started this node to shut down, as Ctrl-C would (a clean end,
+    without the "REQUIRED process has died" of a required node that exits by itself). False
+    when the parent is not roslaunch."""
+    parent = os.getppid()
+    try:
+        with open('/proc/%d/cmdline' % parent, 'rb') as stream:
+            argv = stream.read().split(b'\0')
+    except OSError:
+        return False
+    if not any(os.path.basename(a) == b'roslaunch' for a in argv[:2]):
+        return False
+    os.kill(parent, signal.SIGINT)
+    return True
 
 
 def run(node_name, node_class, argv=None):
