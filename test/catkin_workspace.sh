@@ -2,7 +2,8 @@
 # The ROS way, tested: this package copied into the src/ of a fresh catkin workspace and
 # built there with Debian's packages only (no venv, no pip: PATH is the system's), then
 #   catkin_make, catkin_make run_tests (the rostests), catkin_test_results,
-#   and the timed demo launched from the workspace's devel space.
+#   the timed demo launched from the workspace's devel space, and analyze on a bag
+#   recorded with plain rosbag record -a during the demo.
 # Prints "catkin: N passed, N failed" last; exit status non-zero on any failure.
 set -u
 repo=$(cd "$(dirname "$0")/.." && pwd)
@@ -31,5 +32,11 @@ step run_tests "catkin_make run_tests -j1 && catkin_test_results build/test_resu
 port=$(( 20000 + RANDOM % 20000 ))
 step demo "source devel/setup.bash && roslaunch --port $port server_select demo.launch \
   duration:=10 output:=log | tee demo.out && grep -q '| R1 | S' demo.out && grep -q '| R2 | S' demo.out"
+port=$(( 20000 + RANDOM % 20000 ))
+step bag "source devel/setup.bash && (roscore -p $port > roscore.out 2>&1 &) && sleep 3 \
+  && (rosbag record -a -O plain.bag __name:=recorder > rosbag.out 2>&1 &) && sleep 2 \
+  && roslaunch server_select demo.launch duration:=8 output:=log > demo2.out 2>&1; \
+  rosnode kill /recorder; sleep 2; pkill -INT -f 'roscore -p $port'; sleep 2; \
+  rosrun server_select analyze plain.bag | tee analyze.out && grep -q '^| plain | [1-9]' analyze.out"
 echo "catkin: $passed passed, $failed failed"
 [ $failed -eq 0 ]
