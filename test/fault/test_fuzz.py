@@ -6,6 +6,7 @@ publishers; hypothesis then calls each callback with arbitrary messages, from ar
 publishers. No exception may escape, and afterwards each node still serves a good input.
 """
 
+import io
 import math
 import os
 
@@ -14,13 +15,18 @@ import pytest
 import rospy
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from sensor_msgs.msg import Image, RegionOfInterest
+from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 
 from server_select.msg import (Detection, Detections, FoundTarget, ImageResult, ImageTask,
-                               LatencySample, SelectionFlag, SortResult, SortTask)
+                               LatencySample, OrbTask, SelectionFlag, SortResult, SortTask)
 from server_select.nodes.manager import ManagerNode
 from server_select.nodes.robot import RobotNode
 from server_select.nodes.server import ServerNode
+from server_select.ros.camera import TopicSource
+from server_select.ros.plugins import PluginHandler
+from server_select.tasks.orb import Orb
+from server_select.vision.image_codec import encode, from_array
+from server_select.vision.search import sample_image
 from server_select.srv import KnownTargetsRequest, LatencyProbeRequest
 
 FUZZ = settings(max_examples=150, deadline=None,
@@ -35,9 +41,22 @@ text = st.text(max_size=20)
 AREA = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'search_small.yaml')
 
 
+def _serialized(msg):
+    buffer = io.BytesIO()
+    msg.serialize(buffer)
+    return buffer.getvalue()
+
+
 def sent_by(msg, sender):
     msg._connection_header = {'callerid': sender} if sender else {}
     return msg
+
+
+_PHOTO = sample_image('coffee.png')[:64, :64]
+CAMERA_JPEG_DATA = encode(_PHOTO)[1]
+CAMERA_JPEG = _serialized(CompressedImage(format='jpeg', data=CAMERA_JPEG_DATA))
+CAMERA_RAW = _serialized(Image(**dict(zip(('encoding', 'height', 'width', 'step', 'data'),
+                                          from_array(_PHOTO)))))
 
 
 @pytest.fixture(scope='module')
@@ -153,3 +172,39 @@ def test_every_node_still_serves(nodes):
     robot = nodes['robot']
     robot.on_flag(sent_by(SelectionFlag(robot_id=1, server_id=2, ranking=[2, 1]), '/manager'))
     assert robot.selection.candidates()[0] == 2 or robot.health.state(2) != 'healthy'
+
+
+@FUZZ
+@given(kind=st.sampled_from(['sensor_msgs/Image', 'sensor_msgs/CompressedImage',
+                             'std_msgs/String', '']),
+       buff=st.one_of(st.binary(max_size=200), st.sampled_from([
+           b'', CAMERA_JPEG, CAMERA_RAW])))
+def test_camera_frames(kind, buff):
+    """A camera topic's frames (rospy.AnyMsg): a frame or a ValueError, nothing else."""
+    source = TopicSource('/camera')
+    msg = rospy.AnyMsg()
+    msg._buff, msg._connection_header = buff, {'type': kind}
+    source.on_frame(msg)
+    try:
+        frame, _ = source.frame(0.0)
+        assert frame.ndim in (2, 3)
+    except ValueError:
+        pass
+    assert not source.ready()     # each frame is used once
+
+
+@FUZZ
+@given(robot=uint32, server=st.sampled_from([1, 2]), fmt=st.one_of(
+    st.sampled_from(['jpeg', 'png', 'bgr8; jpeg compressed bgr8']), text),
+    data=st.one_of(st.binary(max_size=300), st.just(CAMERA_JPEG_DATA)),
+    features=st.integers(0, 2 ** 32 - 1))
+def test_plugin_tasks(nodes, robot, server, fmt, data, features):
+    handler = PluginHandler(1, Orb(None, {}))
+    if not hasattr(test_plugin_tasks, 'pub'):
+        handler.start()
+        test_plugin_tasks.pub = handler.pub
+    handler.pub = test_plugin_tasks.pub
+    handler.on_task(OrbTask(robot_id=robot, task_id=1, server_id=server,
+                            frame=CompressedImage(format=fmt, data=data),
+                            max_features=min(features, 2000)))
+    assert handler.done + handler.rejected == (1 if server == 1 else 0)

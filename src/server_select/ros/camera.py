@@ -2,6 +2,7 @@
 
 import threading
 
+import genpy
 import rospy
 from sensor_msgs.msg import CompressedImage, Image
 
@@ -48,13 +49,16 @@ class TopicSource(object):
             raise SourceError('no new frame on %s' % self.topic)
         self.used += 1
         kind = (getattr(msg, '_connection_header', None) or {}).get('type')
-        if kind == 'sensor_msgs/CompressedImage':
-            image = CompressedImage().deserialize(msg._buff)
+        if kind not in ('sensor_msgs/CompressedImage', 'sensor_msgs/Image'):
+            raise SourceError('%s carries %s, not sensor_msgs/Image or CompressedImage'
+                              % (self.topic, kind))
+        try:
+            image = (CompressedImage if kind.endswith('CompressedImage') else Image)() \
+                .deserialize(msg._buff)
+        except genpy.DeserializationError as error:
+            raise SourceError('%s: a frame that does not deserialize: %s' % (self.topic, error))
+        if kind.endswith('CompressedImage'):
             return image_codec.decode(image.format, image.data, self.max_pixels), None
-        if kind == 'sensor_msgs/Image':
-            image = Image().deserialize(msg._buff)
-            return image_codec.task_frame(
-                (image.encoding, image.height, image.width, image.step, image.data),
-                ('', b''), self.max_pixels), None
-        raise SourceError('%s carries %s, not sensor_msgs/Image or CompressedImage'
-                          % (self.topic, kind))
+        return image_codec.task_frame(
+            (image.encoding, image.height, image.width, image.step, image.data),
+            ('', b''), self.max_pixels), None
