@@ -169,8 +169,10 @@ class ServerNode(object):
                 self.tasks_failed += 1
 
     def on_shutdown(self):
-        rospy.loginfo('server %d: %d tasks done, %d rejected',
-                      self.server_id, self.tasks_done, self.tasks_failed)
+        rospy.loginfo('server %d: %d tasks done, %d rejected%s', self.server_id,
+                      self.tasks_done, self.tasks_failed,
+                      ''.join('; %s: %d done, %d rejected' % (p.plugin.kind, p.done, p.rejected)
+                              for p in self.plugins))
 
 
 def main():
