@@ -38,7 +38,7 @@ $(BUILD)/.apt-stamp: Makefile
 
 $(VENV)/.stamp: requirements.txt $(BUILD)/.apt-stamp
 	/usr/bin/python3 -m venv --system-site-packages $(VENV)
-	$(VENV)/bin/pip install --disable-pip-version-check -q -r requirements.txt
+	$(VENV)/bin/pip install --disable-pip-version-check -q --ignore-installed -r requirements.txt
 	@touch $@
 
 deps: $(BUILD)/.apt-stamp $(VENV)/.stamp
