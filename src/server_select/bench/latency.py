@@ -5,8 +5,8 @@ process alternates between the two (interleaved A/B: each ROS message is followe
 socket message of the same payload), stamping each with CLOCK_MONOTONIC, which all
 processes of a host share. The receiver computes arrival - stamp for each message.
 
-    python -m server_select.bench.latency receiver --port P --count N [--nagle]
-    python -m server_select.bench.latency sender --port P --count N --size S [--interval I]
+    python3 -m server_select.bench.latency receiver --port P --count N [--nagle]
+    python3 -m server_select.bench.latency sender --port P --count N --size S [--interval I]
 
 The receiver prints one JSON object: ``{"ros": [s, ...], "socket": [s, ...]}``.
 """

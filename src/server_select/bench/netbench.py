@@ -4,9 +4,9 @@ Frames are a 4-byte big-endian length and the payload. ``echo_server`` sends eve
 back; ``echo_client`` times ``count`` round trips. Command line (used inside testbed
 hosts)::
 
-    python -m server_select.bench.netbench echo-server --port 5555
-    python -m server_select.bench.netbench echo-client --host 10.231.0.2 --port 5555 --count 200
-    python -m server_select.bench.netbench probe-client --server-id 1 --count 100   # needs a master
+    python3 -m server_select.bench.netbench echo-server --port 5555
+    python3 -m server_select.bench.netbench echo-client --host 10.231.0.2 --port 5555 --count 200
+    python3 -m server_select.bench.netbench probe-client --server-id 1 --count 100  # a master
 
 Clients print one JSON object: ``{"rtt": [seconds, ...], ...}``.
 """

@@ -7,7 +7,7 @@ packet a host sends, and writes it to the destination host's TUN after the one-w
 the scenario gives that pair at that moment (plus jitter, loss, or a "down" link).
 Packets of one direction of a pair leave in the order they came (jitter never reorders).
 
-Run as ``python -m server_select.testbed.linkemu --scenario S --hosts HOSTS.json`` (root needed);
+Run as ``python3 -m server_select.testbed.linkemu --scenario S --hosts HOSTS.json`` (root needed);
 it prints ``ready <t0>`` (t0: scenario time zero, epoch seconds) once every device is up,
 and stops on SIGINT/SIGTERM, which deletes the devices.
 """
