@@ -1,11 +1,23 @@
 """Plots of evaluation runs (matplotlib, imported only here)."""
 
+import warnings
+
+
+def _pyplot():
+    """matplotlib's pyplot, drawing to files. Where Debian's python3-matplotlib is installed
+    beside the venv's, its mpl_toolkits makes matplotlib warn that 3-D plots are unavailable:
+    none is drawn here, so that warning is not shown."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings('ignore', message='Unable to import Axes3D')
+        import matplotlib
+        matplotlib.use('Agg')
+        import matplotlib.pyplot as plt
+    return plt
+
 
 def plot_task_rtt(runs, path):
     """Task round trip vs task index, one panel per robot, one line per mode (Fig. 8)."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     robots = sorted(set(r.robot for run in runs.values() for r in run.reports))
     fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
     for ax, robot in zip(axes[:, 0], robots):
@@ -27,9 +39,7 @@ def plot_task_rtt(runs, path):
 
 def plot_latency(run, path, title):
     """Probe round trip per pair over time, the selected server overlaid, per robot."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     robots = sorted(set(s.robot for s in run.samples) | set(f.robot for f in run.flags))
     servers = sorted(set(s.server for s in run.samples))
     colors = dict((s, 'C%d' % i) for i, s in enumerate(servers))
