@@ -52,10 +52,13 @@ def test_mode_summary_compare_and_table():
     s = summaries['select']
     assert (s['tasks'], s['failed'], s['switches']) == (2, 0, 1)
     assert s['rtt_ms']['mean'] == pytest.approx(15.0)
-    assert s['vs_fixed_pct'] == pytest.approx(50.0)
+    # the failed task counts at the 2 s task timeout: fixed's mean is (30 + 2000) / 2 ms
+    assert summaries['fixed']['rtt_ms']['mean'] == pytest.approx(1015.0)
+    assert summaries['fixed']['rtt_ms']['max'] == pytest.approx(2000.0)
+    assert s['vs_fixed_pct'] == pytest.approx(100.0 * (1015 - 15) / 1015)
     assert s['gap_to_oracle_pct'] == pytest.approx(50.0)
     assert s['reaction_mean_s'] == pytest.approx(0.5) and s['reaction_missed'] == 0
     assert summaries['fixed']['failed'] == 1
     text = table(summaries)
     assert '| select | 2 | 0 | 15.00 | 15.00 |' in text
-    assert '+50.0 %' in text and '| fixed | 2 | 1 | 30.00 |' in text
+    assert '+98.5 %' in text and '| fixed | 2 | 1 | 1015.00 |' in text

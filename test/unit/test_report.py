@@ -1,3 +1,5 @@
+import pytest
+
 from server_select.core.report import RunReport
 from server_select.core.stats import format_ms, summarize
 
@@ -25,5 +27,7 @@ def test_run_report_counts_switches_and_tasks():
     assert s['errors'] == {'timeout': 1} and s['servers_used'] == [2]
     assert (s['probes'], s['probes_failed'], s['probe_rtt']['n']) == (2, 1, 1)
     table = r.table()
-    assert ('| R1 | S1 | S1 1.00, S2 2.00 | 1 | 2 | 1 | 1 | 4.00 | 4.00 | 4.00 | 4.00 '
-            '| 2 (1) | 0.50 | 0.50 |') in table
+    # the failed task counts at the task timeout (2 s): median of 4 ms and 2000 ms
+    assert s['rtt']['max'] == 2.0 and s['rtt']['median'] == pytest.approx(1.002)
+    assert ('| R1 | S1 | S1 1.00, S2 2.00 | 1 | 2 | 1 | 1 | 1002.00 | 1900.20 | 1980.04 '
+            '| 2000.00 | 2 (1) | 0.50 | 0.50 |') in table

@@ -10,6 +10,7 @@ import numpy as np
 
 from server_select.bench.harness import PY, fleet, free_port, node_pid, us
 from server_select.core.procs import measure
+from server_select.core.settings import default
 from server_select.core.stats import summarize
 
 
@@ -96,8 +97,10 @@ def offered_load(log, listener, kind, unit, rates, window, **fleet_args):
     """For each offered rate: achieved completions/s, failures and round trips of ``kind``.
 
     Each rate runs in a fresh fleet; the window starts 4 s in (selection, start-up) and
-    reports of tasks resolved in it are counted.
+    reports of tasks resolved in it are counted; a failed task counts in the round trips
+    at the task timeout.
     """
+    timeout = float(fleet_args.get('task_timeout', default('task_timeout')))
     rows = []
     for rate in rates:
         rate_arg = {'hz': 'task_rate', 'fps': 'frame_rate'}[unit]
@@ -108,10 +111,11 @@ def offered_load(log, listener, kind, unit, rates, window, **fleet_args):
             end = time.monotonic()
             time.sleep(1.0)
         reports = listener.between(start, end, kind)
-        ok = [r.rtt for r in reports if r.ok]
-        rows.append({'offered_' + unit: rate, 'achieved_' + unit: len(ok) / window,
+        rtts = summarize([r.rtt if r.ok else timeout for r in reports])
+        rows.append({'offered_' + unit: rate,
+                     'achieved_' + unit: sum(r.ok for r in reports) / window,
                      'failed': sum(1 for r in reports if not r.ok),
-                     'rtt_ms': dict((k, v * 1e3) for k, v in summarize(ok).items() if k != 'n')})
+                     'rtt_ms': dict((k, v * 1e3) for k, v in rtts.items() if k != 'n')})
     return rows
 
 

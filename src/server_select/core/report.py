@@ -3,6 +3,7 @@
 import collections
 
 from server_select.core.ranking import NO_SERVER
+from server_select.core.settings import default
 from server_select.core.stats import summarize
 from server_select.core.tables import markdown_table
 
@@ -10,7 +11,8 @@ from server_select.core.tables import markdown_table
 class RunReport(object):
     """Accumulates what a run's topics say about each robot."""
 
-    def __init__(self):
+    def __init__(self, timeout=default('task_timeout')):
+        self.timeout = timeout   # a failed task's round trip in the statistics
         self.flags = {}
         self.switches = collections.Counter()
         self.tasks = collections.defaultdict(list)
@@ -43,7 +45,7 @@ class RunReport(object):
             'failed': sum(1 for t in tasks if not t[0]),
             'errors': dict(errors),
             'servers_used': sorted(set(t[2] for t in tasks if t[0])),
-            'rtt': summarize([t[1] for t in tasks if t[0]]),
+            'rtt': summarize([t[1] if t[0] else self.timeout for t in tasks]),
             'probes': len(self.probes.get(robot_id, [])),
             'probes_failed': sum(1 for p in self.probes.get(robot_id, []) if not p[1]),
             'probe_rtt': summarize([p[2] for p in self.probes.get(robot_id, []) if p[1]]),

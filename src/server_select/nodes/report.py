@@ -17,6 +17,8 @@ class ReportNode(object):
     :ROS Parameters:
         - ``~duration`` (s, 30.0): how long to listen before printing and exiting.
         - ``~output`` (str, ''): also write the summary as JSON to this path.
+        - ``~task_timeout`` (s, 2.0): a failed task counts in the round-trip statistics at
+          this (the robots' task timeout).
         - ``~end_launch`` (bool, false): then end the roslaunch that started this node
           cleanly, as Ctrl-C would (the timed demo's end).
         - ``~robots``, ``~servers`` (id lists, optional): also summarise the probe samples
@@ -31,7 +33,7 @@ class ReportNode(object):
         duration = param('duration')
         self.output = param('output')
         self.end_launch = param('end_launch')
-        self.report = RunReport()
+        self.report = RunReport(param('task_timeout'))
         self.flag_sub = rospy.Subscriber(fleet(names.SELECTION_TOPIC), SelectionFlag, self.on_flag,
                                          queue_size=100)
         self.task_sub = rospy.Subscriber(fleet(names.TASK_REPORT_TOPIC), TaskReport, self.on_task,
@@ -56,7 +58,8 @@ class ReportNode(object):
 
     def finish(self, _event=None):
         table = self.report.table()
-        print('\nserver_select run summary\n\n' + table + '\n', flush=True)
+        print('\nserver_select run summary (a failed task counts at the task timeout, %g s)\n\n'
+              % self.report.timeout + table + '\n', flush=True)
         if self.output:
             with open(self.output, 'w') as stream:
                 json.dump(self.report.summaries(), stream, indent=2)

@@ -10,6 +10,7 @@ import math
 import os
 
 from server_select.testbed.scenario import Scenario
+from server_select.core.settings import default
 from server_select.core.stats import summarize
 from server_select.core.tables import fmt, markdown_table
 
@@ -104,10 +105,10 @@ def reaction_times(flags, changes):
     return results
 
 
-def mode_summary(run_reports, flags, changes=None):
-    """The figures of one mode: task counts, round-trip statistics, switches, reactions."""
-    ok = [r.rtt for r in run_reports if r.ok]
-    rtt = summarize(ok)
+def mode_summary(run_reports, flags, changes=None, timeout=default('task_timeout')):
+    """The figures of one mode: task counts, round-trip statistics (a failed task counts
+    at the task ``timeout``), switches, reactions."""
+    rtt = summarize([r.rtt if r.ok else timeout for r in run_reports])
     summary = {
         'tasks': len(run_reports),
         'failed': sum(1 for r in run_reports if not r.ok),
@@ -158,13 +159,16 @@ def table(summaries):
 
 def summarize_runs(runs, scenario=None, duration=None):
     """:func:`mode_summary` of each run (``{name: Run}``), compared; with a scenario, the
-    reactions to its changes of the truly nearest server (fixed mode has none)."""
+    reactions to its changes of the truly nearest server (fixed mode has none). Failed
+    tasks count at the run's task timeout (the evaluation's metadata, else the default)."""
     changes = None
     if scenario is not None:
         robots = [h.id for h in scenario.of_role('robot')]
         changes = oracle_changes(scenario, robots, 0.0, duration or scenario.duration)
     return compare(collections.OrderedDict(
-        (name, mode_summary(run.reports, run.flags, changes if name != 'fixed' else None))
+        (name, mode_summary(run.reports, run.flags, changes if name != 'fixed' else None,
+                            run.meta.get('options', {}).get('task_timeout',
+                                                            default('task_timeout'))))
         for name, run in runs.items()))
 
 
@@ -200,7 +204,7 @@ def analyze(out_dir, modes):
     summaries = summarize_runs(runs, scenario, meta['duration'])
     return write_report(
         runs, summaries, out_dir, 'Evaluation: %s' % scenario.name,
-        'Scenario `%s`, %.0f s per mode; task round trip from the robots\' `task_report`; '
-        'improvement and gap by mean round trip; reaction: from a change of the truly '
-        'nearest server to the flag selecting it.'
+        'Scenario `%s`, %.0f s per mode; task round trip from the robots\' `task_report`, a '
+        'failed task counted at the task timeout; improvement and gap by mean round trip; '
+        'reaction: from a change of the truly nearest server to the flag selecting it.'
         % (os.path.basename(meta['scenario']), meta['duration']))
