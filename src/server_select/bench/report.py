@@ -70,11 +70,12 @@ def table1(t1):
 def throughput(rows, title, unit):
     def cells(rtt):
         return ['%.2f' % rtt[k] if k in rtt else '-' for k in ('median', 'p95', 'p99')]
-    return ['## %s' % title, '', 'A failed task counts in the round trips at the task timeout.',
-            '', markdown_table(
+    table = markdown_table(
         ('offered /s', 'achieved /s', 'failed', 'RTT median ms', 'p95 ms', 'p99 ms'),
         [['%g' % r['offered_' + unit], '%.1f' % r['achieved_' + unit], r['failed']]
-         + cells(r['rtt_ms']) for r in rows])]
+         + cells(r['rtt_ms']) for r in rows])
+    return ['## %s' % title, '', 'A failed task counts in the round trips at the task timeout.',
+            '', table]
 
 
 def breakdown(bd):
