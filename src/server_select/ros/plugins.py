@@ -23,8 +23,9 @@ class TaskPlugin(object):
     ``task_id`` and ``server_id``; the result message copies them and adds ``ok``,
     ``error`` and ``process_time``; the rest is the plug-in's.
 
-    Robot side (``robot_id`` is an int): ``make``, ``check``, ``run_local``, ``rate``.
-    Server side (``robot_id`` is None): ``handle``.
+    Robot side (``robot_id`` is an int): ``make``, ``check``, ``run_local``, ``rate``, and
+    optionally ``ready()`` (False: no input for a task yet; none is made). Server side
+    (``robot_id`` is None): ``handle``.
     """
 
     kind = None                          # the name in task reports and of the settings

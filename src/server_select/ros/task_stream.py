@@ -58,8 +58,9 @@ class TaskStream(object):
         if rospy.is_shutdown() or (self.limit and self.flow.sent >= self.limit):
             return
         if not getattr(self.kind, 'ready', lambda: True)():
-            rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for input (%s)' % (
-                self.robot_id, self.flow.kind, getattr(self.kind.source, 'topic', '')))
+            source = getattr(getattr(self.kind, 'source', None), 'topic', 'their source')
+            rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for input from %s'
+                                   % (self.robot_id, self.flow.kind, source))
             return
         if not self.started:
             if not (self.ready() and self.wired()):
