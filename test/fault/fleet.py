@@ -16,6 +16,7 @@ from server_select.msg import SelectionFlag, TaskReport
 from server_select.ros.graph import node_pid, publisher_of
 
 Received = collections.namedtuple('Received', 'time msg sender')
+NODES = ('/manager', '/server1', '/server2', '/server3', '/robot1', '/robot2')
 
 
 class Recorder(object):
@@ -77,8 +78,7 @@ class Fleet(object):
                 ['roslaunch', 'server_select', 'demo.launch', 'output:=log']
                 + ['%s:=%s' % kv for kv in sorted(self.args.items())],
                 stdout=stream, stderr=subprocess.STDOUT, start_new_session=True)
-        nodes = ['/manager', '/server1', '/server2', '/server3', '/robot1', '/robot2']
-        assert wait_until(lambda: all(self.pid(n) for n in nodes), 60.0, period=0.5), \
+        assert wait_until(lambda: all(self.pid(n) for n in NODES), 60.0, period=0.5), \
             'the fleet did not come up (%s)' % self.log
         return self
 
@@ -86,6 +86,13 @@ class Fleet(object):
         for proc in self.extra:
             stop_group(proc)
         stop_group(self.proc)
+        # Nothing of this fleet may outlive it: a straggler registering under a fleet name
+        # would shut down the next fleet's node of that name.
+        for node in NODES:
+            pid = self.pid(node)
+            if pid is not None:
+                os.kill(pid, signal.SIGKILL)
+        assert wait_until(lambda: not any(self.pid(n) for n in NODES), 10.0)
         return False
 
     @staticmethod

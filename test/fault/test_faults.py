@@ -19,7 +19,7 @@ import rosgraph
 
 from server_select.core.procs import stop_group, wait_until
 
-from fleet import Fleet, kill
+from fleet import NODES, Fleet, kill
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TASK_TIMEOUT = 2.0   # the robots' default
@@ -203,8 +203,7 @@ def test_roscore_restart(ros):
                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                      start_new_session=True)
         t_up = time.monotonic()
-        nodes = ['/manager', '/server1', '/server2', '/server3', '/robot1', '/robot2']
-        assert wait_until(lambda: all(fleet.pid(n) for n in nodes), 20.0), system_state()
+        assert wait_until(lambda: all(fleet.pid(n) for n in NODES), 20.0), system_state()
         kill(fleet, '/server3')                # a node that joins the new master
         fleet.restart_server(3)
 
