@@ -1,4 +1,6 @@
 """Image conversion and detection on real photographs shipped in scikit-image's wheel."""
+import threading
+
 import cv2
 import numpy as np
 import pytest
@@ -99,3 +101,26 @@ def test_iou():
     assert iou((0, 0, 10, 10), (0, 0, 10, 10)) == 1.0
     assert iou((0, 0, 10, 10), (20, 20, 5, 5)) == 0.0
     assert iou((0, 0, 10, 10), (5, 0, 10, 10)) == pytest.approx(1 / 3.0)
+
+
+@pytest.mark.parametrize('kind', ['haar', 'hog'])
+def test_frames_searched_at_once_keep_their_own_boxes(astronaut, kind):
+    """A server searches the frames of several robots in several threads with one detector."""
+    detector = Detector(kind=kind)
+    frames = [astronaut, np.full_like(astronaut, 100)]
+    expected = [detector.detect(f) for f in frames]
+    assert expected[0] != expected[1]
+    wrong = []
+
+    def search(index):
+        for _ in range(40 if kind == 'haar' else 5):
+            boxes = detector.detect(frames[index])
+            if boxes != expected[index]:
+                wrong.append((index, boxes))
+
+    threads = [threading.Thread(target=search, args=(i,)) for i in (0, 1)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert not wrong, wrong[:3]

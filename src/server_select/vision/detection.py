@@ -2,6 +2,7 @@
 
 import collections
 import os
+import threading
 
 import cv2
 import numpy as np
@@ -44,6 +45,10 @@ class Detector(object):
 
     ``kind`` ``haar``: a cascade of :func:`cascade_dir` (by file name) or a path;
     ``kind`` ``hog``: OpenCV's default HOG people detector.
+
+    Thread-safe: OpenCV keeps the image being searched inside the classifier, so two
+    frames searched at once by one classifier (a server's callbacks run in one thread per
+    robot connection) get each other's boxes; ``detect`` lets one frame in at a time.
     """
 
     def __init__(self, kind=default('detector'), cascade=default('cascade'),
@@ -53,6 +58,7 @@ class Detector(object):
         self.scale_factor = float(scale_factor)
         self.min_neighbors = int(min_neighbors)
         self.min_size = int(min_size)
+        self._lock = threading.Lock()
         if kind == 'haar':
             folder = None if os.path.isabs(cascade) else cascade_dir()
             path = os.path.join(folder, cascade) if folder else cascade
@@ -75,6 +81,10 @@ class Detector(object):
             raise DetectorError('unknown detector %r (expected haar or hog)' % kind)
 
     def detect(self, frame):
+        with self._lock:
+            return self._detect(frame)
+
+    def _detect(self, frame):
         if self.kind == 'haar':
             boxes, _, weights = self.classifier.detectMultiScale3(
                 to_gray(frame), scaleFactor=self.scale_factor, minNeighbors=self.min_neighbors,
