@@ -60,3 +60,29 @@ def test_failed_sample_rtt_is_not_kept():
     w.add(1, 1, 0.1, True, 0.5)
     stats = w.stats(1, 1, 0.1)
     assert stats.mean == 0.5 and (stats.ok_count, stats.failed_count) == (1, 1)
+
+
+def test_running_sums_match_a_recomputation_over_a_long_stream():
+    """Thousands of samples in and out of the window: the O(1) mean stays the mean."""
+    import random
+    rng = random.Random(4)
+    w = LatencyWindow(5.0)
+    kept = []
+    for i in range(5000):
+        t = i * 0.1
+        ok = rng.random() > 0.1
+        rtt = rng.choice([1e-4, 0.02, 0.242, 3.0]) * rng.random()
+        w.add(1, 1, t, ok, rtt)
+        kept = [(ts, o, r) for ts, o, r in kept if ts > t - 5.0] + [(t, ok, rtt)]
+        good = [r for _, o, r in kept if o]
+        stats = w.stats(1, 1, t)
+        assert (stats.ok_count, stats.failed_count) == (len(good), len(kept) - len(good))
+        if good:
+            assert stats.mean == pytest.approx(sum(good) / len(good), rel=1e-9, abs=1e-12)
+
+
+def test_a_pair_without_samples_is_forgotten():
+    w = LatencyWindow(1.0)
+    w.add(1, 1, 0.0, True, 0.1)
+    assert w.stats(1, 1, 2.0) == (None, 0, 0)
+    assert not w._pairs

@@ -37,6 +37,16 @@ class ServerHealth(object):
         self._lock = threading.Lock()
         self._servers = dict((s, _Server()) for s in servers)
 
+    def add(self, server):
+        """A new server: healthy."""
+        with self._lock:
+            self._servers.setdefault(server, _Server())
+
+    def remove(self, server):
+        """A server that left: never usable."""
+        with self._lock:
+            self._servers.pop(server, None)
+
     def _get(self, server, now):
         entry = self._servers.get(server)
         if entry is not None and entry.state == EJECTED and now >= entry.until:

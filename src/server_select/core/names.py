@@ -12,6 +12,8 @@ IMAGE_RESULT_TOPIC = 'processed_image'
 DETECTIONS_TOPIC = 'detections'
 FOUND_TARGETS_TOPIC = 'found_targets'
 KNOWN_TARGETS_SERVICE = '~known_targets'
+SAMPLES_TOPIC = 'latency_samples'       # fleet profile: one batch per robot probe round
+SERVERS_TOPIC = 'fleet_servers'         # fleet profile: the servers found in the master
 
 
 def probe_service(server_id):
@@ -22,3 +24,20 @@ def probe_service(server_id):
 def sample_topic(robot_id, server_id):
     """Name of the topic carrying the latency samples of one (robot, server) pair."""
     return 'latency_R%dS%d' % (robot_id, server_id)
+
+
+def server_topic(server_id, topic):
+    """Direct routing: ``topic`` of one server's own tasks (``server_3/data``)."""
+    return 'server_%d/%s' % (server_id, topic)
+
+
+def robot_topic(robot_id, topic):
+    """Direct routing: ``topic`` of one robot's own results (``robot_1/processed_data``)."""
+    return 'robot_%d/%s' % (robot_id, topic)
+
+
+def probe_server_id(service, fleet_ns='/'):
+    """The server id of a probe service's resolved name in ``fleet_ns``, else None."""
+    prefix = fleet_ns.rstrip('/') + '/latency_S'
+    rest = service[len(prefix):] if service.startswith(prefix) else ''
+    return int(rest) if rest.isdigit() and str(int(rest)) == rest else None

@@ -52,6 +52,13 @@ def parse_id_list(name, value):
     return ids
 
 
+def parse_members(name, value):
+    """A list of distinct ids that may be empty (``[]``, ``''``: learned at run time)."""
+    if value in ('', [], ()) or (isinstance(value, str) and not value.strip().strip('[]').strip()):
+        return []
+    return parse_id_list(name, value)
+
+
 def parse_positive(name, value, integer=False):
     """A strictly positive number (int when ``integer``)."""
     kind = 'integer' if integer else 'number'

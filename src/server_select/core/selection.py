@@ -48,6 +48,22 @@ class Selection(object):
             self._flag = (self._clock(), server_id, list(ranking))
         return None
 
+    def add_server(self, server):
+        """A server joined the fleet: a candidate from now on (once it has answered)."""
+        with self._lock:
+            if server not in self.servers:
+                self.servers.append(server)
+        if self.health is not None:
+            self.health.add(server)
+
+    def remove_server(self, server):
+        """A server left the fleet: never a candidate again, whatever a flag says."""
+        with self._lock:
+            if server in self.servers:
+                self.servers.remove(server)
+        if self.health is not None:
+            self.health.remove(server)
+
     def on_sample(self, server, ok, rtt):
         """One of the robot's own probe samples (ValueError for an impossible round trip)."""
         self.window.add(self.robot_id, server, self._clock(), ok, rtt)

@@ -7,8 +7,8 @@ node's default", and the evaluation takes its defaults from it.
 
 import collections
 
-from server_select.core.params import (one_of, parse_bool, parse_count, parse_id, parse_id_list,
-                                       parse_mode, parse_names, parse_non_negative,
+from server_select.core.params import (one_of, parse_bool, parse_count, parse_id,
+                                       parse_members, parse_mode, parse_names, parse_non_negative,
                                        parse_number, parse_plugins, parse_positive,
                                        parse_positive_int, parse_publisher, parse_text)
 
@@ -22,8 +22,19 @@ DEFAULT_CASCADE = 'haarcascade_frontalface_default.xml'
 PARAMS = {
     'robot_id': Param(REQUIRED, parse_id, "this robot's id"),
     'server_id': Param(REQUIRED, parse_id, "this server's id"),
-    'robots': Param(REQUIRED, parse_id_list, 'ids of the robots'),
-    'servers': Param(REQUIRED, parse_id_list, 'ids of the servers'),
+    'robots': Param(REQUIRED, parse_members, 'ids of the robots (fleet: [] = whoever sends '
+                    'samples)'),
+    'servers': Param(REQUIRED, parse_members, 'ids of the servers (fleet: [] = those the '
+                     'manager announces)'),
+    'profile': Param('paper', one_of('paper', 'fleet'), 'a set of defaults: the paper as '
+                     'written, or the fleet layout (PROFILES)'),
+    'routing': Param('broadcast', one_of('broadcast', 'direct'), 'tasks on one topic for '
+                     'every server, or on the addressed server\'s own topic'),
+    'sample_stream': Param('pair', one_of('pair', 'robot'), 'probe samples on one topic per '
+                           '(robot, server) pair, or one batch per probe round per robot'),
+    'discover': Param(False, parse_bool, 'also probe the servers the manager announces'),
+    'discovery_period': Param(2.0, parse_positive, "period of the manager's look for "
+                              'servers in the master (s)'),
     'mode': Param('select', parse_mode, 'select (follow the manager), fixed or local'),
     'fixed_server': Param(None, parse_id, 'target in fixed mode (default: first server)'),
     'probe_rate': Param(1.0, parse_positive, 'probes per second to each server (Hz)'),
@@ -90,6 +101,15 @@ PARAMS = {
 }
 
 
-def default(name):
-    """The default of parameter ``name`` (KeyError for an unknown name)."""
-    return PARAMS[name].default
+# Profiles: sets of defaults, one argument apart (``~profile``, launch ``profile:=``). A
+# parameter set explicitly always wins. ``paper`` is the paper as written.
+PROFILES = {
+    'paper': {},
+    'fleet': {'routing': 'direct', 'sample_stream': 'robot', 'discover': True,
+              'robots': [], 'servers': []},
+}
+
+
+def default(name, profile='paper'):
+    """The default of parameter ``name`` in ``profile`` (KeyError for an unknown name)."""
+    return PROFILES[profile].get(name, PARAMS[name].default)

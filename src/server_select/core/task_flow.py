@@ -85,6 +85,10 @@ class TaskFlow(object):
         self.ignored = collections.Counter()          # DUPLICATE / LATE / UNKNOWN / FOREIGN
         self.rtts = collections.deque(maxlen=keep_rtts)   # recent answered round trips
 
+    def candidates(self):
+        """Where a task may go now, best first."""
+        return self._candidates()
+
     def __len__(self):
         with self._lock:
             return len(self._pending)

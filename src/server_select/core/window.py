@@ -14,11 +14,43 @@ def valid_rtt(rtt):
         math.isfinite(rtt) and rtt >= 0
 
 
+class _Pair(object):
+    """One pair's samples and their running sums (O(1) amortised per sample)."""
+    __slots__ = ('samples', 'rtt_sum', 'ok_count')
+
+    def __init__(self):
+        self.samples, self.rtt_sum, self.ok_count = collections.deque(), 0.0, 0
+
+    def append(self, sample):
+        self.samples.append(sample)
+        if sample.ok:
+            self.rtt_sum += sample.rtt
+            self.ok_count += 1
+
+    def prune(self, horizon):
+        samples = self.samples
+        while samples and samples[0].time <= horizon:
+            old = samples.popleft()
+            if old.ok:
+                self.ok_count -= 1
+                self.rtt_sum -= old.rtt
+        if not self.ok_count:
+            self.rtt_sum = 0.0      # no rounding residue survives an empty window
+
+    def stats(self):
+        failed = len(self.samples) - self.ok_count
+        if not self.ok_count:
+            return PairStats(None, 0, failed)
+        return PairStats(max(0.0, self.rtt_sum / self.ok_count), self.ok_count, failed)
+
+
 class LatencyWindow(object):
     """The samples of the last ``window`` seconds of every (robot, server) pair.
 
     Times are those of the caller's clock (the manager's receive time, because robot and
-    manager clocks are not shared). Thread-safe: subscriber callbacks add, a timer reads.
+    manager clocks are not shared). Each pair keeps running sums, so adding a sample and
+    reading a pair's mean cost O(1) amortised, whatever the number of pairs. Thread-safe:
+    subscriber callbacks add, a timer reads.
     """
 
     def __init__(self, window):
@@ -26,7 +58,7 @@ class LatencyWindow(object):
             raise ValueError('window must be positive, got %r' % (window,))
         self.window = float(window)
         self._lock = threading.Lock()
-        self._samples = collections.defaultdict(collections.deque)
+        self._pairs = {}
 
     def add(self, robot_id, server_id, now, ok, rtt):
         """Record one sample; failed samples carry no latency. A successful sample whose
@@ -34,27 +66,22 @@ class LatencyWindow(object):
         if ok and not valid_rtt(rtt):
             raise ValueError('round trip %r is not a finite number >= 0' % (rtt,))
         with self._lock:
-            samples = self._samples[(robot_id, server_id)]
-            samples.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')))
-            self._prune(samples, now)
-
-    def _prune(self, samples, now):
-        horizon = now - self.window
-        while samples and samples[0].time <= horizon:
-            samples.popleft()
+            pair = self._pairs.get((robot_id, server_id))
+            if pair is None:
+                pair = self._pairs[(robot_id, server_id)] = _Pair()
+            pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')))
+            pair.prune(now - self.window)
 
     def stats(self, robot_id, server_id, now):
         """Mean round trip of the successful samples in the window (None when none)."""
         with self._lock:
-            samples = self._samples.get((robot_id, server_id))
-            if samples is None:
+            pair = self._pairs.get((robot_id, server_id))
+            if pair is None:
                 return PairStats(None, 0, 0)
-            self._prune(samples, now)
-            rtts = [s.rtt for s in samples if s.ok]
-            failed = len(samples) - len(rtts)
-        if not rtts:
-            return PairStats(None, 0, failed)
-        return PairStats(sum(rtts) / len(rtts), len(rtts), failed)
+            pair.prune(now - self.window)
+            if not pair.samples:       # nothing left: forget the pair
+                del self._pairs[(robot_id, server_id)]
+            return pair.stats()
 
     def robot_stats(self, robot_id, servers, now):
         """``{server_id: PairStats}`` for each of ``servers``."""

@@ -4,11 +4,13 @@ import rospy
 
 from server_select.core import names
 from server_select.core.params import ParamError
-from server_select.core.ranking import choose, rank_servers
-from server_select.core.window import LatencyWindow, valid_rtt
-from server_select.msg import LatencySample
+from server_select.core.ranking import choose
+from server_select.core.rankings import FleetRankings
+from server_select.core.window import valid_rtt
+from server_select.msg import LatencySample, LatencySamples
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.graph import publisher_of
+from server_select.ros.membership import ServerDiscovery
 from server_select.ros.node import fleet, owned_by, param, run
 
 
@@ -19,92 +21,146 @@ class ManagerNode(object):
     each robot's servers by mean round trip (stable sort, ties to the lower id, servers
     without a successful sample excluded) and publishes one ``server_select_flag`` per
     robot every ``1/~publish_rate`` s, and at once when a robot's selected server or the set
-    of servers it ranks changes. Rankings are re-evaluated on every sample and every
-    ``1/~update_rate`` s, so a server drops out as soon as its last good sample leaves the
-    window. Window times are the manager's receive times: robot and manager clocks are
-    not shared. A robot gets no flag before its first sample (a restarted manager does not
-    publish an empty ranking over a robot's working choice). Samples claiming another
-    pair, with an impossible round trip, or not published by ``~robot_node`` are ignored
-    with a throttled warning naming the publisher.
+    of servers it ranks changes. A sample costs O(1); a robot is ranked again only when a
+    sample may change its flag, and every ``1/~update_rate`` s, so a server drops out as
+    soon as its last good sample leaves the window. Window times are the manager's receive
+    times: robot and manager clocks are not shared. A robot gets no flag before its first
+    sample (a restarted manager does not publish an empty ranking over a robot's working
+    choice). Samples claiming another pair, with an impossible round trip, or not
+    published by ``~robot_node`` are ignored with a throttled warning naming the publisher.
 
     :ROS Parameters:
-        - ``~robots`` (list of int, required), ``~servers`` (list of int, required)
-        - ``~window`` (s, 5.0): sample window.
-        - ``~publish_rate`` (Hz, 1.0): periodic flag rate.
-        - ``~update_rate`` (Hz, 10.0): rate of re-evaluation between samples.
+        - ``~profile`` (``paper``): ``fleet`` sets the defaults marked (fleet) below.
+        - ``~robots``, ``~servers`` (lists of int; required in the paper profile; (fleet)
+          empty: robots are whoever sends samples, servers whatever they probe)
+        - ``~sample_stream`` (``pair``; (fleet) ``robot``): samples on ``latency_R<r>S<s>``
+          per pair, or batches on ``latency_samples``.
+        - ``~discover`` (false; (fleet) true): publish the servers found in the master on
+          ``fleet_servers`` every ``~discovery_period`` s (2.0).
+        - ``~window`` (s, 5.0), ``~publish_rate`` (Hz, 1.0), ``~update_rate`` (Hz, 10.0)
         - ``~hysteresis`` (s, 0.0): keep the current server while its mean is within this
           of the best one (0: always the best, as in the paper).
         - ``~robot_node`` (``/robot{id}``): the node, or the namespace of the nodes, whose
           samples count for robot {id} (``*``: any publisher).
         - ``~fleet_ns`` (``/``): namespace of the fleet-level topics and services.
     :ROS Subscribers:
-        - ``latency_R<r>S<s>`` (server_select/LatencySample) for every robot r and server s.
+        - ``latency_R<r>S<s>`` (server_select/LatencySample) for every robot r and server s,
+          or ``latency_samples`` (server_select/LatencySamples).
     :ROS Publishers:
         - ``server_select_flag`` (server_select/SelectionFlag)
+        - ``fleet_servers`` (server_select/FleetServers, latched; with ``~discover``)
     """
 
     def __init__(self):
-        self.robots = param('robots')
-        self.servers = param('servers')
-        self.window = LatencyWindow(param('window'))
+        self.stream = param('sample_stream')
+        self.rankings = FleetRankings(param('window'), param('robots'), param('servers'))
+        if self.stream == 'pair' and not (self.rankings.fixed_robots
+                                          and self.rankings.fixed_servers):
+            raise ParamError('~robots and ~servers: needed with ~sample_stream pair '
+                             '(one topic per pair)')
         self.publish_rate = param('publish_rate')
         self.update_rate = param('update_rate')
         self.hysteresis = param('hysteresis')
-        pattern = param('robot_node')
+        self.robot_node = pattern = param('robot_node')      # None: any publisher
         try:
-            self.robot_node = dict(   # None: any publisher
-                (r, rospy.resolve_name(pattern.format(id=r)) if pattern else None)
-                for r in self.robots)
+            pattern and pattern.format(id=1)
         except (KeyError, IndexError, ValueError) as error:
             raise ParamError('~robot_node: %r is not a node name with {id}: %s'
                              % (pattern, error))
-        self.heard = set()
-        self.flags = FlagPublisher(self.robots, 'manager')
+        self._robot_nodes = {}
+        self.discovery = ServerDiscovery(param('discovery_period')) if param('discover') \
+            else None
+        self.flags = FlagPublisher('manager', max(100, 4 * len(self.rankings.fixed_robots)))
         self.sample_subs = []
         self.timers = []
 
     def start(self):
-        self.sample_subs = [
-            rospy.Subscriber(fleet(names.sample_topic(r, s)), LatencySample, self.on_sample,
-                             callback_args=(r, s), queue_size=100, tcp_nodelay=True)
-            for r in self.robots for s in self.servers]
+        if self.stream == 'pair':
+            self.sample_subs = [
+                rospy.Subscriber(fleet(names.sample_topic(r, s)), LatencySample,
+                                 self.on_sample, callback_args=(r, s), queue_size=100,
+                                 tcp_nodelay=True)
+                for r in self.rankings.fixed_robots for s in self.rankings.fixed_servers]
+        else:
+            self.sample_subs = [rospy.Subscriber(fleet(names.SAMPLES_TOPIC), LatencySamples,
+                                                 self.on_batch, queue_size=1000,
+                                                 tcp_nodelay=True)]
+        if self.discovery is not None:
+            self.discovery.start()
         self.timers = [
             rospy.Timer(rospy.Duration(1.0 / self.publish_rate), lambda _e: self.update_all(False)),
             rospy.Timer(rospy.Duration(1.0 / self.update_rate), lambda _e: self.update_all(True))]
-        rospy.loginfo('manager: robots %s, servers %s, window %.3g s',
-                      self.robots, self.servers, self.window.window)
+        rospy.loginfo('manager: robots %s, servers %s, window %.3g s, samples %s',
+                      self.rankings.fixed_robots or 'as they come',
+                      self.rankings.fixed_servers or 'as probed', self.rankings.window.window,
+                      'per pair' if self.stream == 'pair' else 'in one batch per robot round')
 
     def on_sample(self, sample, pair):
-        why = self.refuse(sample, pair)
+        """One sample on the topic of ``pair`` (paper layout)."""
+        why = self.refuse(sample, pair[0], pair)
         if why:
-            rospy.logwarn_throttle(5.0, 'manager: ignored a sample on %s published by %s: %s'
-                                   % (names.sample_topic(*pair), publisher_of(sample), why))
-            return
-        self.window.add(pair[0], pair[1], rospy.get_time(), sample.ok, sample.rtt)
-        self.heard.add(pair[0])
-        self.update(pair[0], only_on_change=True)
+            self.warn(names.sample_topic(*pair), sample, why)
+        else:
+            self.take(pair[0], pair[1], sample.ok, sample.rtt, rospy.get_time())
 
-    def refuse(self, sample, pair):
-        """Why ``sample``, received on the topic of ``pair``, must be ignored (or None)."""
-        if (sample.robot_id, sample.server_id) != pair:
-            return 'it claims robot %d / server %d' % (sample.robot_id, sample.server_id)
-        if sample.ok and not valid_rtt(sample.rtt):
-            return 'round trip %r is not a finite number >= 0' % sample.rtt
-        expected = self.robot_node.get(pair[0])
-        if expected is not None and not owned_by(publisher_of(sample), expected):
-            return 'robot %d is %s (or a node in its namespace)' % (pair[0], expected)
+    def on_batch(self, batch):
+        """One robot's probe round (fleet layout)."""
+        robot = batch.robot_id
+        count = len(batch.server_id)
+        why = self.refuse(batch, robot)
+        if why is None and not len(batch.ok) == len(batch.rtt) == count:
+            why = 'arrays of %d servers, %d ok, %d rtt' % (count, len(batch.ok), len(batch.rtt))
+        if why:
+            self.warn(names.SAMPLES_TOPIC, batch, why)
+            return
+        now = rospy.get_time()
+        for server, ok, rtt in zip(batch.server_id, batch.ok, batch.rtt):
+            if ok and not valid_rtt(rtt):
+                self.warn(names.SAMPLES_TOPIC, batch, 'round trip %r of server %d is not a '
+                          'finite number >= 0' % (rtt, server))
+                continue
+            why = self.rankings.admits(robot, server)
+            if why:
+                self.warn(names.SAMPLES_TOPIC, batch, why)
+                continue
+            self.take(robot, server, ok, rtt, now)
+
+    def take(self, robot, server, ok, rtt, now):
+        if self.rankings.add(robot, server, now, ok, rtt):
+            self.update(robot, only_on_change=True)
+
+    def refuse(self, msg, robot, pair=None):
+        """Why ``msg`` (a sample, or a batch when ``pair`` is None) must be ignored."""
+        if pair is not None and (msg.robot_id, msg.server_id) != pair:
+            return 'it claims robot %d / server %d' % (msg.robot_id, msg.server_id)
+        if pair is not None and msg.ok and not valid_rtt(msg.rtt):
+            return 'round trip %r is not a finite number >= 0' % msg.rtt
+        if pair is None and self.rankings.admits_robot(robot):
+            return self.rankings.admits_robot(robot)
+        if self.robot_node is not None:
+            expected = self._robot_nodes.get(robot)
+            if expected is None:
+                expected = self._robot_nodes[robot] = rospy.resolve_name(
+                    self.robot_node.format(id=robot))
+            if not owned_by(publisher_of(msg), expected):
+                return 'robot %d is %s (or a node in its namespace)' % (robot, expected)
         return None
 
+    def warn(self, topic, msg, why):
+        rospy.logwarn_throttle(5.0, 'manager: ignored a sample on %s published by %s: %s'
+                               % (topic, publisher_of(msg), why))
+
     def update_all(self, only_on_change):
-        for robot in self.robots:
-            if robot in self.heard:   # silent for a robot until it has sent samples
+        for robot in self.rankings.robots():
+            if self.rankings.heard(robot):   # silent for a robot until it has sent samples
                 self.update(robot, only_on_change)
 
     def update(self, robot, only_on_change):
         """Rank ``robot``'s servers now; publish unless unchanged and ``only_on_change``."""
-        ranking = rank_servers(self.window.robot_stats(robot, self.servers, rospy.get_time()))
-        self.flags.offer(robot, ranking, only_on_change,
-                         lambda previous: choose(ranking, previous, self.hysteresis))
+        ranking = self.rankings.rank(robot, rospy.get_time())
+        if self.flags.offer(robot, ranking, only_on_change,
+                            lambda previous: choose(ranking, previous, self.hysteresis)):
+            self.rankings.selected(robot, self.flags.selected(robot))
 
 
 def main():

@@ -41,7 +41,7 @@ class OracleNode(object):
                 raise ParamError('~robots: robot %d is not in scenario %s' % (robot, path))
         self.publish_rate = param('publish_rate')
         self.update_rate = param('update_rate', default=20.0)
-        self.flags = FlagPublisher(self.robots, 'oracle')
+        self.flags = FlagPublisher('oracle', queue_size=4 * len(self.robots))
         self.timers = []
 
     def start(self):

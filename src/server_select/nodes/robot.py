@@ -16,13 +16,11 @@ from server_select.ros.camera import TopicSource
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.node import fleet, param, run
 from server_select.ros.plugins import load as load_plugin
+from server_select.ros.membership import ServerAnnouncements
 from server_select.ros.prober import Prober
-from server_select.ros.search import SearchParticipant
-from server_select.ros.task_kinds import ImageKind, SortKind
+from server_select.ros.routing import ROUTES
+from server_select.ros.task_kinds import SortKind, image_kind
 from server_select.ros.task_stream import TaskStream
-from server_select.vision.detection import DetectorError, make_detector
-from server_select.vision.image_source import SourceError, open_source
-from server_select.vision.search import SearchError
 
 
 class RobotNode(object):
@@ -75,7 +73,11 @@ class RobotNode(object):
         self.robot_id = param('robot_id')
         servers = param('servers')
         mode = param('mode')
-        fixed = param('fixed_server', default=servers[0],
+        self.discover = param('discover')
+        if not servers and (mode == 'fixed' or not self.discover):
+            raise ParamError('~servers: empty, and %s' % ('~mode is fixed' if mode == 'fixed'
+                                                          else '~discover is off'))
+        fixed = param('fixed_server', default=servers[0] if servers else None,
                       parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
         eject_time, eject_max = param('eject_time'), param('eject_max')
         if eject_time > eject_max:
@@ -86,24 +88,14 @@ class RobotNode(object):
                                    param('window'), param('hysteresis'),
                                    param('manager_timeout'))
         self.prober = Prober(self.robot_id, servers, param('probe_rate'), param('probe_timeout'),
-                             on_sample=self.on_sample)
+                             on_sample=self.on_sample, stream=param('sample_stream'))
         self.start_delay = param('start_delay')
         self.summary_period = param('summary_period')
         manager = param('manager_node')   # None: flags from any node
         self.manager_node = rospy.resolve_name(manager) if manager else None
         self.providers = ServiceProviders(rospy.get_name())
         self.search = self.camera = None
-        kinds = []
-        if param('sort_tasks'):
-            kinds.append((SortKind(self.robot_id, param('task_size'),
-                                   param('seed', default=self.robot_id)), param('task_rate')))
-        if param('image_source') or param('image_topic'):
-            kinds.append((self._image_kind(mode), param('frame_rate')))
-        kinds += [(plugin, plugin.rate) for plugin in
-                  (load_plugin(spec, self.robot_id) for spec in param('task_plugins'))]
-        if not kinds:
-            raise ParamError('~sort_tasks is false, and neither ~image_source, ~image_topic '
-                             'nor ~task_plugins is set: no tasks to send')
+        kinds = self._kinds(mode)
         flow_args = dict(timeout=param('task_timeout'), candidates=self.selection.candidates,
                          on_failure=self.on_failure, on_success=self.health.task_ok,
                          ids=itertools.count(1))    # task ids are per robot, across streams
@@ -111,34 +103,32 @@ class RobotNode(object):
         self.streams = [
             TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready,
                        dict(flow_args, deadlines=AttemptClock(flow_args['timeout'], **retry)),
-                       local=mode == 'local', expected_publisher=self.server_node)
+                       local=mode == 'local', expected_publisher=self.server_node,
+                       route=ROUTES[param('routing')])
             for kind, rate in kinds]
+        self.announcements = ServerAnnouncements(servers, self.on_servers, self.manager_node,
+                                                 self.robot_id) if self.discover else None
         self._start_after = None
         self._local_decision = False
         self.timers = []
 
-    def _image_kind(self, mode):
-        if param('image_source') and param('image_topic'):
-            raise ParamError('~image_source and ~image_topic: set one of them, not both')
-        if param('image_topic'):
-            source = self.camera = TopicSource(param('image_topic'), param('max_image_pixels'))
-        else:
-            try:
-                source = open_source(param('image_source'), param('robot_index'),
-                                     param('robot_count'), param('speed'))
-            except (SourceError, SearchError, OSError) as error:
-                raise ParamError('~image_source: %s' % error)
-        detector = None
-        if mode == 'local':
-            try:
-                detector = make_detector(param)
-            except DetectorError as error:
-                raise ParamError('~detector/~cascade: %s' % error)
-        self.search = SearchParticipant(self.robot_id, param('merge_radius'),
-                                        getattr(source, 'world', None))
-        return ImageKind(self.robot_id, source, param('image_encoding'), self.search, detector,
-                         param('max_image_pixels'), param('image_transport'),
-                         param('jpeg_quality'))
+    def _kinds(self, mode):
+        """(task kind, rate) of each stream the parameters ask for."""
+        kinds = []
+        if param('sort_tasks'):
+            kinds.append((SortKind(self.robot_id, param('task_size'),
+                                   param('seed', default=self.robot_id)), param('task_rate')))
+        if param('image_source') or param('image_topic'):
+            kind = image_kind(self.robot_id, mode, param)
+            self.search = kind.search
+            self.camera = kind.source if isinstance(kind.source, TopicSource) else None
+            kinds.append((kind, param('frame_rate')))
+        kinds += [(plugin, plugin.rate) for plugin in
+                  (load_plugin(spec, self.robot_id) for spec in param('task_plugins'))]
+        if not kinds:
+            raise ParamError('~sort_tasks is false, and neither ~image_source, ~image_topic '
+                             'nor ~task_plugins is set: no tasks to send')
+        return kinds
 
     def start(self):
         self._start_after = time.monotonic() + self.start_delay
@@ -150,7 +140,11 @@ class RobotNode(object):
             self.camera.start()
         for stream in self.streams:
             stream.start()
+            for server in self.prober.servers:    # task topics connected before the first task
+                stream.add_server(server)
         self.prober.start()
+        if self.announcements is not None:
+            self.announcements.start()
         self.timers = [rospy.Timer(rospy.Duration(self.summary_period),
                                    lambda _e: rospy.loginfo(self.summary())),
                        rospy.Timer(rospy.Duration(0.5), self.on_decision_timer)]
@@ -183,6 +177,20 @@ class RobotNode(object):
             self.health.probe_ok(server)
         else:
             self.on_failure(server, 'probe failed: %s' % error)
+
+    def on_servers(self, added, removed):
+        """Servers joined or left the fleet (``fleet_servers``)."""
+        for server in added:
+            self.selection.add_server(server)
+            self.prober.add(server)
+        for server in removed:
+            self.prober.remove(server)
+            self.selection.remove_server(server)
+        for stream in self.streams:
+            for server in added:
+                stream.add_server(server)
+            for server in removed:
+                stream.remove_server(server)
 
     def on_failure(self, server, why):
         ejection = self.health.failure(server, why)

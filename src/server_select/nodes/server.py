@@ -5,16 +5,16 @@ import time
 
 import numpy as np
 import rospy
-from rospy.numpy_msg import numpy_msg
 from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 
 from server_select.core import names
 from server_select.core.params import ParamError
 from server_select.core.sort_task import TaskError, sort_values
-from server_select.msg import (Detection, Detections, ImageResult, ImageTask, SortResult,
-                               SortTask)
+from server_select.msg import Detection, Detections, ImageResult, SortResult
 from server_select.ros.node import fleet, param, run
 from server_select.ros.plugins import PluginHandler, load as load_plugin
+from server_select.ros.routing import ServerEndpoint
+from server_select.ros.task_kinds import ImageKind, SortKind
 from server_select.srv import LatencyProbe, LatencyProbeResponse
 from server_select.vision import image_codec
 from server_select.vision.detection import DetectorError, make_detector, search_frame
@@ -29,6 +29,9 @@ class ServerNode(object):
     selected when it sent it, and only that server processes it. Deciding by the id
     stamped in the task (rather than by the latest flag each server happens to have seen)
     is what keeps one task from being answered twice, or not at all, around a switch.
+    With ``~routing`` ``direct`` (fleet profile) the server also takes tasks on its own
+    topics (``server_<id>/data``, ...) and answers those on the sending robot's own topic
+    (``robot_<r>/processed_data``, ...).
 
     Image tasks are searched for targets with an OpenCV Haar cascade (``~cascade``, a file
     of OpenCV's cascade folder or a path) or the HOG people detector (``~detector:=hog``);
@@ -38,6 +41,7 @@ class ServerNode(object):
 
     :ROS Parameters:
         - ``~server_id`` (int, required): this server's id.
+        - ``~profile`` (``paper``), ``~routing`` (``broadcast``; fleet: ``direct``)
         - ``~max_task_len`` (int, 1000000): larger sort tasks get an error result.
         - ``~queue_size`` (int, 100): task subscriber queues.
         - ``~detector`` (str, ``haar``): ``haar`` or ``hog``.
@@ -68,33 +72,29 @@ class ServerNode(object):
             self.detector = make_detector(param)
         except DetectorError as error:
             raise ParamError('~detector/~cascade: %s' % error)
-        self.plugins = [PluginHandler(self.server_id, load_plugin(spec, None), self.queue_size)
-                        for spec in param('task_plugins')]
+        direct = param('routing') == 'direct'
+        self.plugins = [PluginHandler(self.server_id, load_plugin(spec, None), self.queue_size,
+                                      direct) for spec in param('task_plugins')]
+        self.endpoints = [ServerEndpoint(self.server_id, kind, handle, direct, self.queue_size)
+                          for kind, handle in ((SortKind, self.on_sort_task),
+                                               (ImageKind, self.on_image_task))]
         self._lock = threading.Lock()
         self.tasks_done = 0
         self.tasks_failed = 0
 
     def start(self):
-        queue = self.queue_size
-        self.result_pub = rospy.Publisher(
-            fleet(names.SORT_RESULT_TOPIC), numpy_msg(SortResult), queue_size=queue)
-        self.image_pub = rospy.Publisher(fleet(names.IMAGE_RESULT_TOPIC), ImageResult,
-                                         queue_size=queue)
         self.detections_pub = rospy.Publisher(fleet(names.DETECTIONS_TOPIC), Detections,
-                                              queue_size=queue)
-        self.task_sub = rospy.Subscriber(
-            fleet(names.SORT_TASK_TOPIC), numpy_msg(SortTask), self.on_sort_task,
-            queue_size=queue, tcp_nodelay=True, buff_size=1 << 24)
-        self.image_sub = rospy.Subscriber(
-            fleet(names.IMAGE_TASK_TOPIC), ImageTask, self.on_image_task, queue_size=queue,
-            tcp_nodelay=True, buff_size=1 << 24)
+                                              queue_size=self.queue_size)
+        for endpoint in self.endpoints:
+            endpoint.start()
         for plugin in self.plugins:
             plugin.start()
         # Advertised last: a robot that can probe us finds our task topics wired already.
         self.probe_srv = rospy.Service(
             fleet(names.probe_service(self.server_id)), LatencyProbe, self.on_probe)
         rospy.loginfo('server %d: probe service %s, tasks on %s',
-                      self.server_id, self.probe_srv.resolved_name, self.task_sub.resolved_name)
+                      self.server_id, self.probe_srv.resolved_name,
+                      ', '.join(t for e in self.endpoints for t in e.topics))
         rospy.on_shutdown(self.on_shutdown)
 
     def on_probe(self, req):
@@ -102,8 +102,9 @@ class ServerNode(object):
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now())
 
     def on_sort_task(self, task):
+        """The result of a sort task addressed here (None: addressed elsewhere)."""
         if task.server_id != self.server_id:
-            return
+            return None
         result = SortResult(header=task.header, robot_id=task.robot_id, task_id=task.task_id,
                             server_id=self.server_id, data=EMPTY)
         start = time.perf_counter()
@@ -113,12 +114,13 @@ class ServerNode(object):
         except TaskError as error:
             self._reject(result, 'task', task, error)
         result.process_time = time.perf_counter() - start
-        self.result_pub.publish(result)
         self._count(result.ok)
+        return result
 
     def on_image_task(self, task):
+        """The result of a frame addressed here (None: addressed elsewhere)."""
         if task.server_id != self.server_id:
-            return
+            return None
         result = ImageResult(header=task.header, robot_id=task.robot_id, task_id=task.task_id,
                              server_id=self.server_id)
         start = time.perf_counter()
@@ -141,8 +143,8 @@ class ServerNode(object):
                                                    height=b.height),
                               label=b.label, score=b.score) for b in boxes]))
         result.process_time = time.perf_counter() - start
-        self.image_pub.publish(result)
         self._count(result.ok)
+        return result
 
     def _annotated(self, result, frame, raw_header, compressed_header):
         """The annotated frame into ``result``: raw for a raw task (``raw_header``), JPEG

@@ -16,18 +16,19 @@ class FlagPublisher(object):
     ranks differs from the last one published for it.
     """
 
-    def __init__(self, robots, source):
+    def __init__(self, source, queue_size=100):
         self.source = source     # 'manager', 'oracle': for the log
         self._lock = threading.Lock()
         self._published = {}     # robot -> (selected, frozenset of ranked servers)
         self.pub = rospy.Publisher(fleet(names.SELECTION_TOPIC), SelectionFlag,
-                                   queue_size=4 * max(1, len(robots)))
+                                   queue_size=queue_size)
 
     def offer(self, robot, ranking, only_on_change, choose=None):
         """Publish ``robot``'s flag for ``ranking`` (a
         :class:`~server_select.core.ranking.Ranking`) unless ``only_on_change`` and nothing
         changed; True if published. ``choose(previous)`` picks the server given the one
-        published before (None at first); default: the ranking's best."""
+        published before (None at first); default: the ranking's best.
+        :meth:`selected` then tells the server chosen."""
         ranked = frozenset(ranking.ranking)
         with self._lock:
             previous, previous_ranked = self._published.get(robot, (None, None))
@@ -45,3 +46,8 @@ class FlagPublisher(object):
                           selected if selected != SelectionFlag.NO_SERVER else 'none',
                           ranking.ranking, ['%.2f' % (m * 1e3) for m in ranking.means])
         return True
+
+    def selected(self, robot):
+        """The server ``robot``'s last published flag selected (None: no flag yet)."""
+        with self._lock:
+            return self._published.get(robot, (None, None))[0]

@@ -8,21 +8,23 @@ import rosgraph.names
 import rospy
 
 from server_select.core.params import ParamError
-from server_select.core.settings import PARAMS, REQUIRED
+from server_select.core.settings import PARAMS, REQUIRED, default as profile_default
 from server_select.ros.master_watch import MasterWatch
 
 _FLEET_NS = None
+_PROFILE = None
 
 
 def param(name, default=None, parse=None):
-    """The private parameter ``~name``, parsed, with its default from the table.
+    """The private parameter ``~name``, parsed, with its default from the table (in the
+    node's ``~profile``).
 
     ``default`` and ``parse`` override the table's (for a default that depends on another
     parameter, e.g. ``~seed`` defaults to ``~robot_id``). A missing required parameter or
     a value the parser refuses raises :class:`ParamError` naming ``~name``.
     """
     spec = PARAMS[name]
-    default = spec.default if default is None else default
+    default = profile_default(name, profile()) if default is None else default
     private = '~' + name
     if default is REQUIRED and not rospy.has_param(private):
         raise ParamError('%s: required parameter is not set (resolved: %s)'
@@ -31,6 +33,14 @@ def param(name, default=None, parse=None):
     if value is None:
         return None
     return (parse or spec.parse)(private, value)
+
+
+def profile():
+    """The node's ``~profile`` (``paper`` unless set)."""
+    global _PROFILE
+    if _PROFILE is None:
+        _PROFILE = PARAMS['profile'].parse('~profile', rospy.get_param('~profile', 'paper'))
+    return _PROFILE
 
 
 def fleet(name):

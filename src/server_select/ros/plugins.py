@@ -15,7 +15,7 @@ import time
 import rospy
 
 from server_select.core.params import ParamError
-from server_select.ros.node import fleet
+from server_select.ros.routing import ServerEndpoint
 
 
 class TaskPlugin(object):
@@ -79,21 +79,19 @@ class PluginHandler(object):
     """A server's side of one plug-in task type: the tasks addressed to this server, each
     answered once (an error result when the plug-in rejects it)."""
 
-    def __init__(self, server_id, plugin, queue_size=100):
-        self.server_id, self.plugin, self.queue_size = server_id, plugin, queue_size
+    def __init__(self, server_id, plugin, queue_size=100, direct=False):
+        self.server_id, self.plugin = server_id, plugin
+        self.endpoint = ServerEndpoint(server_id, plugin, self.on_task, direct, queue_size)
         self._lock = threading.Lock()
         self.done = self.rejected = 0
 
     def start(self):
-        self.pub = rospy.Publisher(fleet(self.plugin.result_topic), self.plugin.result_type,
-                                   queue_size=self.queue_size)
-        self.sub = rospy.Subscriber(fleet(self.plugin.task_topic), self.plugin.task_type,
-                                    self.on_task, queue_size=self.queue_size, tcp_nodelay=True,
-                                    buff_size=1 << 24)
+        self.endpoint.start()
 
     def on_task(self, task):
+        """The result of a task addressed here (None: addressed elsewhere)."""
         if task.server_id != self.server_id:
-            return
+            return None
         result = self.plugin.result_type(header=task.header, robot_id=task.robot_id,
                                          task_id=task.task_id, server_id=self.server_id)
         start = time.perf_counter()
@@ -105,7 +103,7 @@ class PluginHandler(object):
             rospy.logerr('server %d: %s task %d of robot %d rejected: %s', self.server_id,
                          self.plugin.kind, task.task_id, task.robot_id, error)
         result.process_time = time.perf_counter() - start
-        self.pub.publish(result)
         with self._lock:
             self.done += result.ok
             self.rejected += not result.ok
+        return result

@@ -2,42 +2,91 @@
 
 import concurrent.futures
 import itertools
+import threading
 
 import rospy
 
 from server_select.core import names
-from server_select.msg import LatencySample
+from server_select.msg import LatencySample, LatencySamples
 from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
 
+class _Round(object):
+    """The samples of one probe round, published as one batch when the last one is in."""
+
+    def __init__(self, number, stamp, servers):
+        self.number, self.stamp = number, stamp
+        self.waiting = set(servers)
+        self.samples = []
+        self.lock = threading.Lock()
+
+    def record(self, server, ok, rtt):
+        """Add a sample; True when it completes the round."""
+        with self.lock:
+            self.samples.append((server, ok, rtt if ok else 0.0))
+            self.waiting.discard(server)
+            return not self.waiting
+
+
 class Prober(object):
     """Probes every server every ``1/rate`` s and publishes each sample, failed ones too.
 
-    Each server is probed from its own worker thread over a persistent connection, every
-    call bounded by ``timeout``; a server whose previous probe is still running gets a
-    failed sample instead of a second call. ``answered`` is the set of servers that have
-    answered at least once; ``on_sample(server, ok, rtt, error)`` hears every sample.
+    Each server is probed from a worker thread over a persistent connection, every call
+    bounded by ``timeout``; a server whose previous probe is still running gets a failed
+    sample instead of a second call. ``stream`` ``pair`` publishes each sample on
+    ``latency_R<r>S<s>`` (the paper); ``robot`` publishes one ``latency_samples`` batch per
+    round, when its last probe has ended. Servers can be added and removed at run time.
+    ``answered`` is the set of servers that have answered at least once;
+    ``on_sample(server, ok, rtt, error)`` hears every sample.
     """
 
-    def __init__(self, robot_id, servers, rate, timeout, on_sample=None):
+    def __init__(self, robot_id, servers, rate, timeout, on_sample=None, stream='pair'):
         self.robot_id = robot_id
-        self.servers = list(servers)
         self.rate = rate
         self.timeout = timeout
+        self.stream = stream
         self.answered = set()
         self.on_sample = on_sample or (lambda server, ok, rtt, error: None)
         self._seq = itertools.count(1)
+        self._rounds = itertools.count(1)
+        self._lock = threading.Lock()
         self._inflight = {}
-        self._pubs = dict((s, rospy.Publisher(fleet(names.sample_topic(robot_id, s)),
-                                              LatencySample, queue_size=10))
-                          for s in self.servers)
-        self._proxies = dict((s, TimedServiceProxy(fleet(names.probe_service(s)), LatencyProbe))
-                             for s in self.servers)
+        self._pubs, self._proxies = {}, {}
+        self._batch_pub = rospy.Publisher(fleet(names.SAMPLES_TOPIC), LatencySamples,
+                                          queue_size=10) if stream == 'robot' else None
         self._pool = concurrent.futures.ThreadPoolExecutor(
-            max_workers=len(self.servers), thread_name_prefix='probe')
+            max_workers=max(16, len(servers)), thread_name_prefix='probe')
         self._timer = None
+        for server in servers:
+            self.add(server)
+
+    @property
+    def servers(self):
+        with self._lock:
+            return sorted(self._proxies)
+
+    def add(self, server):
+        with self._lock:
+            if server in self._proxies:
+                return
+            if self.stream == 'pair':
+                self._pubs[server] = rospy.Publisher(
+                    fleet(names.sample_topic(self.robot_id, server)), LatencySample,
+                    queue_size=10)
+            self._proxies[server] = TimedServiceProxy(fleet(names.probe_service(server)),
+                                                      LatencyProbe)
+
+    def remove(self, server):
+        with self._lock:
+            proxy = self._proxies.pop(server, None)
+            pub = self._pubs.pop(server, None)
+            self.answered.discard(server)
+        if proxy is not None:
+            proxy.close()
+        if pub is not None:
+            pub.unregister()
 
     def start(self):
         self._timer = rospy.Timer(rospy.Duration(1.0 / self.rate), self.on_timer)
@@ -45,44 +94,65 @@ class Prober(object):
     def on_timer(self, _event):
         if rospy.is_shutdown():
             return
-        for server in self.servers:
+        servers = self.servers
+        stamp = rospy.Time.now()
+        batch = _Round(next(self._rounds), stamp, servers) if self._batch_pub else None
+        for server in servers:
             previous = self._inflight.get(server)
             if previous is not None and not previous.done():
-                self._publish(server, next(self._seq), rospy.Time.now(), None,
-                              'previous probe still in progress')
+                self._publish(server, next(self._seq), stamp, None,
+                              'previous probe still in progress', batch)
                 continue
             try:
-                self._inflight[server] = self._pool.submit(self._probe, server, next(self._seq))
+                self._inflight[server] = self._pool.submit(self._probe, server,
+                                                           next(self._seq), batch)
             except RuntimeError:  # pool shut down: the node is stopping
                 return
 
-    def _probe(self, server, seq):
+    def _probe(self, server, seq, batch):
         stamp = rospy.Time.now()
         request = LatencyProbeRequest(robot_id=self.robot_id, seq=seq, stamp=stamp)
+        proxy = self._proxies.get(server)
+        if proxy is None:       # removed meanwhile
+            self._publish(server, seq, stamp, None, 'server left the fleet', batch)
+            return
         try:
-            response, rtt = self._proxies[server].call_within(request, self.timeout)
+            response, rtt = proxy.call_within(request, self.timeout)
         except rospy.ServiceException as error:
-            self._publish(server, seq, stamp, None, str(error))
+            self._publish(server, seq, stamp, None, str(error), batch)
             return
         if response.server_id != server or response.seq != seq:
             self._publish(server, seq, stamp, None, 'answer from server %d seq %d'
-                          % (response.server_id, response.seq))
+                          % (response.server_id, response.seq), batch)
             return
-        self._publish(server, seq, stamp, rtt, '')
         self.answered.add(server)
+        self._publish(server, seq, stamp, rtt, '', batch)
 
-    def _publish(self, server, seq, stamp, rtt, error):
-        sample = LatencySample(robot_id=self.robot_id, server_id=server, seq=seq,
-                               ok=rtt is not None, rtt=rtt or 0.0, error=error)
-        sample.header.stamp = stamp
+    def _publish(self, server, seq, stamp, rtt, error, batch):
         if error:
             rospy.logdebug('robot %d: probe of server %d failed: %s', self.robot_id, server, error)
-        self._pubs[server].publish(sample)
+        pub = self._pubs.get(server)
+        if pub is not None:
+            sample = LatencySample(robot_id=self.robot_id, server_id=server, seq=seq,
+                                   ok=rtt is not None, rtt=rtt or 0.0, error=error)
+            sample.header.stamp = stamp
+            pub.publish(sample)
         self.on_sample(server, not error, rtt, error)
+        if batch is not None and batch.record(server, not error, rtt):
+            self._publish_round(batch)
+
+    def _publish_round(self, batch):
+        servers, oks, rtts = zip(*sorted(batch.samples)) if batch.samples else ((), (), ())
+        msg = LatencySamples(robot_id=self.robot_id, round=batch.number, server_id=servers,
+                             ok=oks, rtt=rtts)
+        msg.header.stamp = batch.stamp
+        self._batch_pub.publish(msg)
 
     def shutdown(self):
         if self._timer is not None:
             self._timer.shutdown()
         self._pool.shutdown(wait=False)
-        for proxy in self._proxies.values():
+        with self._lock:
+            proxies = list(self._proxies.values())
+        for proxy in proxies:
             proxy.close()

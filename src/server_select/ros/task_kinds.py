@@ -13,10 +13,15 @@ from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Header
 
 from server_select.core import names
+from server_select.core.params import ParamError
 from server_select.core.sort_task import check_sorted, fingerprint, make_values, sort_values
 from server_select.msg import ImageResult, ImageTask, SortResult, SortTask
+from server_select.ros.camera import TopicSource
+from server_select.ros.search import SearchParticipant
 from server_select.vision import image_codec
-from server_select.vision.detection import search_frame
+from server_select.vision.detection import DetectorError, make_detector, search_frame
+from server_select.vision.image_source import SourceError, open_source
+from server_select.vision.search import SearchError
 
 
 class SortKind(object):
@@ -102,3 +107,27 @@ class ImageKind(object):
             self.search.found_in(task_id, [(b.x, b.y, b.width, b.height, b.label)
                                            for b in boxes])
         return None
+
+
+def image_kind(robot_id, mode, param):
+    """The camera stream the parameters describe (``param(name)`` reads one): a topic
+    (``~image_topic``) or a source (``~image_source``); ParamError when they are wrong."""
+    if param('image_source') and param('image_topic'):
+        raise ParamError('~image_source and ~image_topic: set one of them, not both')
+    if param('image_topic'):
+        source = TopicSource(param('image_topic'), param('max_image_pixels'))
+    else:
+        try:
+            source = open_source(param('image_source'), param('robot_index'),
+                                 param('robot_count'), param('speed'))
+        except (SourceError, SearchError, OSError) as error:
+            raise ParamError('~image_source: %s' % error)
+    detector = None
+    if mode == 'local':
+        try:
+            detector = make_detector(param)
+        except DetectorError as error:
+            raise ParamError('~detector/~cascade: %s' % error)
+    search = SearchParticipant(robot_id, param('merge_radius'), getattr(source, 'world', None))
+    return ImageKind(robot_id, source, param('image_encoding'), search, detector,
+                     param('max_image_pixels'), param('image_transport'), param('jpeg_quality'))

@@ -15,6 +15,7 @@ from server_select.core.task_flow import RETRIED, TaskFlow
 from server_select.msg import TaskReport
 from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet
+from server_select.ros.routing import BroadcastRoute
 
 
 class TaskStream(object):
@@ -27,7 +28,7 @@ class TaskStream(object):
     """
 
     def __init__(self, robot_id, kind, rate, limit, ready, flow_args, local=False,
-                 expected_publisher=None):
+                 expected_publisher=None, route=BroadcastRoute):
         self.robot_id, self.kind, self.rate, self.limit = robot_id, kind, rate, limit
         self.ready, self.local = ready, local
         self.expected_publisher = expected_publisher
@@ -35,24 +36,24 @@ class TaskStream(object):
         self.flow = TaskFlow(kind.kind, make=kind.make, publish=self._publish_task,
                              check=kind.check, report=self._report, run_local=kind.run_local,
                              clock=time.monotonic, **flow_args)
-        self.task_pub = self.result_sub = self.report_pub = None
+        self.route = None if local else route(robot_id, kind, self.on_result)
+        self.report_pub = None
         self.timers = []
 
     def start(self):
         self.report_pub = rospy.Publisher(fleet(names.TASK_REPORT_TOPIC), TaskReport,
                                           queue_size=100)
-        if not self.local:
-            self.task_pub = rospy.Publisher(fleet(self.kind.task_topic), self.kind.task_type,
-                                            queue_size=100)
-            self.result_sub = rospy.Subscriber(
-                fleet(self.kind.result_topic), self.kind.result_type, self.on_result,
-                queue_size=100, tcp_nodelay=True, buff_size=1 << 24)
+        if self.route is not None:
+            self.route.start()
         self.timers = [rospy.Timer(rospy.Duration(1.0 / self.rate), self.on_timer),
                        rospy.Timer(rospy.Duration(0.02), lambda _e: self.flow.tick())]
 
     def wired(self):
-        return self.local or (self.task_pub.get_num_connections() > 0
-                              and self.result_sub.get_num_connections() > 0)
+        """Whether the first candidate's task topic and our result topic are connected."""
+        if self.route is None:
+            return True
+        candidates = self.flow.candidates()
+        return bool(candidates) and self.route.wired(candidates[0])
 
     def on_timer(self, _event):
         if rospy.is_shutdown() or (self.limit and self.flow.sent >= self.limit):
@@ -73,7 +74,7 @@ class TaskStream(object):
 
     def _publish_task(self, request, server):
         request.server_id = server
-        self.task_pub.publish(request)
+        self.route.publish(request, server)
 
     def on_result(self, result):
         if result.robot_id != self.robot_id:
@@ -127,6 +128,16 @@ class TaskStream(object):
             ', %d results ignored' % ignored if ignored else '',
             format_ms(summarize(list(flow.rtts)), ('median', 'p99', 'max')))
 
+    def add_server(self, server):
+        if self.route is not None:
+            self.route.add(server)
+
+    def remove_server(self, server):
+        if self.route is not None:
+            self.route.remove(server)
+
     def shutdown(self):
         for timer in self.timers:
             timer.shutdown()
+        if self.route is not None:
+            self.route.shutdown()

@@ -1,0 +1,92 @@
+"""The manager's rankings of every robot's servers, kept at O(1) per sample (no rospy).
+
+Which robots and servers take part is either fixed (``robots`` / ``servers`` lists, the
+paper) or learned from the samples themselves (empty lists, the fleet profile): a robot
+takes part from its first sample, a server from the first sample of it, and a server
+drops out of a robot's ranking once the window holds no sample of it at all (it has left:
+no probe of it, good or failed, for a whole window).
+
+A sample can change a robot's flag only if it concerns the selected server, a server
+that enters or leaves the ranking, or a server whose mean falls below the selected one's;
+:meth:`FleetRankings.add` says so in O(1), and only then need the robot be ranked again.
+"""
+
+import threading
+
+from server_select.core.ranking import NO_SERVER, rank_servers
+from server_select.core.window import LatencyWindow
+
+
+class FleetRankings(object):
+    """Samples in, :class:`~server_select.core.ranking.Ranking` per robot out. Thread-safe."""
+
+    def __init__(self, window, robots=(), servers=()):
+        self.window = LatencyWindow(window)
+        self.fixed_robots = list(robots)          # empty: learned
+        self.fixed_servers = list(servers)        # empty: learned
+        self._lock = threading.Lock()
+        self._servers = {}                        # robot -> set of servers heard for it
+        self._selected = {}                       # robot -> server its last flag selected
+
+    def admits_robot(self, robot):
+        """Why samples of ``robot`` are not taken (or None)."""
+        if self.fixed_robots and robot not in self.fixed_robots:
+            return 'robot %d is not one of ~robots %s' % (robot, self.fixed_robots)
+        return None
+
+    def admits(self, robot, server):
+        """Why a sample of (``robot``, ``server``) is not taken (or None)."""
+        if self.admits_robot(robot):
+            return self.admits_robot(robot)
+        if self.fixed_servers and server not in self.fixed_servers:
+            return 'server %d is not one of ~servers %s' % (server, self.fixed_servers)
+        return None
+
+    def add(self, robot, server, now, ok, rtt):
+        """Record a sample (ValueError for an impossible round trip); True when ``robot``'s
+        flag may change because of it."""
+        before = self.window.stats(robot, server, now).mean is not None
+        self.window.add(robot, server, now, ok, rtt)
+        mean = self.window.stats(robot, server, now).mean
+        with self._lock:
+            heard = self._servers.setdefault(robot, set())
+            new = server not in heard
+            heard.add(server)
+            selected = self._selected.get(robot, NO_SERVER)
+        if new or server == selected or before != (mean is not None):
+            return True
+        if mean is None:
+            return False
+        best = self.window.stats(robot, selected, now).mean if selected != NO_SERVER else None
+        return best is None or mean < best
+
+    def robots(self):
+        """The robots that take part (those heard from, or the fixed list)."""
+        with self._lock:
+            return list(self.fixed_robots) or sorted(self._servers)
+
+    def heard(self, robot):
+        with self._lock:
+            return robot in self._servers
+
+    def servers(self, robot, now):
+        """``robot``'s servers: the fixed list, or those with a sample in the window."""
+        if self.fixed_servers:
+            return list(self.fixed_servers)
+        with self._lock:
+            heard = sorted(self._servers.get(robot, ()))
+        kept = [s for s in heard if any(self.window.stats(robot, s, now)[1:])]
+        if len(kept) < len(heard):
+            with self._lock:
+                self._servers[robot] = set(kept) | (self._servers.get(robot, set())
+                                                    - set(heard))
+        return kept
+
+    def rank(self, robot, now):
+        """``robot``'s ranking now (paper rule: mean, stable sort, ties to the lower id)."""
+        return rank_servers(self.window.robot_stats(robot, self.servers(robot, now), now))
+
+    def selected(self, robot, server):
+        """Note the server ``robot``'s last flag selected."""
+        with self._lock:
+            self._selected[robot] = server

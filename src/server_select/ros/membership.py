@@ -1,0 +1,92 @@
+"""Servers that come and go at run time (fleet profile).
+
+The master already knows every server: each hosts a ``latency_S<s>`` probe service. The
+manager looks there every ``~discovery_period`` s (one master call per period for the
+whole fleet, rather than one per robot) and publishes the ids, latched, on
+``fleet_servers`` when they change; robots with ``~discover`` probe what it lists on top
+of their static ``~servers``. A server that shuts down unregisters its service and is
+dropped from the list; one that dies without unregistering is dropped by the robots'
+health (failed probes) and leaves the manager's rankings when its window is empty.
+"""
+
+import threading
+
+import rosgraph
+import rospy
+
+from server_select.core import names
+from server_select.msg import FleetServers
+from server_select.ros.graph import publisher_of
+from server_select.ros.node import fleet
+
+
+class ServerDiscovery(object):
+    """Manager side: the probe services in the master, published on ``fleet_servers``."""
+
+    def __init__(self, period, system_state=None):
+        self.period = period
+        self._system_state = system_state or (
+            lambda: rosgraph.Master(rospy.get_name()).getSystemState())
+        self.servers = None
+        self.pub = self.timer = None
+
+    def start(self):
+        self.pub = rospy.Publisher(fleet(names.SERVERS_TOPIC), FleetServers, queue_size=1,
+                                   latch=True)
+        self.look()
+        self.timer = rospy.Timer(rospy.Duration(self.period), self.look)
+
+    def look(self, _event=None):
+        try:
+            _, _, services = self._system_state()
+        except (rosgraph.MasterError, OSError) as error:
+            rospy.logwarn_throttle(30.0, 'manager: cannot list the servers in the master: %s'
+                                   % error)
+            return
+        ns = fleet('')
+        found = sorted(s for s in (names.probe_server_id(name, ns) for name, nodes in services
+                                   if nodes) if s is not None)
+        if found != self.servers:
+            if self.servers is not None:
+                rospy.loginfo('manager: servers in the fleet now %s (joined %s, left %s)',
+                              found, sorted(set(found) - set(self.servers)),
+                              sorted(set(self.servers) - set(found)))
+            self.servers = found
+            msg = FleetServers(servers=found)
+            msg.header.stamp = rospy.Time.now()
+            self.pub.publish(msg)
+
+    def shutdown(self):
+        if self.timer is not None:
+            self.timer.shutdown()
+
+
+class ServerAnnouncements(object):
+    """Robot side: ``on_change(added, removed)`` when the announced list changes. Servers
+    in ``static`` are never removed. Only announcements of ``manager_node`` count."""
+
+    def __init__(self, static, on_change, manager_node, robot_id):
+        self.static = set(static)
+        self.known = set(static)
+        self.on_change, self.manager_node, self.robot_id = on_change, manager_node, robot_id
+        self._lock = threading.Lock()
+        self.sub = None
+
+    def start(self):
+        self.sub = rospy.Subscriber(fleet(names.SERVERS_TOPIC), FleetServers, self.on_servers,
+                                    queue_size=10)
+
+    def on_servers(self, msg):
+        sender = publisher_of(msg)
+        if self.manager_node is not None and sender != self.manager_node:
+            rospy.logwarn_throttle(5.0, 'robot %d: ignored a server list published by %s '
+                                   '(the manager is %s)' % (self.robot_id, sender,
+                                                            self.manager_node))
+            return
+        with self._lock:
+            wanted = self.static | set(msg.servers)
+            added, removed = sorted(wanted - self.known), sorted(self.known - wanted)
+            self.known = wanted
+        if added or removed:
+            rospy.loginfo('robot %d: servers joined %s, left %s', self.robot_id, added, removed)
+            self.on_change(added, removed)

@@ -1,0 +1,165 @@
+"""How tasks reach servers and results reach robots: broadcast (the paper) or direct.
+
+``broadcast``: every task of a kind on one fleet topic (``data``), which every server
+receives and all but the addressed one drop; every result on one topic (``processed_data``)
+that every robot receives. ``direct`` (fleet profile): a task on the addressed server's own
+topic (``server_<s>/data``), its result on the sending robot's own topic
+(``robot_<r>/processed_data``), so bytes on each link do not grow with the number of
+servers or robots.
+"""
+
+import threading
+import time
+
+import rospy
+
+from server_select.core import names
+from server_select.ros.node import fleet
+
+
+class BroadcastRoute(object):
+    """Robot side, paper layout: one task topic, one result topic per task kind."""
+
+    def __init__(self, robot_id, kind, on_result):
+        self.kind, self.on_result = kind, on_result
+        self.pub = self.sub = None
+
+    def start(self):
+        self.pub = rospy.Publisher(fleet(self.kind.task_topic), self.kind.task_type,
+                                   queue_size=100)
+        self.sub = _results(fleet(self.kind.result_topic), self.kind, self.on_result)
+
+    def publish(self, request, _server):
+        self.pub.publish(request)
+
+    def wired(self, _server):
+        return self.pub.get_num_connections() > 0 and self.sub.get_num_connections() > 0
+
+    def add(self, server):
+        pass
+
+    def remove(self, server):
+        pass
+
+    def shutdown(self):
+        for endpoint in (self.pub, self.sub):
+            if endpoint is not None:
+                endpoint.unregister()
+
+
+class DirectRoute(object):
+    """Robot side, fleet layout: a task publisher per server, one result topic of its own."""
+
+    def __init__(self, robot_id, kind, on_result):
+        self.robot_id, self.kind, self.on_result = robot_id, kind, on_result
+        self._lock = threading.Lock()
+        self.pubs = {}
+        self.sub = None
+
+    def start(self):
+        self.sub = _results(fleet(names.robot_topic(self.robot_id, self.kind.result_topic)),
+                            self.kind, self.on_result)
+
+    def _pub(self, server):
+        with self._lock:
+            pub = self.pubs.get(server)
+            if pub is None:
+                pub = self.pubs[server] = rospy.Publisher(
+                    fleet(names.server_topic(server, self.kind.task_topic)),
+                    self.kind.task_type, queue_size=100)
+            return pub
+
+    def publish(self, request, server):
+        self._pub(server).publish(request)
+
+    def wired(self, server):
+        # The server makes our result publisher at our first task and waits for us to
+        # connect (ResultRoutes), so only the task side can be checked beforehand.
+        return self._pub(server).get_num_connections() > 0
+
+    def add(self, server):
+        self._pub(server)
+
+    def remove(self, server):
+        with self._lock:
+            pub = self.pubs.pop(server, None)
+        if pub is not None:
+            pub.unregister()
+
+    def shutdown(self):
+        with self._lock:
+            pubs, self.pubs = list(self.pubs.values()), {}
+        for endpoint in pubs + [self.sub]:
+            if endpoint is not None:
+                endpoint.unregister()
+
+
+ROUTES = {'broadcast': BroadcastRoute, 'direct': DirectRoute}
+
+
+def _results(topic, kind, callback):
+    return rospy.Subscriber(topic, kind.result_type, callback, queue_size=100,
+                            tcp_nodelay=True, buff_size=1 << 24)
+
+
+class ResultRoutes(object):
+    """Server side of direct routing: one result publisher per robot, made at its first task.
+
+    A fresh publisher has no subscriber yet (the robot connects once the master tells it),
+    so the first result waits up to ``connect_wait`` s for the connection instead of being
+    lost; later ones go at once.
+    """
+
+    def __init__(self, topic, msg_type, connect_wait=1.0):
+        self.topic, self.msg_type, self.connect_wait = topic, msg_type, connect_wait
+        self._lock = threading.Lock()
+        self.pubs = {}
+
+    def publish(self, robot, result):
+        with self._lock:
+            pub = self.pubs.get(robot)
+            fresh = pub is None
+            if fresh:
+                pub = self.pubs[robot] = rospy.Publisher(
+                    fleet(names.robot_topic(robot, self.topic)), self.msg_type, queue_size=100)
+        if fresh or not pub.get_num_connections():
+            end = time.monotonic() + self.connect_wait
+            while not pub.get_num_connections() and time.monotonic() < end \
+                    and not rospy.is_shutdown():
+                time.sleep(0.005)
+        pub.publish(result)
+
+
+class ServerEndpoint(object):
+    """Server side of one task kind: tasks from the broadcast topic and, with ``direct``,
+    from this server's own topic too; each result goes back the way its task came.
+    ``handle(task)`` returns the result, or None for a task addressed to another server."""
+
+    def __init__(self, server_id, kind, handle, direct, queue_size=100):
+        self.server_id, self.kind, self.handle = server_id, kind, handle
+        self.direct = ResultRoutes(kind.result_topic, kind.result_type) if direct else None
+        self.queue_size = queue_size
+        self.pub, self.subs = None, []
+
+    def start(self):
+        kind, queue = self.kind, self.queue_size
+        self.pub = rospy.Publisher(fleet(kind.result_topic), kind.result_type, queue_size=queue)
+        topics = [(fleet(kind.task_topic), False)]
+        if self.direct is not None:
+            topics.append((fleet(names.server_topic(self.server_id, kind.task_topic)), True))
+        self.subs = [rospy.Subscriber(topic, kind.task_type, self.on_task, callback_args=direct,
+                                      queue_size=queue, tcp_nodelay=True, buff_size=1 << 24)
+                     for topic, direct in topics]
+
+    def on_task(self, task, direct):
+        result = self.handle(task)
+        if result is None:
+            return
+        if direct:
+            self.direct.publish(task.robot_id, result)
+        else:
+            self.pub.publish(result)
+
+    @property
+    def topics(self):
+        return [sub.resolved_name for sub in self.subs]
