@@ -1,5 +1,7 @@
 """Manager: ranks each robot's servers by mean probe latency and publishes the choice."""
 
+import threading
+
 import rospy
 
 from server_select.core import names
@@ -68,6 +70,7 @@ class ManagerNode(object):
             raise ParamError('~robot_node: %r is not a node name with {id}: %s'
                              % (pattern, error))
         self._robot_nodes = {}
+        self._update_lock = threading.Lock()
         self.discovery = ServerDiscovery(param('discovery_period')) if param('discover') \
             else None
         self.flags = FlagPublisher('manager', max(100, 4 * len(self.rankings.fixed_robots)))
@@ -156,11 +159,15 @@ class ManagerNode(object):
                 self.update(robot, only_on_change)
 
     def update(self, robot, only_on_change):
-        """Rank ``robot``'s servers now; publish unless unchanged and ``only_on_change``."""
-        ranking = self.rankings.rank(robot, rospy.get_time())
-        if self.flags.offer(robot, ranking, only_on_change,
-                            lambda previous: choose(ranking, previous, self.hysteresis)):
-            self.rankings.selected(robot, self.flags.selected(robot))
+        """Rank ``robot``'s servers now; publish unless unchanged and ``only_on_change``.
+
+        One update at a time: samples arrive on many threads, and a ranking computed
+        before another thread's sample must not be published after the newer one."""
+        with self._update_lock:
+            ranking = self.rankings.rank(robot, rospy.get_time())
+            if self.flags.offer(robot, ranking, only_on_change,
+                                lambda previous: choose(ranking, previous, self.hysteresis)):
+                self.rankings.selected(robot, self.flags.selected(robot))
 
 
 def main():

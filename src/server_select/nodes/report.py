@@ -7,7 +7,7 @@ import rospy
 from server_select.core import names
 from server_select.core.params import parse_id_list
 from server_select.core.report import RunReport
-from server_select.msg import LatencySample, SelectionFlag, TaskReport
+from server_select.msg import LatencySample, LatencySamples, SelectionFlag, TaskReport
 from server_select.ros.node import end_parent_launch, fleet, param, run
 
 
@@ -27,6 +27,7 @@ class ReportNode(object):
         - ``server_select_flag`` (server_select/SelectionFlag)
         - ``task_report`` (server_select/TaskReport)
         - ``latency_R<r>S<s>`` (server_select/LatencySample), with ``~robots``/``~servers``
+        - ``latency_samples`` (server_select/LatencySamples): the fleet profile's batches
     """
 
     def __init__(self):
@@ -43,6 +44,8 @@ class ReportNode(object):
             rospy.Subscriber(fleet(names.sample_topic(r, s)), LatencySample, self.on_probe,
                              queue_size=100)
             for r in param('robots', **optional) for s in param('servers', **optional)]
+        self.probe_subs.append(rospy.Subscriber(fleet(names.SAMPLES_TOPIC), LatencySamples,
+                                                self.on_probes, queue_size=100))
         self.timer = rospy.Timer(rospy.Duration(duration), self.finish, oneshot=True)
         rospy.loginfo('report: listening for %.3g s', duration)
 
@@ -51,6 +54,10 @@ class ReportNode(object):
 
     def on_probe(self, sample):
         self.report.add_probe(sample.robot_id, sample.server_id, sample.ok, sample.rtt)
+
+    def on_probes(self, batch):
+        for server, ok, rtt in zip(batch.server_id, batch.ok, batch.rtt):
+            self.report.add_probe(batch.robot_id, server, ok, rtt)
 
     def on_task(self, report):
         self.report.add_task(report.robot_id, report.ok, report.rtt, report.answered_by,
