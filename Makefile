@@ -21,6 +21,7 @@ DEMO_DURATION ?= 30
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate bench bench-emulator bench-memory \
+  bench-scale bench-routing \
   test unit-test testbed-test fault-test catkin-test rostest lint clean
 all: build
 
@@ -93,6 +94,14 @@ bench: build
 # RSS of every demo node over 10 minutes at 20 sort tasks/s per robot.
 bench-memory: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.memory --out results/bench
+
+# The manager against simulated robots, per pair and per robot, 2x3 to 500x100 (~12 min).
+bench-scale: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.scale --out results/bench
+
+# Bytes per task on the testbed, broadcast vs direct routing, 2-8 servers (root, ~8 min).
+bench-routing: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.routing_bytes --out results/bench
 
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build

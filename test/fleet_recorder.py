@@ -15,21 +15,37 @@ Received = collections.namedtuple('Received', 'time msg')
 
 
 class FleetRecorder(object):
-    """Every flag, task, result and task report, with its (monotonic) receive time."""
+    """Every flag, task, result and task report, with its (monotonic) receive time.
 
-    def __init__(self):
+    With direct routing (``robots`` and ``servers`` given), tasks are recorded from every
+    server's own topic and results from every robot's own topic; what still arrives on
+    the broadcast topics is kept apart, in ``broadcast``.
+    """
+
+    def __init__(self, robots=(), servers=()):
         self.lock = threading.Lock()
         self.flags, self.tasks, self.results, self.reports = [], [], [], []
+        self.broadcast = []
+        direct = bool(robots and servers)
         self.subs = [
             rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self._add, 'flags',
                              tcp_nodelay=True, queue_size=1000),
-            rospy.Subscriber(names.SORT_TASK_TOPIC, numpy_msg(SortTask), self._add, 'tasks',
-                             tcp_nodelay=True, queue_size=1000),
+            rospy.Subscriber(names.SORT_TASK_TOPIC, numpy_msg(SortTask), self._add,
+                             'broadcast' if direct else 'tasks', tcp_nodelay=True,
+                             queue_size=1000),
             rospy.Subscriber(names.SORT_RESULT_TOPIC, numpy_msg(SortResult), self._add,
-                             'results', tcp_nodelay=True, queue_size=1000),
+                             'broadcast' if direct else 'results', tcp_nodelay=True,
+                             queue_size=1000),
             rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, self._add, 'reports',
                              tcp_nodelay=True, queue_size=1000),
         ]
+        if direct:
+            self.subs += [rospy.Subscriber(names.server_topic(s, names.SORT_TASK_TOPIC),
+                                           numpy_msg(SortTask), self._add, 'tasks',
+                                           tcp_nodelay=True, queue_size=1000) for s in servers]
+            self.subs += [rospy.Subscriber(names.robot_topic(r, names.SORT_RESULT_TOPIC),
+                                           numpy_msg(SortResult), self._add, 'results',
+                                           tcp_nodelay=True, queue_size=1000) for r in robots]
 
     def _add(self, msg, store):
         with self.lock:

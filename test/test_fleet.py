@@ -2,7 +2,8 @@
 """Integration test of a running fleet (demo.launch): selection, probing, task delivery.
 
 Parameters (private): ``robots``, ``servers`` (id lists), ``tasks`` (per robot), ``mode``
-(``select`` or ``fixed``), ``fixed_server``, ``timeout`` (s to wait for all tasks).
+(``select`` or ``fixed``), ``fixed_server``, ``timeout`` (s to wait for all tasks),
+``routing`` (``broadcast`` or ``direct``: the fleet profile).
 """
 
 import collections
@@ -32,7 +33,8 @@ class FleetTest(unittest.TestCase):
         cls.mode = rospy.get_param('~mode', 'select')
         cls.fixed_server = int(rospy.get_param('~fixed_server', 1))
         cls.timeout = float(rospy.get_param('~timeout', 60.0))
-        cls.rec = FleetRecorder()
+        cls.direct = rospy.get_param('~routing', 'broadcast') == 'direct'
+        cls.rec = FleetRecorder(cls.robots, cls.servers) if cls.direct else FleetRecorder()
 
     def test_every_robot_selects_a_live_server(self):
         if self.mode == 'fixed':   # no manager runs: no flag names a server the robots do not use
@@ -117,6 +119,8 @@ class FleetTest(unittest.TestCase):
                 self.assertLess(report.rtt, 2.0)
         if self.mode == 'fixed':
             self.assertEqual(set(r.msg.server_id for r in results), {self.fixed_server})
+        if self.direct:     # nothing went on the broadcast topics
+            self.assertEqual(self.rec.snapshot(self.rec.broadcast), [])
 
 
 if __name__ == '__main__':

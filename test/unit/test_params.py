@@ -1,7 +1,9 @@
 import pytest
 
+from server_select.core import names
 from server_select.core.params import (ParamError, parse_fixed_server, parse_id, parse_id_list,
-                                       parse_mode, parse_non_negative, parse_positive)
+                                       parse_members, parse_mode, parse_non_negative,
+                                       parse_positive)
 
 
 @pytest.mark.parametrize('value, expected', [
@@ -70,3 +72,26 @@ def test_fixed_server_must_be_listed():
     with pytest.raises(ParamError):
         parse_fixed_server('~fixed_server', '', [1, 2, 3], 'fixed')
     assert parse_fixed_server('~fixed_server', '', [1, 2, 3], 'select') is None
+
+
+@pytest.mark.parametrize('value, expected', [('', []), ([], []), ('[]', []), (' ', []),
+                                             ('3,1', [3, 1]), ([2], [2])])
+def test_member_lists_may_be_empty(value, expected):
+    assert parse_members('~servers', value) == expected
+
+
+def test_member_lists_refuse_what_id_lists_refuse():
+    with pytest.raises(ParamError, match='duplicate'):
+        parse_members('~servers', '1,1')
+
+
+@pytest.mark.parametrize('service, expected', [
+    ('/latency_S3', 3), ('/latency_S12', 12), ('/fleet/latency_S3', None),
+    ('/latency_S', None), ('/latency_S03', None), ('/latency_S3x', None), ('/other', None)])
+def test_probe_services_name_their_server(service, expected):
+    assert names.probe_server_id(service, '/') == expected
+
+
+def test_probe_services_in_a_fleet_namespace():
+    assert names.probe_server_id('/fleet/latency_S4', '/fleet/') == 4
+    assert names.probe_server_id('/latency_S4', '/fleet/') is None

@@ -100,3 +100,26 @@ def test_shipped_scenarios_load(tmp_path):
     bad.write_text('hosts: [1, 2')
     with pytest.raises(ScenarioError, match='bad.yaml'):
         Scenario.load(str(bad))
+
+
+def test_servers_that_start_late_or_stop_are_not_ranked_meanwhile():
+    hosts = dict(HOSTS, s2={'role': 'server', 'id': 2, 'start': 10, 'stop': 30})
+    s = scenario({'r1 s2': [{'at': 0, 'delay': 0.5}]}, hosts=hosts)
+    assert s.hosts['s2'].start == 10.0 and s.hosts['s2'].stop == 30.0
+    assert s.hosts['s1'].start == 0.0 and s.hosts['s1'].stop is None
+    assert [s.nearest_server(1, t) for t in (5, 10, 29.9, 30)] == [1, 2, 2, 1]
+    assert s.ranking(1, 5) == ([(1.0, 1)], [2])
+
+
+@pytest.mark.parametrize('spec, message', [
+    ({'role': 'server', 'id': 2, 'start': 10, 'stop': 5}, 'stop'),
+    ({'role': 'server', 'id': 2, 'start': -1}, 'start'),
+    ({'role': 'server', 'id': 2, 'stop': 'later'}, 'stop')])
+def test_bad_start_and_stop_times(spec, message):
+    with pytest.raises(ScenarioError, match=message):
+        scenario(hosts=dict(HOSTS, s2=spec))
+
+
+def test_the_manager_runs_throughout():
+    with pytest.raises(ScenarioError, match='whole scenario'):
+        scenario(hosts=dict(HOSTS, m={'role': 'manager', 'stop': 5}))

@@ -24,41 +24,50 @@ class FleetRankings(object):
         self.window = LatencyWindow(window)
         self.fixed_robots = list(robots)          # empty: learned
         self.fixed_servers = list(servers)        # empty: learned
+        self._robot_set, self._server_set = set(robots), set(servers)
         self._lock = threading.Lock()
         self._servers = {}                        # robot -> set of servers heard for it
         self._selected = {}                       # robot -> server its last flag selected
 
     def admits_robot(self, robot):
         """Why samples of ``robot`` are not taken (or None)."""
-        if self.fixed_robots and robot not in self.fixed_robots:
+        if self._robot_set and robot not in self._robot_set:
             return 'robot %d is not one of ~robots %s' % (robot, self.fixed_robots)
         return None
 
     def admits(self, robot, server):
         """Why a sample of (``robot``, ``server``) is not taken (or None)."""
-        if self.admits_robot(robot):
+        if self._robot_set and robot not in self._robot_set:
             return self.admits_robot(robot)
-        if self.fixed_servers and server not in self.fixed_servers:
+        if self._server_set and server not in self._server_set:
             return 'server %d is not one of ~servers %s' % (server, self.fixed_servers)
         return None
 
     def add(self, robot, server, now, ok, rtt):
         """Record a sample (ValueError for an impossible round trip); True when ``robot``'s
         flag may change because of it."""
-        before = self.window.stats(robot, server, now).mean is not None
-        self.window.add(robot, server, now, ok, rtt)
-        mean = self.window.stats(robot, server, now).mean
+        had_mean, stats = self.window.add(robot, server, now, ok, rtt)
         with self._lock:
-            heard = self._servers.setdefault(robot, set())
+            heard = self._servers.get(robot)
+            if heard is None:
+                heard = self._servers[robot] = set()
             new = server not in heard
-            heard.add(server)
+            if new:
+                heard.add(server)
             selected = self._selected.get(robot, NO_SERVER)
-        if new or server == selected or before != (mean is not None):
+        if new or server == selected or had_mean != (stats.mean is not None):
             return True
-        if mean is None:
+        if stats.mean is None:
             return False
         best = self.window.stats(robot, selected, now).mean if selected != NO_SERVER else None
-        return best is None or mean < best
+        return best is None or stats.mean < best
+
+    def selected_left(self, robot, now):
+        """Whether the server ``robot``'s last flag selected has no good sample left (O(1):
+        what the periodic check looks at between full re-rankings)."""
+        with self._lock:
+            selected = self._selected.get(robot, NO_SERVER)
+        return selected != NO_SERVER and self.window.stats(robot, selected, now).mean is None
 
     def robots(self):
         """The robots that take part (those heard from, or the fixed list)."""

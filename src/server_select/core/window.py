@@ -62,15 +62,18 @@ class LatencyWindow(object):
 
     def add(self, robot_id, server_id, now, ok, rtt):
         """Record one sample; failed samples carry no latency. A successful sample whose
-        ``rtt`` is not a finite number >= 0 raises ValueError (and is not recorded)."""
+        ``rtt`` is not a finite number >= 0 raises ValueError (and is not recorded).
+        Returns whether the pair had a mean before, and its :class:`PairStats` after."""
         if ok and not valid_rtt(rtt):
             raise ValueError('round trip %r is not a finite number >= 0' % (rtt,))
         with self._lock:
             pair = self._pairs.get((robot_id, server_id))
             if pair is None:
                 pair = self._pairs[(robot_id, server_id)] = _Pair()
-            pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')))
             pair.prune(now - self.window)
+            had_mean = pair.ok_count > 0
+            pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')))
+            return had_mean, pair.stats()
 
     def stats(self, robot_id, server_id, now):
         """Mean round trip of the successful samples in the window (None when none)."""

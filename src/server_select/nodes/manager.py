@@ -24,8 +24,9 @@ class ManagerNode(object):
     without a successful sample excluded) and publishes one ``server_select_flag`` per
     robot every ``1/~publish_rate`` s, and at once when a robot's selected server or the set
     of servers it ranks changes. A sample costs O(1); a robot is ranked again only when a
-    sample may change its flag, and every ``1/~update_rate`` s, so a server drops out as
-    soon as its last good sample leaves the window. Window times are the manager's receive
+    sample may change its flag (at most once per batch), when its selected server's last
+    good sample leaves the window (checked every ``1/~update_rate`` s), and with each
+    periodic flag. Window times are the manager's receive
     times: robot and manager clocks are not shared. A robot gets no flag before its first
     sample (a restarted manager does not publish an empty ranking over a robot's working
     choice). Samples claiming another pair, with an impossible round trip, or not
@@ -92,7 +93,7 @@ class ManagerNode(object):
             self.discovery.start()
         self.timers = [
             rospy.Timer(rospy.Duration(1.0 / self.publish_rate), lambda _e: self.update_all(False)),
-            rospy.Timer(rospy.Duration(1.0 / self.update_rate), lambda _e: self.update_all(True))]
+            rospy.Timer(rospy.Duration(1.0 / self.update_rate), self.on_check)]
         rospy.loginfo('manager: robots %s, servers %s, window %.3g s, samples %s',
                       self.rankings.fixed_robots or 'as they come',
                       self.rankings.fixed_servers or 'as probed', self.rankings.window.window,
@@ -117,16 +118,17 @@ class ManagerNode(object):
             self.warn(names.SAMPLES_TOPIC, batch, why)
             return
         now = rospy.get_time()
+        changed = False
         for server, ok, rtt in zip(batch.server_id, batch.ok, batch.rtt):
-            if ok and not valid_rtt(rtt):
-                self.warn(names.SAMPLES_TOPIC, batch, 'round trip %r of server %d is not a '
-                          'finite number >= 0' % (rtt, server))
-                continue
             why = self.rankings.admits(robot, server)
+            if why is None and ok and not valid_rtt(rtt):
+                why = 'round trip %r of server %d is not a finite number >= 0' % (rtt, server)
             if why:
                 self.warn(names.SAMPLES_TOPIC, batch, why)
-                continue
-            self.take(robot, server, ok, rtt, now)
+            elif self.rankings.add(robot, server, now, ok, rtt):
+                changed = True
+        if changed:     # one ranking per batch: O(1) per sample
+            self.update(robot, only_on_change=True)
 
     def take(self, robot, server, ok, rtt, now):
         if self.rankings.add(robot, server, now, ok, rtt):
@@ -157,6 +159,14 @@ class ManagerNode(object):
         for robot in self.rankings.robots():
             if self.rankings.heard(robot):   # silent for a robot until it has sent samples
                 self.update(robot, only_on_change)
+
+    def on_check(self, _event):
+        """Between flags: re-rank the robots whose selected server has no good sample left
+        (O(1) per robot; a non-selected server leaving shows in the next periodic flag)."""
+        now = rospy.get_time()
+        for robot in self.rankings.robots():
+            if self.rankings.selected_left(robot, now):
+                self.update(robot, only_on_change=True)
 
     def update(self, robot, only_on_change):
         """Rank ``robot``'s servers now; publish unless unchanged and ``only_on_change``.

@@ -17,10 +17,12 @@ from server_select.core.tables import fmt, markdown_table
 Flag = collections.namedtuple('Flag', 't robot server ranking means')
 Report = collections.namedtuple('Report', 't robot task ok rtt server answered_by error')
 Sample = collections.namedtuple('Sample', 't robot server ok rtt')
-Run = collections.namedtuple('Run', 'meta flags reports samples')
+Run = collections.namedtuple('Run', 'meta flags reports samples servers')
+Servers = collections.namedtuple('Servers', 't servers')
 
 
-TOPICS = ('task_report', 'server_select_flag', 'latency_R<r>S<s>')
+TOPICS = ('task_report', 'server_select_flag', 'latency_R<r>S<s>', 'latency_samples',
+          'fleet_servers')
 
 
 def load(bag_path):
@@ -33,7 +35,7 @@ def load(bag_path):
     if os.path.exists(bag_path + '.json'):
         with open(bag_path + '.json') as stream:
             meta = json.load(stream)
-    flags, reports, samples = [], [], []
+    flags, reports, samples, servers = [], [], [], []
     with rosbag.Bag(bag_path) as bag:
         t0 = meta.get('t0', bag.get_start_time() if bag.get_message_count() else 0.0)
         for topic, msg, stamp in bag.read_messages():
@@ -47,7 +49,12 @@ def load(bag_path):
                                       msg.server_id, msg.answered_by, msg.error))
             elif name.startswith('latency_R'):
                 samples.append(Sample(t, msg.robot_id, msg.server_id, msg.ok, msg.rtt))
-    return Run(meta, flags, reports, samples)
+            elif name == 'latency_samples':     # the fleet profile's batch per probe round
+                samples += [Sample(t, msg.robot_id, s, ok, rtt)
+                            for s, ok, rtt in zip(msg.server_id, msg.ok, msg.rtt)]
+            elif name == 'fleet_servers':
+                servers.append(Servers(t, list(msg.servers)))
+    return Run(meta, flags, reports, samples, servers)
 
 
 def switches(reports):

@@ -16,7 +16,9 @@ analysis (:mod:`server_select.testbed.bag_analysis`).
 import argparse
 import json
 import os
+import signal
 import sys
+import threading
 
 from server_select.core.settings import default
 from server_select.core.procs import wait_until
@@ -26,7 +28,8 @@ from server_select.testbed.netns import Testbed
 
 MODES = ('select', 'fixed', 'oracle')
 MASTER_PORT = 11311
-RECORDED = '/(latency_R[0-9]+S[0-9]+|server_select_flag|data|processed_data|task_report)'
+RECORDED = ('/(latency_R[0-9]+S[0-9]+|latency_samples|fleet_servers|server_select_flag|'
+            '(server_[0-9]+/)?data|(robot_[0-9]+/)?processed_data|task_report)')
 
 
 class RunOptions(object):
@@ -35,7 +38,8 @@ class RunOptions(object):
     def __init__(self, fixed_server=1, window=default('window'), task_rate=default('task_rate'),
                  task_size=default('task_size'), probe_rate=default('probe_rate'),
                  probe_timeout=default('probe_timeout'), task_timeout=default('task_timeout'),
-                 start_delay=5.0, hysteresis=default('hysteresis'), prefix='ssb'):
+                 start_delay=5.0, hysteresis=default('hysteresis'), prefix='ssb',
+                 profile=default('profile')):
         self.fixed_server = fixed_server
         self.window = window
         self.task_rate = task_rate
@@ -46,6 +50,7 @@ class RunOptions(object):
         self.start_delay = start_delay
         self.hysteresis = hysteresis
         self.prefix = prefix
+        self.profile = profile
 
 
 def _ids(hosts):
@@ -90,16 +95,25 @@ class HostRun(object):
             self.launch(manager, 'oracle.launch', 'scenario:=%s' % scenario.source,
                         't0:=%.6f' % self.tb.t0, 'robots:=%s' % _ids(robots))
         elif mode == 'select':   # fixed mode has no manager: no flag names an unused server
-            self.launch(manager, 'manager.launch', 'robots:=%s' % _ids(robots),
-                        'servers:=%s' % _ids(servers), 'window:=%g' % options.window,
-                        'hysteresis:=%g' % options.hysteresis)
+            fleet = options.profile == 'fleet'   # robots and servers learned at run time
+            self.launch(manager, 'manager.launch', 'profile:=%s' % options.profile,
+                        'robots:=%s' % ('' if fleet else _ids(robots)),
+                        'servers:=%s' % ('' if fleet else _ids(servers)),
+                        'window:=%g' % options.window, 'hysteresis:=%g' % options.hysteresis)
         self.popen(manager, ['rosbag', 'record', '--tcpnodelay', '-O', bag, '-e', RECORDED],
                    'rosbag')
         for server in servers:
-            self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id)
+            if server.start or server.stop is not None:
+                threading.Thread(target=self.server_lifetime, args=(server, options),
+                                 daemon=True).start()
+            else:
+                self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
+                            'profile:=%s' % options.profile)
+        static = [s for s in servers if not s.start]
         for robot in robots:
             self.launch(robot.name, 'robot.launch', 'robot_id:=%d' % robot.id,
-                        'servers:=%s' % _ids(servers),
+                        'profile:=%s' % options.profile,
+                        'servers:=%s' % _ids(static if options.profile == 'fleet' else servers),
                         'mode:=%s' % ('fixed' if mode == 'fixed' else 'select'),
                         'fixed_server:=%d' % options.fixed_server,
                         'probe_rate:=%g' % options.probe_rate,
@@ -108,6 +122,16 @@ class HostRun(object):
                         'task_timeout:=%g' % options.task_timeout,
                         'start_delay:=%g' % options.start_delay,
                         'manager_node:=%s' % ('/oracle' if mode == 'oracle' else '/manager'))
+
+    def server_lifetime(self, server, options):
+        """A server that starts late or stops early (the scenario's ``start`` / ``stop``):
+        launched at its start, stopped with SIGINT (a clean shutdown) at its stop."""
+        self.tb.sleep_until(server.start)
+        proc = self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
+                           'profile:=%s' % options.profile)
+        if server.stop is not None:
+            self.tb.sleep_until(server.stop)
+            proc.send_signal(signal.SIGINT)
 
 
 def run_mode(scenario_path, mode, out_dir, options=None, log=print):

@@ -8,6 +8,7 @@ A scenario is a YAML mapping::
       manager: {role: manager}
       server1: {role: server, id: 1}
       robot1:  {role: robot, id: 1}
+      server9: {role: server, id: 9, start: 20, stop: 60}   # runs from t=20 s to 60 s
     default: {delay: 1.0}       # link state of pairs not listed: one-way delay in ms, ...
     links:                      # per unordered pair of hosts "a b", events in time order
       robot1 server1:
@@ -34,7 +35,7 @@ ROLES = ('manager', 'server', 'robot')
 
 LinkState = collections.namedtuple('LinkState', 'delay jitter loss down rate')
 LinkState.__new__.__defaults__ = (0.0,)   # rate: MB/s each way, 0 = unlimited
-Host = collections.namedtuple('Host', 'name role id')
+Host = collections.namedtuple('Host', 'name role id start stop')
 
 
 class ScenarioError(ValueError):
@@ -166,7 +167,13 @@ class Scenario(object):
                 if (role, ident) in ids:
                     raise ScenarioError('hosts: two %ss with id %d' % (role, ident))
                 ids.add((role, ident))
-            result[name] = Host(name, role, ident)
+            start = _number(spec.get('start', 0.0), 'hosts: %s start' % name, 0.0)
+            stop = spec.get('stop')
+            if stop is not None:
+                stop = _number(stop, 'hosts: %s stop' % name, start)
+            if role == 'manager' and (start or stop is not None):
+                raise ScenarioError('hosts: the manager runs for the whole scenario')
+            result[name] = Host(name, role, ident, start, stop)
         if sum(1 for h in result.values() if h.role == 'manager') != 1:
             raise ScenarioError('hosts: exactly one host must have role manager')
         return result
@@ -190,7 +197,8 @@ class Scenario(object):
         return profile.value_at(t) if profile else self.default_state
 
     def ranking(self, robot_id, t):
-        """The robot's servers whose links are up at ``t``, nearest first, and those down.
+        """The robot's servers whose links are up at ``t``, nearest first, and those down
+        (or not running: a host's ``start`` / ``stop`` times).
 
         Returns ``([(one-way delay ms, server id), ...], [down server ids])``: lowest delay
         first, ties to the lower server id (the choice of an oracle that knows the scenario).
@@ -199,7 +207,8 @@ class Scenario(object):
         up, down = [], []
         for server in sorted(self.of_role('server'), key=lambda h: h.id):
             state = self.link(robot.name, server.name, t)
-            (down if state.down else up).append((state.delay, server.id))
+            running = server.start <= t and (server.stop is None or t < server.stop)
+            (down if state.down or not running else up).append((state.delay, server.id))
         return sorted(up, key=lambda pair: pair[0]), [s for _, s in down]
 
     def nearest_server(self, robot_id, t):

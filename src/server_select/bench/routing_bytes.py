@@ -1,0 +1,104 @@
+"""Bytes on the wire per task: broadcast (paper) vs direct (fleet) routing (testbed, root).
+
+Two robots send tasks to server 1 (``mode:=fixed``) while 2, 4 or 8 servers run, each host
+in a network namespace of its own behind the link emulator, which counts every byte. With
+``routing:=broadcast`` each task goes to every server and each result to every robot;
+with ``direct`` a task goes to the addressed server only and a result to its robot only.
+Printed per layout, task kind and number of servers: tasks answered by robot 1, and the
+bytes per task on robot 1's links (sum over its links to every server) in each direction
+(its one probe per server per second is included: about 0.2 kB per server and second).
+"""
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+
+import yaml
+
+from server_select.core.paths import package_file
+from server_select.core.tables import markdown_table
+from server_select.testbed import bag_analysis
+from server_select.testbed.evaluation import HostRun
+from server_select.testbed.netns import Testbed
+from server_select.testbed.scenario import Scenario
+
+KINDS = {
+    'sort': ['task_rate:=2'],
+    'frame': ['sort_tasks:=false', 'frame_rate:=1', 'image_transport:=raw',
+              'image_source:=search:%s' % package_file('config', 'search_area.yaml')],
+}
+
+
+def scenario(servers, seconds):
+    hosts = {'manager': {'role': 'manager'}}
+    hosts.update(('server%d' % s, {'role': 'server', 'id': s}) for s in range(1, servers + 1))
+    hosts.update(('robot%d' % r, {'role': 'robot', 'id': r}) for r in (1, 2))
+    return {'name': 'routing', 'duration': seconds + 12, 'hosts': hosts,
+            'default': {'delay': 0.5}, 'links': {}}
+
+
+def run_once(routing, kind, servers, seconds, work):
+    data = scenario(servers, seconds)
+    path = os.path.join(work, 'routing.yaml')
+    with open(path, 'w') as stream:
+        yaml.safe_dump(data, stream)
+    name = '%s-%s-%d' % (routing, kind, servers)
+    run_dir, bag = os.path.join(work, name), os.path.join(work, name + '.bag')
+    ids = ','.join(str(s) for s in range(1, servers + 1))
+    with Testbed(Scenario(data), path, run_dir, prefix='ssrb') as tb:
+        run = HostRun(tb, tb.scenario, run_dir)
+        run.start_master()
+        run.popen('manager', ['rosbag', 'record', '--tcpnodelay', '-O', bag, '/task_report'],
+                  'rosbag')
+        for server in range(1, servers + 1):
+            run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server,
+                       'routing:=%s' % routing)
+        for robot in (1, 2):
+            run.launch('robot%d' % robot, 'robot.launch', 'robot_id:=%d' % robot,
+                       'servers:=%s' % ids, 'mode:=fixed', 'fixed_server:=1',
+                       'routing:=%s' % routing, 'start_delay:=2', *KINDS[kind])
+        tb.sleep_until(tb.scenario.duration)
+    with open(os.path.join(run_dir, 'link_stats.json')) as stream:
+        link = json.load(stream)
+    reports = [r for r in bag_analysis.load(bag).reports if r.robot == 1]
+    up = sum(v['bytes'] for k, v in link.items() if k.startswith('robot1>'))
+    down = sum(v['bytes'] for k, v in link.items() if k.endswith('>robot1'))
+    return {'routing': routing, 'kind': kind, 'servers': servers, 'tasks': len(reports),
+            'ok': sum(1 for r in reports if r.ok), 'up_kb': up / 1e3 / max(1, len(reports)),
+            'down_kb': down / 1e3 / max(1, len(reports))}
+
+
+def table(rows):
+    return markdown_table(
+        ('routing', 'task', 'servers', 'tasks of robot 1 (ok)', 'kB/task robot 1 -> servers',
+         'kB/task servers -> robot 1'),
+        [(r['routing'], r['kind'], r['servers'], '%d (%d)' % (r['tasks'], r['ok']),
+          '%.1f' % r['up_kb'], '%.1f' % r['down_kb']) for r in rows])
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--servers', default='2,4,8')
+    parser.add_argument('--kinds', default='sort,frame')
+    parser.add_argument('--seconds', type=float, default=20.0, help='tasks sent per run')
+    parser.add_argument('--out', default='results/bench')
+    args = parser.parse_args(argv)
+    rows = []
+    with tempfile.TemporaryDirectory(prefix='bench_routing') as work:
+        for kind in args.kinds.split(','):
+            for servers in map(int, args.servers.split(',')):
+                for routing in ('broadcast', 'direct'):
+                    rows.append(run_once(routing, kind, servers, args.seconds, work))
+                    print(table(rows[-1:]).splitlines()[-1], file=sys.stderr, flush=True)
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, 'routing_bytes.json'), 'w') as stream:
+        json.dump(rows, stream, indent=1)
+    print('\nTwo robots, tasks to server 1; bytes counted by the link emulator\n\n%s\n'
+          % table(rows))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

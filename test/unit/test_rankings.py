@@ -1,0 +1,87 @@
+"""The manager's rankings: same answers as ranking everything on every sample, O(1) triggers."""
+
+import random
+
+import pytest
+
+from server_select.core.ranking import NO_SERVER, rank_servers
+from server_select.core.rankings import FleetRankings
+from server_select.core.settings import PARAMS, PROFILES, default
+
+
+def test_a_robot_is_ranked_as_the_paper_ranks_it():
+    r = FleetRankings(5.0, robots=[1], servers=[1, 2, 3])
+    for t, server, rtt in [(0.0, 1, 0.004), (0.1, 2, 0.002), (0.2, 3, 0.003)]:
+        r.add(1, server, t, True, rtt)
+    ranking = r.rank(1, 0.5)
+    assert (ranking.selected, ranking.ranking) == (2, [2, 3, 1])
+    assert r.rank(1, 5.15).ranking == [3]       # the first two left the window
+
+
+def test_fixed_lists_refuse_others_learned_lists_take_whoever_comes():
+    fixed = FleetRankings(5.0, robots=[1], servers=[1, 2])
+    assert 'robot 7' in fixed.admits(7, 1) and 'server 9' in fixed.admits(1, 9)
+    assert fixed.admits(1, 2) is None
+    learned = FleetRankings(5.0)
+    assert learned.admits(7, 9) is None and learned.robots() == []
+    learned.add(7, 9, 0.0, True, 0.001)
+    learned.add(3, 9, 0.0, False, 0.0)
+    assert learned.robots() == [3, 7] and learned.heard(7) and not learned.heard(4)
+    assert learned.rank(3, 0.1).excluded == [9]     # probed, never answered
+
+
+def test_a_server_with_no_sample_left_in_the_window_has_left():
+    r = FleetRankings(5.0)
+    r.add(1, 1, 0.0, True, 0.001)
+    r.add(1, 2, 0.0, True, 0.002)
+    for t in range(1, 9):
+        r.add(1, 1, float(t), True, 0.001)        # server 2 is no longer probed
+    assert r.servers(1, 8.0) == [1]
+    assert r.rank(1, 8.0).excluded == []
+
+
+def test_add_says_when_a_flag_may_change():
+    r = FleetRankings(5.0)
+    assert r.add(1, 1, 0.0, True, 0.002)          # a new server
+    assert r.add(1, 2, 0.0, True, 0.004)
+    r.selected(1, 1)
+    assert not r.add(1, 2, 0.1, True, 0.004)      # still worse than the selected one
+    assert r.add(1, 1, 0.2, True, 0.010)          # the selected server itself (mean 6 ms)
+    assert r.add(1, 2, 0.3, True, 0.004)          # 4 ms: below the selected one's mean
+    assert r.add(1, 3, 0.4, False, 0.0)           # new, even failed
+    assert not r.add(1, 3, 0.5, False, 0.0)       # still no mean: nothing changes
+    with pytest.raises(ValueError):
+        r.add(1, 2, 0.6, True, float('nan'))
+
+
+def test_updating_only_when_add_says_so_gives_the_flags_of_updating_always():
+    """Random streams: a manager that re-ranks only on add() == True publishes the same
+    selection as one re-ranking on every sample (the paper's manager)."""
+    rng = random.Random(11)
+    lazy, eager = FleetRankings(5.0), FleetRankings(5.0)
+    lazy_flag = eager_flag = NO_SERVER
+    for step in range(4000):
+        t = step * 0.05
+        server = rng.randint(1, 6)
+        ok = rng.random() > 0.05
+        rtt = rng.choice([0.001, 0.002, 0.005, 0.3]) * (1 + rng.random())
+        if lazy.add(1, server, t, ok, rtt):
+            lazy_flag = lazy.rank(1, t).selected
+            lazy.selected(1, lazy_flag)
+        eager.add(1, server, t, ok, rtt)
+        eager_flag = rank_servers(eager.window.robot_stats(1, eager.servers(1, t), t)).selected
+        if step % 20 == 0:      # the manager's periodic re-rank catches expiries
+            lazy_flag = lazy.rank(1, t).selected
+            lazy.selected(1, lazy_flag)
+            assert lazy_flag == eager_flag, step
+        elif lazy_flag != eager_flag:
+            # only an expiry, which the periodic re-rank handles, may differ meanwhile
+            assert lazy.rank(1, t).selected == eager_flag, step
+
+
+def test_profiles_only_name_known_parameters():
+    assert PROFILES['paper'] == {}
+    for profile in PROFILES.values():
+        assert set(profile) <= set(PARAMS)
+    assert default('routing') == 'broadcast' and default('routing', 'fleet') == 'direct'
+    assert default('sample_stream', 'fleet') == 'robot' and default('window', 'fleet') == 5.0
