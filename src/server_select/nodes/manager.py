@@ -57,10 +57,10 @@ class ManagerNode(object):
     def __init__(self):
         self.stream = param('sample_stream')
         self.rankings = FleetRankings(param('window'), param('robots'), param('servers'))
-        if self.stream == 'pair' and not (self.rankings.fixed_robots
-                                          and self.rankings.fixed_servers):
-            raise ParamError('~robots and ~servers: needed with ~sample_stream pair '
-                             '(one topic per pair)')
+        for name in ('robots', 'servers'):
+            if self.stream == 'pair' and not getattr(self.rankings, 'fixed_' + name):
+                raise ParamError('~%s: expected a non-empty list of ids (an empty one needs '
+                                 '~sample_stream robot: one topic per pair)' % name)
         self.publish_rate = param('publish_rate')
         self.update_rate = param('update_rate')
         self.hysteresis = param('hysteresis')

@@ -75,8 +75,8 @@ class RobotNode(object):
         mode = param('mode')
         self.discover = param('discover')
         if not servers and (mode == 'fixed' or not self.discover):
-            raise ParamError('~servers: empty, and %s' % ('~mode is fixed' if mode == 'fixed'
-                                                          else '~discover is off'))
+            raise ParamError('~servers: expected a non-empty list of ids (an empty one needs '
+                             '~discover, and a mode other than fixed)')
         fixed = param('fixed_server', default=servers[0] if servers else None,
                       parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
         eject_time, eject_max = param('eject_time'), param('eject_max')

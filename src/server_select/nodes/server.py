@@ -1,5 +1,6 @@
 """Compute server: answers latency probes, and the sort and image tasks addressed to it."""
 
+import concurrent.futures
 import threading
 import time
 
@@ -72,7 +73,9 @@ class ServerNode(object):
             self.detector = make_detector(param)
         except DetectorError as error:
             raise ParamError('~detector/~cascade: %s' % error)
-        direct = param('routing') == 'direct'
+        self.direct = direct = param('routing') == 'direct'
+        self._known_robots = set()
+        self._pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='routes')
         self.plugins = [PluginHandler(self.server_id, load_plugin(spec, None), self.queue_size,
                                       direct) for spec in param('task_plugins')]
         self.endpoints = [ServerEndpoint(self.server_id, kind, handle, direct, self.queue_size)
@@ -98,8 +101,15 @@ class ServerNode(object):
         rospy.on_shutdown(self.on_shutdown)
 
     def on_probe(self, req):
+        if self.direct and req.robot_id not in self._known_robots:
+            self._known_robots.add(req.robot_id)   # its result publishers, off this path
+            self._pool.submit(self._prepare, req.robot_id)
         return LatencyProbeResponse(
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now())
+
+    def _prepare(self, robot):
+        for endpoint in self.endpoints + [p.endpoint for p in self.plugins]:
+            endpoint.prepare(robot)
 
     def on_sort_task(self, task):
         """The result of a sort task addressed here (None: addressed elsewhere)."""
@@ -171,6 +181,7 @@ class ServerNode(object):
                 self.tasks_failed += 1
 
     def on_shutdown(self):
+        self._pool.shutdown(wait=False)
         rospy.loginfo('server %d: %d tasks done, %d rejected%s', self.server_id,
                       self.tasks_done, self.tasks_failed,
                       ''.join('; %s: %d done, %d rejected' % (p.plugin.kind, p.done, p.rejected)

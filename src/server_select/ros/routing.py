@@ -103,11 +103,13 @@ def _results(topic, kind, callback):
 
 
 class ResultRoutes(object):
-    """Server side of direct routing: one result publisher per robot, made at its first task.
+    """Server side of direct routing: one result publisher per robot.
 
-    A fresh publisher has no subscriber yet (the robot connects once the master tells it),
-    so the first result waits up to ``connect_wait`` s for the connection instead of being
-    lost; later ones go at once.
+    A fresh publisher has no subscriber yet (the robot, and any recorder, connect once the
+    master tells them), so the server makes a robot's publishers when the robot first
+    probes it (:meth:`prepare`, off the probe's path), well before its first task. A
+    result for a robot without a connected publisher still waits up to ``connect_wait`` s
+    for one instead of being lost.
     """
 
     def __init__(self, topic, msg_type, connect_wait=1.0):
@@ -115,14 +117,18 @@ class ResultRoutes(object):
         self._lock = threading.Lock()
         self.pubs = {}
 
-    def publish(self, robot, result):
+    def prepare(self, robot):
+        """The publisher of ``robot``'s results (made now if it is not there yet)."""
         with self._lock:
             pub = self.pubs.get(robot)
-            fresh = pub is None
-            if fresh:
+            if pub is None:
                 pub = self.pubs[robot] = rospy.Publisher(
                     fleet(names.robot_topic(robot, self.topic)), self.msg_type, queue_size=100)
-        if fresh or not pub.get_num_connections():
+            return pub
+
+    def publish(self, robot, result):
+        pub = self.prepare(robot)
+        if not pub.get_num_connections():
             end = time.monotonic() + self.connect_wait
             while not pub.get_num_connections() and time.monotonic() < end \
                     and not rospy.is_shutdown():
@@ -150,6 +156,11 @@ class ServerEndpoint(object):
         self.subs = [rospy.Subscriber(topic, kind.task_type, self.on_task, callback_args=direct,
                                       queue_size=queue, tcp_nodelay=True, buff_size=1 << 24)
                      for topic, direct in topics]
+
+    def prepare(self, robot):
+        """Make ``robot``'s result publisher (direct routing; nothing otherwise)."""
+        if self.direct is not None:
+            self.direct.prepare(robot)
 
     def on_task(self, task, direct):
         result = self.handle(task)
