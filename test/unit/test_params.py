@@ -72,6 +72,8 @@ def test_fixed_server_must_be_listed():
     with pytest.raises(ParamError):
         parse_fixed_server('~fixed_server', '', [1, 2, 3], 'fixed')
     assert parse_fixed_server('~fixed_server', '', [1, 2, 3], 'select') is None
+    # only the fixed mode uses it: a robot that learns its servers may be given one
+    assert parse_fixed_server('~fixed_server', 1, [], 'select') == 1
 
 
 @pytest.mark.parametrize('value, expected', [('', []), ([], []), ('[]', []), (' ', []),

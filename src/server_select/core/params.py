@@ -109,7 +109,7 @@ def parse_fixed_server(name, value, servers, mode):
     if value in (None, ''):
         raise ParamError('%s: required when mode is fixed' % name)
     ident = parse_id(name, value)
-    if ident not in servers:
+    if mode == 'fixed' and ident not in servers:
         raise ParamError('%s: server %d is not in servers %s' % (name, ident, servers))
     return ident
 

@@ -97,8 +97,8 @@ class HostRun(object):
         elif mode == 'select':   # fixed mode has no manager: no flag names an unused server
             fleet = options.profile == 'fleet'   # robots and servers learned at run time
             self.launch(manager, 'manager.launch', 'profile:=%s' % options.profile,
-                        'robots:=%s' % ('' if fleet else _ids(robots)),
-                        'servers:=%s' % ('' if fleet else _ids(servers)),
+                        'robots:=%s' % ('[]' if fleet else _ids(robots)),
+                        'servers:=%s' % ('[]' if fleet else _ids(servers)),
                         'window:=%g' % options.window, 'hysteresis:=%g' % options.hysteresis)
         self.popen(manager, ['rosbag', 'record', '--tcpnodelay', '-O', bag, '-e', RECORDED],
                    'rosbag')
@@ -109,11 +109,10 @@ class HostRun(object):
             else:
                 self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
                             'profile:=%s' % options.profile)
-        static = [s for s in servers if not s.start]
-        for robot in robots:
+        for robot in robots:     # fleet: every server found at run time, none given
             self.launch(robot.name, 'robot.launch', 'robot_id:=%d' % robot.id,
                         'profile:=%s' % options.profile,
-                        'servers:=%s' % _ids(static if options.profile == 'fleet' else servers),
+                        'servers:=%s' % ('[]' if options.profile == 'fleet' else _ids(servers)),
                         'mode:=%s' % ('fixed' if mode == 'fixed' else 'select'),
                         'fixed_server:=%d' % options.fixed_server,
                         'probe_rate:=%g' % options.probe_rate,
