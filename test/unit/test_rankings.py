@@ -85,3 +85,17 @@ def test_profiles_only_name_known_parameters():
         assert set(profile) <= set(PARAMS)
     assert default('routing') == 'broadcast' and default('routing', 'fleet') == 'direct'
     assert default('sample_stream', 'fleet') == 'robot' and default('window', 'fleet') == 5.0
+
+
+def test_a_group_manager_ranks_only_its_members():
+    r = FleetRankings(5.0)
+    r.set_members([], [])                         # no table from the top manager yet
+    assert r.robots() == [] and 'robot 1' in r.admits(1, 1)
+    r.set_members([2, 1], [4, 5])
+    assert r.robots() == [1, 2] and r.admits(1, 4) is None
+    assert 'server 7' in r.admits(1, 7)           # another group's representative
+    r.add(1, 4, 0.0, True, 0.002)
+    r.add(1, 5, 0.0, True, 0.001)
+    assert r.rank(1, 0.1).ranking == [5, 4]
+    r.set_members([2], [4, 5])                    # robot 1 moved to another group
+    assert r.robots() == [2] and 'robot 1' in r.admits(1, 4)

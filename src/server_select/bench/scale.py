@@ -23,31 +23,50 @@ import time
 import psutil
 
 from server_select.bench.harness import PY, Roscore, node_pid
+from server_select.bench.scale_sim import group_table
 from server_select.core.procs import measure, stop_group, wait_until
 from server_select.core.stats import summarize
 from server_select.core.tables import fmt as _fmt, markdown_table
 
 SIZES = '2x3,10x10,50x50,100x50,200x100,500x100'
+GROUPED = '200x100:4,500x500:10,1000x1000:20'
 
 
-def _manager(layout, robots, servers, log):
-    cmd = [sys.executable, '-c', 'from server_select.nodes.manager import main; main()',
-           '_robots:=%s' % ','.join(map(str, robots)),
-           '_servers:=%s' % ','.join(map(str, servers)), "_robot_node:='*'",
-           '_sample_stream:=%s' % layout, '_discover:=false', '__name:=manager']
+def _node(module, args, log):
+    cmd = [sys.executable, '-c', 'from server_select.nodes.%s import main; main()' % module]
     with open(log, 'a') as stream:
-        return subprocess.Popen(cmd, stdout=stream, stderr=subprocess.STDOUT,
+        return subprocess.Popen(cmd + args, stdout=stream, stderr=subprocess.STDOUT,
                                 start_new_session=True)
 
 
-def _sims(tmp, robots, servers, sims, layout, until, log):
+def _managers(layout, robots, servers, groups, log):
+    """The nodes under test: {node name: process}."""
+    ids = ','.join(map(str, range(1, servers + 1)))
+    common = ["_robot_node:='*'", '_discover:=false']
+    if layout != 'grouped':
+        return {'/manager': _node('manager', common + [
+            '_robots:=%s' % ','.join(map(str, range(1, robots + 1))), '_servers:=%s' % ids,
+            '_sample_stream:=%s' % layout, '__name:=manager'], log)}
+    table = group_table(servers, groups)
+    nodes = {'/top_manager': _node('top_manager', common + [
+        '_groups:=%s' % json.dumps(dict((str(g), s) for g, s in table.items())),
+        '__name:=top_manager'], log)}
+    for group in table:
+        nodes['/manager_g%d' % group] = _node('manager', common + [
+            '_robots:=[]', '_servers:=[]', '_sample_stream:=robot', '_group:=%d' % group,
+            '__name:=manager_g%d' % group], log)
+    return nodes
+
+
+def _sims(tmp, robots, servers, sims, layout, until, log, groups=1):
     per = -(-robots // sims)
     procs, outs = [], []
     for first in range(1, robots + 1, per):
         out = os.path.join(tmp, 'sim%d.json' % first)
         cmd = PY + ['server_select.bench.scale_sim', '--first', str(first), '--count',
                     str(min(per, robots - first + 1)), '--servers', str(servers),
-                    '--layout', layout, '--until', repr(until), '--out', out]
+                    '--layout', layout, '--until', repr(until), '--out', out,
+                    '--groups', str(groups)]
         with open(log, 'a') as stream:
             procs.append(subprocess.Popen(cmd, stdout=stream, stderr=subprocess.STDOUT,
                                           start_new_session=True))
@@ -74,28 +93,33 @@ def _ranked_in(outs):
     return (max(ranked) if len(ranked) == robots and ranked else None), delays
 
 
-def run_one(robots, servers, layout, sims, limit, measure_s, tmp):
+def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1):
     log = os.path.join(tmp, 'scale.log')
     until = time.time() + 8.0 + limit + measure_s
-    sim_procs, outs = _sims(tmp, robots, servers, sims, layout, until, log)
+    sim_procs, outs = _sims(tmp, robots, servers, sims, layout, until, log, groups)
     time.sleep(5.0)                    # the simulated robots registered and publishing
     started = time.time()
-    manager = _manager(layout, range(1, robots + 1), range(1, servers + 1), log)
-    row = {'robots': robots, 'servers': servers, 'layout': layout}
+    managers = _managers(layout, robots, servers, groups, log)
+    row = {'robots': robots, 'servers': servers, 'layout': layout, 'groups': groups}
     try:
-        if not wait_until(lambda: _pid('/manager') is not None, 30.0, period=0.2):
+        if not wait_until(lambda: all(_pid(n) for n in managers), 60.0, period=0.5):
             with open(log) as stream:
-                raise RuntimeError('the manager did not register:\n' + stream.read()[-3000:])
-        pids = {'manager': _pid('/manager'), 'rosmaster': _master_pid()}
+                raise RuntimeError('a manager did not register:\n' + stream.read()[-3000:])
+        pids = [_pid(n) for n in managers]
+        master = _master_pid()
         time.sleep(max(0.0, started + limit - time.time()))
-        usage = measure([p for p in pids.values() if p], measure_s)
-        row.update(_usage(pids['manager']))
-        row['manager_cpu'] = usage.get(pids['manager'], {}).get('cpu_percent')
-        row['master_cpu'] = usage.get(pids['rosmaster'], {}).get('cpu_percent')
+        usage = measure(pids + [master], measure_s)
+        totals = [_usage(p) for p in pids]
+        for key in ('threads', 'fds', 'rss_mb'):
+            row[key] = sum(t[key] for t in totals)
+        cpu = [usage.get(p, {}).get('cpu_percent', 0.0) for p in pids]
+        row['manager_cpu'], row['manager_cpu_max'] = sum(cpu), max(cpu)
+        row['master_cpu'] = usage.get(master, {}).get('cpu_percent')
     finally:
         for proc in sim_procs:
             proc.wait(timeout=limit + measure_s + 60)
-        stop_group(manager)
+        for proc in managers.values():
+            stop_group(proc)
     last, delays = _ranked_in(outs)
     row['ranked_s'] = None if last is None else last - started
     summary = summarize(delays)
@@ -125,15 +149,22 @@ def fmt(value, spec='%.0f'):
     return _fmt(value, spec)
 
 
+def _layout(row):
+    if row['layout'] == 'grouped':
+        return 'grouped: %d x %d servers' % (row['groups'], row['servers'] // row['groups'])
+    return 'per pair' if row['layout'] == 'pair' else 'per robot'
+
+
 def table(rows):
     header = ['robots x servers', 'samples', 'every robot ranked after', 'sample-to-flag p50 ms',
-              'p99 ms', 'changes', 'manager CPU %', 'threads', 'fds', 'RSS MiB', 'rosmaster CPU %']
-    body = [['%d x %d' % (r['robots'], r['servers']),
-             'per pair' if r['layout'] == 'pair' else 'per robot',
+              'p99 ms', 'changes', 'managers CPU % (busiest)', 'threads', 'fds', 'RSS MiB',
+              'rosmaster CPU %']
+    body = [['%d x %d' % (r['robots'], r['servers']), _layout(r),
              'never within %.0f s' % r['limit'] if r['ranked_s'] is None
              else '%.1f s' % r['ranked_s'],
              fmt(r['delay_p50_ms'], '%.1f'), fmt(r['delay_p99_ms'], '%.1f'), str(r['changes']),
-             fmt(r.get('manager_cpu')), fmt(r.get('threads'), '%d'), fmt(r.get('fds'), '%d'),
+             '%s (%s)' % (fmt(r.get('manager_cpu')), fmt(r.get('manager_cpu_max'))),
+             fmt(r.get('threads'), '%d'), fmt(r.get('fds'), '%d'),
              fmt(r.get('rss_mb')), fmt(r.get('master_cpu'))] for r in rows]
     return markdown_table(header, body)
 
@@ -142,6 +173,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--sizes', default=SIZES, help='RxS,... (default %(default)s)')
     parser.add_argument('--layouts', default='pair,robot')
+    parser.add_argument('--grouped-sizes', default=GROUPED,
+                        help='RxS:G,... run grouped, G groups (default %(default)s)')
     parser.add_argument('--pair-max', type=int, default=2500,
                         help='largest R*S run per pair (the layout breaks before)')
     parser.add_argument('--sims', type=int, default=4, help='simulated robot processes')
@@ -150,20 +183,24 @@ def main(argv=None):
     parser.add_argument('--measure', type=float, default=15.0)
     parser.add_argument('--out', default='results/bench')
     args = parser.parse_args(argv)
-    rows = []
+    runs = []
     for size in args.sizes.split(','):
         robots, servers = map(int, size.lower().split('x'))
-        for layout in args.layouts.split(','):
-            if layout == 'pair' and robots * servers > args.pair_max:
-                continue
-            with tempfile.TemporaryDirectory(prefix="bench_scale") as tmp, Roscore(tmp):
-                print('scale: %d x %d per %s' % (robots, servers, layout), file=sys.stderr,
-                      flush=True)
-                row = run_one(robots, servers, layout, min(args.sims, robots), args.limit,
-                              args.measure, tmp)
-                row['limit'] = args.limit
-                rows.append(row)
-                print(table([row]).splitlines()[-1], file=sys.stderr, flush=True)
+        runs += [(robots, servers, layout, 1) for layout in args.layouts.split(',')
+                 if layout != 'pair' or robots * servers <= args.pair_max]
+    for size in filter(None, args.grouped_sizes.split(',')):
+        shape, groups = size.split(':')
+        robots, servers = map(int, shape.lower().split('x'))
+        runs.append((robots, servers, 'grouped', int(groups)))
+    rows = []
+    for robots, servers, layout, groups in runs:
+        with tempfile.TemporaryDirectory(prefix='bench_scale') as tmp, Roscore(tmp):
+            print('scale: %d x %d %s' % (robots, servers, layout), file=sys.stderr, flush=True)
+            row = run_one(robots, servers, layout, min(args.sims, robots), args.limit,
+                          args.measure, tmp, groups)
+            row['limit'] = args.limit
+            rows.append(row)
+            print(table([row]).splitlines()[-1], file=sys.stderr, flush=True)
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, 'scale.json'), 'w') as stream:
         json.dump(rows, stream, indent=2)

@@ -8,6 +8,11 @@ ranking all servers, one robot every ``--change-every`` s gets a 10 s round trip
 server its flag selects, which must move its flag elsewhere: the time from that sample's
 publication to the flag that shows the move is the sample-to-flag delay. Results go to
 ``--out`` as JSON.
+
+``--layout grouped``: the servers form ``--groups`` equal groups; each robot follows the
+top manager's ``group_assignments`` and sends batches for its group's servers plus every
+group's representative, as a grouped robot does; a full ranking is then one of all its
+group's servers, from its group's manager.
 """
 
 import argparse
@@ -19,21 +24,37 @@ import time
 import rospy
 
 from server_select.core import names
-from server_select.msg import LatencySample, LatencySamples, SelectionFlag
+from server_select.core.groups import probe_set
+from server_select.msg import GroupAssignments, LatencySample, LatencySamples, SelectionFlag
 
 SLOW = 10.0
 QUIET = 7.0       # s between two triggers of one robot (window 5 s + margin)
 
 
-def base_rtt(robot, server, servers):
-    """Robot ``robot``'s nearest server is the one with (robot + server) % servers == 0."""
-    return 1e-3 * (1 + (robot + server) % servers)
+def base_rtt(robot, server, servers, groups=1):
+    """Robot ``robot``'s nearest server is the one with (robot + server) % servers == 0;
+    with groups, its nearest group is the one with (robot + group) % groups == 0 (5 ms a
+    step), and within a group steps are 0.1 ms."""
+    if groups == 1:
+        return 1e-3 * (1 + (robot + server) % servers)
+    size = servers // groups
+    group = (server - 1) // size + 1
+    return 1e-3 * (1 + 5 * ((robot + group) % groups) + 0.1 * ((robot + server) % size))
+
+
+def group_table(servers, groups):
+    size = servers // groups
+    return dict((g, list(range((g - 1) * size + 1, g * size + 1))) for g in range(1, groups + 1))
 
 
 class SimulatedRobots(object):
-    def __init__(self, robots, servers, layout, change_every):
+    def __init__(self, robots, servers, layout, change_every, groups=1):
         self.robots, self.servers, self.layout = robots, servers, layout
-        self.change_every = change_every
+        self.change_every, self.groups = change_every, groups
+        self.table = group_table(servers, groups)
+        self.probed = dict((r, sorted(probe_set(self.table, None))) for r in robots) \
+            if layout == 'grouped' else None
+        self.group_of = {}
         self.lock = threading.Lock()
         self.ranked = {}             # robot -> time its first full ranking arrived
         self.flagged = {}            # robot -> server its last flag selected
@@ -45,12 +66,29 @@ class SimulatedRobots(object):
         self.rng = random.Random(robots[0])
         self.sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
                                     queue_size=10000, tcp_nodelay=True)
-        if layout == 'robot':
+        if layout == 'grouped':
+            self.groups_sub = rospy.Subscriber(names.GROUPS_TOPIC, GroupAssignments,
+                                               self.on_groups, queue_size=10)
+        if layout in ('robot', 'grouped'):
             self.pub = rospy.Publisher(names.SAMPLES_TOPIC, LatencySamples, queue_size=10000)
         else:
             self.pubs = dict(((r, s), rospy.Publisher(names.sample_topic(r, s), LatencySample,
                                                       queue_size=100))
                              for r in robots for s in range(1, servers + 1))
+
+    def on_groups(self, msg):
+        with self.lock:
+            for robot, group in zip(msg.robot_id, msg.group_id):
+                if robot in self.probed:
+                    self.group_of[robot] = group
+                    self.probed[robot] = sorted(probe_set(self.table, group))
+
+    def full(self, robot):
+        """How many servers a full ranking of ``robot`` has."""
+        if self.layout != 'grouped':
+            return self.servers
+        group = self.group_of.get(robot)
+        return len(self.table[group]) if group else -1
 
     def on_flag(self, flag):
         now = time.time()
@@ -59,7 +97,7 @@ class SimulatedRobots(object):
             return
         with self.lock:
             self.flags += 1
-            if len(flag.ranking) == self.servers and robot not in self.ranked:
+            if len(flag.ranking) == self.full(robot) and robot not in self.ranked:
                 self.ranked[robot] = now
             trigger = self.triggers.get(robot)
             if trigger is not None and flag.server_id != trigger[1]:
@@ -69,13 +107,16 @@ class SimulatedRobots(object):
 
     def send(self, robot, slow=None, sending=lambda: None):
         """One probe round of ``robot``; ``sending()`` right before the ``slow`` sample goes."""
-        servers = list(range(1, self.servers + 1))
-        if slow is not None:                      # the slow sample first
+        with self.lock:
+            servers = list(self.probed[robot]) if self.probed else \
+                list(range(1, self.servers + 1))
+        if slow is not None and slow in servers:  # the slow sample first
             servers.remove(slow)
             servers.insert(0, slow)
-        rtts = [SLOW if s == slow else base_rtt(robot, s, self.servers) +
-                2e-4 * self.rng.random() for s in servers]     # noise below the 1 ms steps
-        if self.layout == 'robot':
+        noise = 2e-4 if self.groups == 1 else 2e-5           # below the steps
+        rtts = [SLOW if s == slow else base_rtt(robot, s, self.servers, self.groups) +
+                noise * self.rng.random() for s in servers]
+        if self.layout in ('robot', 'grouped'):
             msg = LatencySamples(robot_id=robot, server_id=servers, ok=[True] * len(rtts),
                                  rtt=rtts)
             msg.header.stamp = rospy.Time.now()
@@ -131,14 +172,15 @@ def main(argv=None):
     parser.add_argument('--first', type=int, required=True)
     parser.add_argument('--count', type=int, required=True)
     parser.add_argument('--servers', type=int, required=True)
-    parser.add_argument('--layout', choices=('robot', 'pair'), required=True)
+    parser.add_argument('--layout', choices=('robot', 'pair', 'grouped'), required=True)
+    parser.add_argument('--groups', type=int, default=1)
     parser.add_argument('--until', type=float, required=True, help='epoch s to stop at')
     parser.add_argument('--change-every', type=float, default=0.5)
     parser.add_argument('--out', required=True)
     args = parser.parse_args(argv)
     rospy.init_node('scale_sim_%d' % args.first, disable_signals=True)
     sim = SimulatedRobots(list(range(args.first, args.first + args.count)), args.servers,
-                          args.layout, args.change_every)
+                          args.layout, args.change_every, args.groups)
     sim.run(args.until)
     with open(args.out, 'w') as stream:
         json.dump(sim.result(), stream)

@@ -14,6 +14,7 @@ FOUND_TARGETS_TOPIC = 'found_targets'
 KNOWN_TARGETS_SERVICE = '~known_targets'
 SAMPLES_TOPIC = 'latency_samples'       # fleet profile: one batch per robot probe round
 SERVERS_TOPIC = 'fleet_servers'         # fleet profile: the servers found in the master
+GROUPS_TOPIC = 'group_assignments'      # grouped deployments: robots to server groups
 
 
 def probe_service(server_id):

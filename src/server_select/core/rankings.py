@@ -25,21 +25,31 @@ class FleetRankings(object):
         self.fixed_robots = list(robots)          # empty: learned
         self.fixed_servers = list(servers)        # empty: learned
         self._robot_set, self._server_set = set(robots), set(servers)
+        self.learn_robots, self.learn_servers = not robots, not servers
         self._lock = threading.Lock()
         self._servers = {}                        # robot -> set of servers heard for it
         self._selected = {}                       # robot -> server its last flag selected
 
+    def set_members(self, robots, servers):
+        """Fix the robots and servers (a group manager: what the top manager assigned to
+        its group; either may be empty). Samples of robots and servers left out are no
+        longer taken; a robot left out gets no more flags."""
+        with self._lock:
+            self.fixed_robots, self.fixed_servers = sorted(robots), list(servers)
+            self._robot_set, self._server_set = set(robots), set(servers)
+            self.learn_robots = self.learn_servers = False
+
     def admits_robot(self, robot):
         """Why samples of ``robot`` are not taken (or None)."""
-        if self._robot_set and robot not in self._robot_set:
+        if not self.learn_robots and robot not in self._robot_set:
             return 'robot %d is not one of ~robots %s' % (robot, self.fixed_robots)
         return None
 
     def admits(self, robot, server):
         """Why a sample of (``robot``, ``server``) is not taken (or None)."""
-        if self._robot_set and robot not in self._robot_set:
+        if not self.learn_robots and robot not in self._robot_set:
             return self.admits_robot(robot)
-        if self._server_set and server not in self._server_set:
+        if not self.learn_servers and server not in self._server_set:
             return 'server %d is not one of ~servers %s' % (server, self.fixed_servers)
         return None
 
@@ -72,7 +82,7 @@ class FleetRankings(object):
     def robots(self):
         """The robots that take part (those heard from, or the fixed list)."""
         with self._lock:
-            return list(self.fixed_robots) or sorted(self._servers)
+            return list(self.fixed_robots) if not self.learn_robots else sorted(self._servers)
 
     def heard(self, robot):
         with self._lock:
@@ -80,7 +90,7 @@ class FleetRankings(object):
 
     def servers(self, robot, now):
         """``robot``'s servers: the fixed list, or those with a sample in the window."""
-        if self.fixed_servers:
+        if not self.learn_servers:
             return list(self.fixed_servers)
         with self._lock:
             heard = sorted(self._servers.get(robot, ()))

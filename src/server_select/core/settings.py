@@ -7,6 +7,7 @@ node's default", and the evaluation takes its defaults from it.
 
 import collections
 
+from server_select.core.groups import parse_groups
 from server_select.core.params import (one_of, parse_bool, parse_count, parse_id,
                                        parse_members, parse_mode, parse_names, parse_non_negative,
                                        parse_number, parse_plugins, parse_positive,
@@ -33,6 +34,15 @@ PARAMS = {
     'sample_stream': Param('pair', one_of('pair', 'robot'), 'probe samples on one topic per '
                            '(robot, server) pair, or one batch per probe round per robot'),
     'discover': Param(False, parse_bool, 'also probe the servers the manager announces'),
+    'groups': Param(REQUIRED, parse_groups, 'server groups {group id: [server ids]}; the '
+                    'first server of a group is its representative'),
+    'group': Param(None, parse_id, 'grouped: this manager ranks the robots of group {group}'),
+    'top_manager_node': Param('', parse_publisher, 'grouped: follow the group assignments '
+                              'of this node (empty: not grouped)'),
+    'group_manager_node': Param('/manager_g{group}', parse_publisher, 'grouped: flags '
+                                "count only from the manager of the robot's group"),
+    'group_margin': Param(0.001, parse_non_negative, 'a robot moves to a nearer group only '
+                          'when its representative is nearer by this (s)'),
     'discovery_period': Param(2.0, parse_positive, "period of the manager's look for "
                               'servers in the master (s)'),
     'mode': Param('select', parse_mode, 'select (follow the manager), fixed or local'),

@@ -12,7 +12,7 @@ from server_select.core.window import valid_rtt
 from server_select.msg import LatencySample, LatencySamples
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.graph import publisher_of
-from server_select.ros.membership import ServerDiscovery
+from server_select.ros.membership import GroupAssignmentsListener, ServerDiscovery
 from server_select.ros.node import fleet, owned_by, param, run
 
 
@@ -46,6 +46,9 @@ class ManagerNode(object):
         - ``~robot_node`` (``/robot{id}``): the node, or the namespace of the nodes, whose
           samples count for robot {id} (``*``: any publisher).
         - ``~fleet_ns`` (``/``): namespace of the fleet-level topics and services.
+        - ``~group`` (none): a grouped deployment's manager of group {group}: ranks that
+          group's servers for the robots ``~top_manager_node`` (``/top_manager``) assigns
+          to it (``group_assignments``), and ignores the others' samples.
     :ROS Subscribers:
         - ``latency_R<r>S<s>`` (server_select/LatencySample) for every robot r and server s,
           or ``latency_samples`` (server_select/LatencySamples).
@@ -72,9 +75,18 @@ class ManagerNode(object):
                              % (pattern, error))
         self._robot_nodes = {}
         self._update_lock = threading.Lock()
-        self.discovery = ServerDiscovery(param('discovery_period')) if param('discover') \
-            else None
-        self.flags = FlagPublisher('manager', max(100, 4 * len(self.rankings.fixed_robots)))
+        self.group = param('group')       # grouped: robots get their servers elsewhere
+        self.discovery = ServerDiscovery(param('discovery_period')) \
+            if param('discover') and self.group is None else None
+        self.assignments = None
+        if self.group is not None:      # a group's manager: members from the top manager
+            self.rankings.set_members([], [])
+            self.assignments = GroupAssignmentsListener(
+                param('top_manager_node') or '/top_manager', self.on_assignments,
+                'manager of group %d' % self.group)
+        self.flags = FlagPublisher('manager' if self.group is None else
+                                   'manager of group %d' % self.group,
+                                   max(100, 4 * len(self.rankings.fixed_robots)))
         self.sample_subs = []
         self.timers = []
 
@@ -89,8 +101,9 @@ class ManagerNode(object):
             self.sample_subs = [rospy.Subscriber(fleet(names.SAMPLES_TOPIC), LatencySamples,
                                                  self.on_batch, queue_size=1000,
                                                  tcp_nodelay=True)]
-        if self.discovery is not None:
-            self.discovery.start()
+        for part in (self.discovery, self.assignments):
+            if part is not None:
+                part.start()
         self.timers = [
             rospy.Timer(rospy.Duration(1.0 / self.publish_rate), lambda _e: self.update_all(False)),
             rospy.Timer(rospy.Duration(1.0 / self.update_rate), self.on_check)]
@@ -107,9 +120,19 @@ class ManagerNode(object):
         else:
             self.take(pair[0], pair[1], sample.ok, sample.rtt, rospy.get_time())
 
+    def on_assignments(self, groups, assigned):
+        """The top manager's table: this group's servers and robots."""
+        if self.group not in groups:
+            rospy.logwarn_throttle(30.0, 'manager of group %d: the top manager has no group %d '
+                                   '(groups %s)' % (self.group, self.group, sorted(groups)))
+        robots = [r for r, g in assigned.items() if g == self.group]
+        self.rankings.set_members(robots, groups.get(self.group, []))
+
     def on_batch(self, batch):
         """One robot's probe round (fleet layout)."""
         robot = batch.robot_id
+        if self.group is not None and self.rankings.admits_robot(robot):
+            return      # a robot of another group: not ours to rank
         count = len(batch.server_id)
         why = self.refuse(batch, robot)
         if why is None and not len(batch.ok) == len(batch.rtt) == count:
@@ -121,6 +144,8 @@ class ManagerNode(object):
         changed = False
         for server, ok, rtt in zip(batch.server_id, batch.ok, batch.rtt):
             why = self.rankings.admits(robot, server)
+            if why is not None and self.group is not None:
+                continue    # another group's representative: probed for the top manager
             if why is None and ok and not valid_rtt(rtt):
                 why = 'round trip %r of server %d is not a finite number >= 0' % (rtt, server)
             if why:

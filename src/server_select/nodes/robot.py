@@ -16,7 +16,7 @@ from server_select.ros.camera import TopicSource
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.node import fleet, param, run
 from server_select.ros.plugins import load as load_plugin
-from server_select.ros.membership import ServerAnnouncements
+from server_select.ros.membership import GroupFollower, ServerAnnouncements
 from server_select.ros.prober import Prober
 from server_select.ros.routing import ROUTES
 from server_select.ros.task_kinds import SortKind, image_kind
@@ -35,34 +35,23 @@ class RobotNode(object):
     takes part in the cooperative search: targets detected in its frames are recorded
     once in a registry shared through ``found_targets``.
 
-    :ROS Parameters:
-        - ``~robot_id`` (int, required), ``~servers`` (list of int, required)
-        - ``~mode`` (``select``), ``~fixed_server`` (first of ``~servers``)
-        - ``~probe_rate`` (Hz, 1.0), ``~probe_timeout`` (s, 0.5)
-        - ``~sort_tasks`` (true), ``~task_rate`` (Hz, 2.0), ``~task_size`` (1000),
-          ``~task_timeout`` (s, 2.0), ``~tasks`` (0: no limit), ``~seed`` (robot id)
-        - ``~image_source`` ('': none; a folder, a video file or ``search:<area.yaml>``),
-          or ``~image_topic`` (a sensor_msgs/Image or CompressedImage topic, newest frame
-          wins); ``~frame_rate`` (Hz, 10.0), ``~image_encoding`` (``bgr8``, ``rgb8``,
-          ``mono8``), ``~image_transport`` (``raw`` or ``compressed``: JPEG of
-          ``~jpeg_quality``, 80)
-        - ``~robot_index``, ``~robot_count`` (0, 1): this robot's strip of a search area;
-          ``~speed`` (area px/s, 200), ``~merge_radius`` (px, 150)
-        - ``~detector``, ``~cascade``, ``~scale_factor``, ``~min_neighbors``, ``~min_size``
-          (as the server's): used in mode ``local`` only.
-        - ``~task_plugins`` ([]): more task types, ``module:Class`` of
-          :class:`~server_select.ros.plugins.TaskPlugin`, each with its settings under
-          ``~<kind>/`` (e.g. ``server_select.tasks.orb:Orb`` and ``~orb/source``).
-        - ``~start_delay`` (s, 0.0): wait before the first task, e.g. for a recorder to
-          connect (rospy drops messages sent before that); ``~summary_period`` (s, 10)
+    :ROS Parameters: (all, with defaults: README "Nodes" and ``core/settings.py``)
+        - ``~robot_id``; ``~servers`` (may be empty with ``~discover`` or
+          ``~top_manager_node``); ``~profile``, ``~routing``, ``~sample_stream``
+        - ``~mode``, ``~fixed_server``, ``~probe_rate``, ``~probe_timeout``, the task
+          streams' (``~sort_tasks``, ``~task_rate``, ``~image_source`` or
+          ``~image_topic``, ``~frame_rate``, ``~task_plugins``, ...), failover and health
+          (``~retry_factor``, ``~eject_time``, ...), ``~manager_node`` or, grouped,
+          ``~group_manager_node``; ``~start_delay`` (rospy drops what is sent before a
+          recorder connects)
     :ROS Publishers:
-        - ``latency_R<robot_id>S<s>`` (server_select/LatencySample), one topic per server.
-        - ``data`` (server_select/SortTask), ``task_image`` (server_select/ImageTask)
+        - ``latency_R<robot_id>S<s>`` per server, or ``latency_samples`` (fleet)
+        - ``data``, ``task_image``, or per server ``server_<s>/data``, ... (fleet)
         - ``task_report`` (server_select/TaskReport), ``found_targets`` (FoundTarget)
     :ROS Subscribers:
-        - ``server_select_flag`` (server_select/SelectionFlag)
-        - ``processed_data`` (SortResult), ``processed_image`` (ImageResult),
-          ``detections`` (Detections), ``found_targets`` (FoundTarget)
+        - ``server_select_flag``; ``processed_data``, ``processed_image``, or
+          ``robot_<robot_id>/processed_data``, ... (fleet); ``detections``,
+          ``found_targets``; ``fleet_servers`` (``~discover``) or ``group_assignments``
     :ROS Services:
         - ``~known_targets`` (server_select/KnownTargets): the targets found so far.
     :ROS Services called:
@@ -74,7 +63,8 @@ class RobotNode(object):
         servers = param('servers')
         mode = param('mode')
         self.discover = param('discover')
-        if not servers and (mode == 'fixed' or not self.discover):
+        if not servers and (mode == 'fixed' or not (self.discover or
+                                                    param('top_manager_node'))):
             raise ParamError('~servers: expected a non-empty list of ids (an empty one needs '
                              '~discover, and a mode other than fixed)')
         fixed = param('fixed_server', default=servers[0] if servers else None,
@@ -106,8 +96,11 @@ class RobotNode(object):
                        local=mode == 'local', expected_publisher=self.server_node,
                        route=ROUTES[param('routing')])
             for kind, rate in kinds]
-        self.announcements = ServerAnnouncements(servers, self.on_servers, self.manager_node,
-                                                 self.robot_id) if self.discover else None
+        top = param('top_manager_node')     # grouped: servers and manager from its table
+        self.announcements = GroupFollower(self.robot_id, servers, top, self.on_servers,
+                                           self.on_group) if top else ServerAnnouncements(
+            servers, self.on_servers, self.manager_node, self.robot_id) if self.discover \
+            else None
         self._start_after = None
         self._local_decision = False
         self.timers = []
@@ -191,6 +184,10 @@ class RobotNode(object):
                 stream.add_server(server)
             for server in removed:
                 stream.remove_server(server)
+
+    def on_group(self, group):
+        """Grouped: the top manager put this robot in ``group``; its manager's flags count."""
+        self.manager_node = rospy.resolve_name(param('group_manager_node').format(group=group))
 
     def on_failure(self, server, why):
         ejection = self.health.failure(server, why)

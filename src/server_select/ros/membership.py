@@ -15,7 +15,8 @@ import rosgraph
 import rospy
 
 from server_select.core import names
-from server_select.msg import FleetServers
+from server_select.core.groups import probe_set
+from server_select.msg import FleetServers, GroupAssignments
 from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet
 
@@ -90,3 +91,53 @@ class ServerAnnouncements(object):
         if added or removed:
             rospy.loginfo('robot %d: servers joined %s, left %s', self.robot_id, added, removed)
             self.on_change(added, removed)
+
+
+class GroupAssignmentsListener(object):
+    """Grouped deployments: ``on_assignments(groups, assigned)`` for each table of the top
+    manager (``{group: [servers]}``, ``{robot: group}``); tables from other nodes are
+    ignored with a throttled warning naming the publisher."""
+
+    def __init__(self, top_node, on_assignments, who):
+        self.top_node = rospy.resolve_name(top_node)
+        self.on_assignments, self.who = on_assignments, who
+        self.sub = None
+
+    def start(self):
+        self.sub = rospy.Subscriber(fleet(names.GROUPS_TOPIC), GroupAssignments, self.on_msg,
+                                    queue_size=10)
+
+    def on_msg(self, msg):
+        sender = publisher_of(msg)
+        if sender != self.top_node:
+            rospy.logwarn_throttle(5.0, '%s: ignored group assignments published by %s (the '
+                                   'top manager is %s)' % (self.who, sender, self.top_node))
+            return
+        groups = dict((g.group_id, list(g.servers)) for g in msg.groups)
+        self.on_assignments(groups, dict(zip(msg.robot_id, msg.group_id)))
+
+
+class GroupFollower(object):
+    """Robot side of a grouped deployment: probe what the top manager's table says (this
+    robot's group's servers and every group's representative, plus ``static``), and take
+    flags from the group's manager: ``on_change(added, removed)``, ``on_group(group)``."""
+
+    def __init__(self, robot_id, static, top_node, on_change, on_group):
+        self.robot_id = robot_id
+        self.announced = ServerAnnouncements(static, on_change, None, robot_id)
+        self.listener = GroupAssignmentsListener(top_node, self.on_assignments,
+                                                 'robot %d' % robot_id)
+        self.on_group = on_group
+        self.group = None
+
+    def start(self):
+        self.listener.start()
+
+    def on_assignments(self, groups, assigned):
+        group = assigned.get(self.robot_id)
+        self.announced.on_servers(FleetServers(servers=sorted(probe_set(groups, group))))
+        if group is not None and group != self.group:
+            rospy.loginfo('robot %d: in server group %d (servers %s)', self.robot_id, group,
+                          groups.get(group))
+            self.group = group
+            self.on_group(group)

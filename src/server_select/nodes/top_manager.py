@@ -1,0 +1,87 @@
+"""Top manager of a grouped deployment: assigns each robot to a group of servers."""
+
+import threading
+
+import rospy
+
+from server_select.core import names
+from server_select.core.groups import GroupAssigner
+from server_select.core.window import valid_rtt
+from server_select.msg import GroupAssignments, LatencySamples, ServerGroup
+from server_select.ros.graph import publisher_of
+from server_select.ros.node import fleet, owned_by, param, run
+
+
+class TopManagerNode(object):
+    """The top level of the paper's server groups (§4, future work).
+
+    Robots probe their group's servers and every group's representative (its first
+    server) and send one ``latency_samples`` batch per round. This node keeps each robot's
+    windowed mean round trip to every representative and assigns the robot to the group
+    whose representative is nearest (moving it only when another is nearer by
+    ``~group_margin`` s); the assignment table goes out latched on ``group_assignments``
+    whenever it changed (at most every 0.2 s). Each group's own manager
+    (``manager.launch group:=<g>``, node ``manager_g<g>``) ranks its servers for its robots.
+
+    :ROS Parameters:
+        - ``~groups`` (required): ``{group id: [server ids]}``
+        - ``~window`` (s, 5.0), ``~group_margin`` (s, 0.001)
+        - ``~robot_node`` (``/robot{id}``): whose samples count for robot {id} (``*``: any)
+        - ``~fleet_ns`` (``/``)
+    :ROS Subscribers:
+        - ``latency_samples`` (server_select/LatencySamples)
+    :ROS Publishers:
+        - ``group_assignments`` (server_select/GroupAssignments, latched)
+    """
+
+    def __init__(self):
+        self.groups = param('groups')
+        self.assigner = GroupAssigner(self.groups, param('window'), param('group_margin'))
+        self.robot_node = param('robot_node')
+        self._dirty = threading.Event()
+        self.pub = self.sub = self.timer = None
+
+    def start(self):
+        self.pub = rospy.Publisher(fleet(names.GROUPS_TOPIC), GroupAssignments, queue_size=1,
+                                   latch=True)
+        self.sub = rospy.Subscriber(fleet(names.SAMPLES_TOPIC), LatencySamples, self.on_batch,
+                                    queue_size=1000, tcp_nodelay=True)
+        self.timer = rospy.Timer(rospy.Duration(0.2), self.on_timer)
+        self.publish()
+        rospy.loginfo('top manager: groups %s', self.groups)
+
+    def on_batch(self, batch):
+        robot = batch.robot_id
+        if self.robot_node is not None:
+            expected = rospy.resolve_name(self.robot_node.format(id=robot))
+            if not owned_by(publisher_of(batch), expected):
+                rospy.logwarn_throttle(5.0, 'top manager: ignored samples of robot %d published '
+                                       'by %s (robot %d is %s)' % (robot, publisher_of(batch),
+                                                                   robot, expected))
+                return
+        now = rospy.get_time()
+        for server, ok, rtt in zip(batch.server_id, batch.ok, batch.rtt):
+            if ok and not valid_rtt(rtt):
+                rospy.logwarn_throttle(5.0, 'top manager: ignored a round trip %r of robot %d '
+                                       'from %s' % (rtt, robot, publisher_of(batch)))
+                continue
+            self.assigner.add(robot, server, now, ok, rtt)
+        if self.assigner.assign(robot, now):
+            self._dirty.set()
+
+    def on_timer(self, _event):
+        if self._dirty.is_set():
+            self._dirty.clear()
+            self.publish()
+
+    def publish(self):
+        table = self.assigner.table()
+        msg = GroupAssignments(
+            groups=[ServerGroup(group_id=g, servers=s) for g, s in self.groups.items()],
+            robot_id=[r for r, _ in table], group_id=[g for _, g in table])
+        msg.header.stamp = rospy.Time.now()
+        self.pub.publish(msg)
+
+
+def main():
+    run('top_manager', TopManagerNode)
