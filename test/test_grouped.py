@@ -1,0 +1,81 @@
+#!/usr/bin/env python3
+"""A grouped deployment (grouped_example.launch): assignment, probing and flags per group.
+
+Robots start knowing no server. The top manager must put each robot in a group; the robot
+must then probe exactly its group's servers plus every group's representative, take flags
+only from its group's manager (whose rankings hold only that group's servers), and have
+its tasks answered.
+"""
+
+import sys
+import threading
+import unittest
+
+import rospy
+import rostest
+
+from server_select.core import names
+from server_select.core.groups import probe_set
+from server_select.core.procs import wait_until
+from server_select.msg import GroupAssignments, LatencySamples, SelectionFlag, TaskReport
+from server_select.ros.graph import publisher_of
+
+ROBOTS = (1, 2)
+
+
+class GroupedTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('test_grouped')
+        cls.lock = threading.Lock()
+        cls.table, cls.batches, cls.flags, cls.reports = None, [], [], []
+        cls.subs = [
+            rospy.Subscriber(names.GROUPS_TOPIC, GroupAssignments, cls.keep_table),
+            rospy.Subscriber(names.SAMPLES_TOPIC, LatencySamples, cls.keep, 'batches'),
+            rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, cls.keep, 'flags'),
+            rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, cls.keep, 'reports')]
+
+    @classmethod
+    def keep_table(cls, msg):
+        with cls.lock:
+            cls.table = (dict((g.group_id, list(g.servers)) for g in msg.groups),
+                         dict(zip(msg.robot_id, msg.group_id)), rospy.get_time())
+
+    @classmethod
+    def keep(cls, msg, store):
+        with cls.lock:
+            getattr(cls, store).append((rospy.get_time(), publisher_of(msg), msg))
+
+    def snapshot(self, store):
+        with self.lock:
+            return list(getattr(self, store))
+
+    def test_robots_are_grouped_probe_their_group_and_follow_its_manager(self):
+        self.assertTrue(wait_until(lambda: self.table and all(
+            r in self.table[1] for r in ROBOTS), 30.0), 'assignments: %s' % (self.table,))
+        self.assertTrue(wait_until(lambda: all(
+            sum(1 for _, _, m in self.snapshot('reports') if m.robot_id == r) >= 20
+            for r in ROBOTS), 60.0))
+        groups, assigned, since = self.table
+        reports = [m for _, _, m in self.snapshot('reports')]
+        self.assertEqual([(m.robot_id, m.task_id, m.error) for m in reports if not m.ok], [])
+        for robot in ROBOTS:
+            group = assigned[robot]
+            late = [m for t, _, m in self.snapshot('batches')
+                    if m.robot_id == robot and t > since + 2.0]
+            self.assertTrue(late)
+            self.assertEqual(set(tuple(sorted(m.server_id)) for m in late),
+                             {tuple(sorted(probe_set(groups, group)))})
+            flags = [(sender, m) for _, sender, m in self.snapshot('flags')
+                     if m.robot_id == robot]
+            self.assertTrue(flags)
+            self.assertEqual(set(sender for sender, _ in flags), {'/manager_g%d' % group})
+            self.assertTrue(all(set(m.ranking) <= set(groups[group]) for _, m in flags))
+            answered = set(m.answered_by for m in reports if m.robot_id == robot
+                           and m.header.stamp.to_sec() > since + 2.0)
+            self.assertTrue(answered and answered <= set(groups[group]), answered)
+
+
+if __name__ == '__main__':
+    rostest.rosrun('server_select', 'test_grouped', GroupedTest, sys.argv)
