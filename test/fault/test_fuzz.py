@@ -18,7 +18,8 @@ from hypothesis import strategies as st
 from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 
 from server_select.msg import (Detection, Detections, FoundTarget, ImageResult, ImageTask,
-                               LatencySample, OrbTask, SelectionFlag, SortResult, SortTask)
+                               LatencySample, LatencySamples, OrbTask, SelectionFlag,
+                               SortResult, SortTask)
 from server_select.nodes.manager import ManagerNode
 from server_select.nodes.robot import RobotNode
 from server_select.nodes.server import ServerNode
@@ -111,7 +112,27 @@ def test_manager_samples(nodes, claim, pair, ok, rtt, sender):
     sender = sender if sender is not None else '/robot%d' % pair[0]   # None: the robot
     nodes['manager'].on_sample(sent_by(LatencySample(robot_id=robot, server_id=server, ok=ok,
                                                      rtt=rtt), sender), pair)
-    for means in nodes['manager'].window.robot_stats(pair[0], [1, 2], rospy.get_time()).values():
+    window = nodes['manager'].rankings.window
+    for means in window.robot_stats(pair[0], [1, 2], rospy.get_time()).values():
+        assert means.mean is None or (math.isfinite(means.mean) and means.mean >= 0)
+
+
+@FUZZ
+@given(robot=st.one_of(st.sampled_from([1, 2]), uint32),
+       samples=st.lists(st.tuples(st.one_of(st.sampled_from([1, 2]), uint32), st.booleans(),
+                                  floats), max_size=6),
+       ragged=st.integers(0, 2), sender=st.one_of(st.none(), senders))
+def test_manager_sample_batches(nodes, robot, samples, ragged, sender):
+    """The fleet profile's batches: any ids, NaN or negative round trips, arrays of
+    different lengths, any publisher."""
+    servers, oks, rtts = (list(x) for x in zip(*samples)) if samples else ([], [], [])
+    oks = oks[:len(oks) - ragged] if ragged == 1 else oks
+    rtts = rtts + [0.0] if ragged == 2 else rtts
+    batch = LatencySamples(robot_id=robot, server_id=servers, ok=oks, rtt=rtts)
+    nodes['manager'].on_batch(sent_by(batch, sender if sender is not None else
+                                      '/robot%d' % robot))
+    window = nodes['manager'].rankings.window
+    for means in window.robot_stats(robot, [1, 2], rospy.get_time()).values():
         assert means.mean is None or (math.isfinite(means.mean) and means.mean >= 0)
 
 
@@ -168,7 +189,7 @@ def test_every_node_still_serves(nodes):
     manager = nodes['manager']
     manager.on_sample(sent_by(LatencySample(robot_id=1, server_id=1, ok=True, rtt=0.002),
                               '/robot1'), (1, 1))
-    assert manager.window.stats(1, 1, rospy.get_time()).ok_count >= 1
+    assert manager.rankings.window.stats(1, 1, rospy.get_time()).ok_count >= 1
     robot = nodes['robot']
     robot.on_flag(sent_by(SelectionFlag(robot_id=1, server_id=2, ranking=[2, 1]), '/manager'))
     candidates = robot.selection.candidates()    # the fuzzed results may have ejected some
@@ -200,12 +221,12 @@ def test_camera_frames(kind, buff):
     data=st.one_of(st.binary(max_size=300), st.just(CAMERA_JPEG_DATA)),
     features=st.integers(0, 2 ** 32 - 1))
 def test_plugin_tasks(nodes, robot, server, fmt, data, features):
-    handler = PluginHandler(1, Orb(None, {}))
-    if not hasattr(test_plugin_tasks, 'pub'):
-        handler.start()
-        test_plugin_tasks.pub = handler.pub
-    handler.pub = test_plugin_tasks.pub
-    handler.on_task(OrbTask(robot_id=robot, task_id=1, server_id=server,
-                            frame=CompressedImage(format=fmt, data=data),
-                            max_features=min(features, 2000)))
-    assert handler.done + handler.rejected == (1 if server == 1 else 0)
+    if not hasattr(test_plugin_tasks, 'handler'):    # one handler, its endpoint started
+        test_plugin_tasks.handler = PluginHandler(1, Orb(None, {}))
+        test_plugin_tasks.handler.start()
+    handler = test_plugin_tasks.handler
+    before = handler.done + handler.rejected
+    handler.endpoint.on_task(OrbTask(robot_id=robot, task_id=1, server_id=server,
+                                     frame=CompressedImage(format=fmt, data=data),
+                                     max_features=min(features, 2000)), False)
+    assert handler.done + handler.rejected == before + (1 if server == 1 else 0)
