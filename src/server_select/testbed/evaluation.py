@@ -109,10 +109,12 @@ class HostRun(object):
             else:
                 self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
                             'profile:=%s' % options.profile)
-        for robot in robots:     # fleet: every server found at run time, none given
+        # fleet, select mode: every server found at run time (the manager lists them)
+        learned = options.profile == 'fleet' and mode == 'select'
+        for robot in robots:
             self.launch(robot.name, 'robot.launch', 'robot_id:=%d' % robot.id,
                         'profile:=%s' % options.profile,
-                        'servers:=%s' % ('[]' if options.profile == 'fleet' else _ids(servers)),
+                        'servers:=%s' % ('[]' if learned else _ids(servers)),
                         'mode:=%s' % ('fixed' if mode == 'fixed' else 'select'),
                         'fixed_server:=%d' % options.fixed_server,
                         'probe_rate:=%g' % options.probe_rate,
@@ -177,6 +179,8 @@ def main(argv=None):
     parser.add_argument('--task-size', type=int, default=default('task_size'))
     parser.add_argument('--window', type=float, default=default('window'))
     parser.add_argument('--hysteresis', type=float, default=default('hysteresis'))
+    parser.add_argument('--profile', choices=('paper', 'fleet'), default=default('profile'),
+                        help='node defaults (default: paper, the paper as written)')
     parser.add_argument('--analyze-only', action='store_true',
                         help='do not run: analyse the bags already in --out')
     args = parser.parse_args(argv)
@@ -187,7 +191,7 @@ def main(argv=None):
     out = os.path.join(args.out, Scenario.load(args.scenario).name)
     options = RunOptions(fixed_server=args.fixed_server, window=args.window,
                          task_rate=args.task_rate, task_size=args.task_size,
-                         hysteresis=args.hysteresis)
+                         hysteresis=args.hysteresis, profile=args.profile)
     try:
         if not args.analyze_only:
             for mode in modes:
