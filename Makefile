@@ -21,7 +21,7 @@ DEMO_DURATION ?= 30
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate bench bench-emulator bench-memory \
-  bench-scale bench-routing \
+  bench-scale bench-routing bench-hedging \
   test unit-test testbed-test fault-test catkin-test rostest lint clean
 all: build
 
@@ -102,6 +102,10 @@ bench-scale: build
 # Bytes per task on the testbed, broadcast vs direct routing, 2-8 servers (root, ~8 min).
 bench-routing: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.routing_bytes --out results/bench
+
+# Hedged tasks on lossy links, off vs on: tail round trip and extra requests (root, ~6 min).
+bench-hedging: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.hedging --out results/bench
 
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build

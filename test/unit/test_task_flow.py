@@ -198,3 +198,52 @@ def test_a_task_that_cannot_be_made_is_reported_failed_and_not_sent():
     assert (report.ok, report.error, report.attempts) == \
         (False, 'cannot make the task: frame does not decode', 0)
     assert w.published == [] and len(w.flow) == 0
+
+
+def _learn(w, server, rtts):
+    """Give ``server`` a history of answered tasks with these round trips."""
+    for rtt in rtts:
+        task = w.flow.send_next('warm-up')
+        w.clock.now += rtt
+        w.answer(task, server)
+
+
+def test_a_hedged_task_also_goes_to_the_next_server_after_the_p95_and_the_first_wins():
+    w = World(candidates=(3, 4), hedge=0.95)
+    _learn(w, 3, [0.010] * 19 + [0.020])          # p95 of server 3: 20 ms
+    del w.published[:]
+    task = w.flow.send_next('s')
+    w.clock.now += 0.015
+    w.flow.tick()
+    assert [s for _, s in w.published] == [3]     # 15 ms: not yet
+    w.clock.now += 0.010
+    w.flow.tick()
+    assert [s for _, s in w.published] == [3, 4]  # 25 ms: a copy to server 4
+    assert (w.flow.hedged, w.flow.resent, w.failures) == (1, 0, [])   # nobody blamed
+    w.clock.now += 0.001
+    outcome = w.answer(task, 4)                   # the copy wins
+    assert outcome.ok and outcome.answered_by == 4 and outcome.attempts == 2
+    assert w.answer(task, 3) == DUPLICATE         # the original, late: counted, dropped
+    assert w.flow.ignored[DUPLICATE] == 1
+    w.flow.tick()
+    assert [s for _, s in w.published] == [3, 4]  # once per task
+
+
+def test_no_hedge_without_history_or_without_another_server_or_when_off():
+    w = World(candidates=(3, 4), hedge=0.95)
+    w.flow.send_next('s')                         # no round trips of server 3 yet
+    w.clock.now += 0.3
+    w.flow.tick()
+    assert w.flow.hedged == 0
+    alone = World(candidates=(3,), hedge=0.95)
+    _learn(alone, 3, [0.010] * 20)
+    alone.flow.send_next('s')
+    alone.clock.now += 0.05
+    alone.flow.tick()
+    assert alone.flow.hedged == 0 and alone.failures == []
+    off = World(candidates=(3, 4))
+    _learn(off, 3, [0.010] * 20)
+    off.flow.send_next('s')
+    off.clock.now += 0.05
+    off.flow.tick()
+    assert off.flow.hedged == 0 and len(off.published) == 21

@@ -26,3 +26,12 @@ class AttemptClock(object):
             return min(self.timeout, max(self.floor, self.first))
         p99 = rtts[min(len(rtts) - 1, int(0.99 * len(rtts)))]
         return min(self.timeout, max(self.floor, self.factor * p99))
+
+    def hedge_seconds(self, server, quantile):
+        """The ``quantile`` of the server's recent round trips (None while it has fewer than
+        ``min_samples``): how long to wait before a hedged copy goes elsewhere."""
+        with self._lock:
+            rtts = sorted(self._rtts.get(server, ()))
+        if len(rtts) < self.min_samples:
+            return None
+        return rtts[min(len(rtts) - 1, int(quantile * len(rtts)))]

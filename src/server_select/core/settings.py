@@ -11,7 +11,8 @@ from server_select.core.groups import parse_groups
 from server_select.core.params import (one_of, parse_bool, parse_count, parse_id,
                                        parse_members, parse_mode, parse_names, parse_non_negative,
                                        parse_number, parse_plugins, parse_positive,
-                                       parse_positive_int, parse_publisher, parse_text)
+                                       parse_positive_int, parse_publisher, parse_quantile,
+                                       parse_text)
 
 REQUIRED = object()
 
@@ -90,6 +91,10 @@ PARAMS = {
                               'task again'),
     'retry_factor': Param(5.0, parse_positive, "an attempt's deadline: this x the server's "
                           'recent p99 task round trip'),
+    'hedge': Param(False, parse_bool, 'also send a task still unanswered after its '
+                   "server's ~hedge_quantile round trip to the next server (first answer wins)"),
+    'hedge_quantile': Param(0.95, parse_quantile, 'when a hedged copy goes (quantile of the '
+                            "server's recent task round trips)"),
     'retry_floor': Param(0.25, parse_positive, "shortest attempt deadline (s)"),
     'manager_node': Param('/manager', parse_publisher, 'flags count only from this node '
                           '(*: from any)'),

@@ -12,7 +12,10 @@ clock), so it is tested without a master. It goes forward only::
 Tasks are idempotent and carry their id: a task without an answer by its attempt deadline
 (a multiple of that server's recent round trips) is sent again to the next candidate it
 has not tried, and the first answer from any server it was sent to wins; later ones are
-counted as duplicates. Every task yields exactly one :class:`Outcome`.
+counted as duplicates. With ``hedge`` (a quantile, e.g. 0.95), a task still unanswered
+after that quantile of its server's recent round trips is also sent to the next candidate
+without blaming the first ("The Tail at Scale"'s hedged request). Every task yields
+exactly one :class:`Outcome`.
 """
 
 import collections
@@ -37,11 +40,13 @@ DUPLICATE, LATE, UNKNOWN, FOREIGN, RETRIED = 'duplicate', 'late', 'unknown', 'fo
 
 class _Pending(object):
     """A task in flight: its request, check context, and the attempts made so far."""
-    __slots__ = ('task_id', 'stamp', 'request', 'context', 'started', 'attempts', 'deadline')
+    __slots__ = ('task_id', 'stamp', 'request', 'context', 'started', 'attempts', 'deadline',
+                 'hedged')
 
     def __init__(self, task_id, stamp, request, context, started):
         self.task_id, self.stamp, self.request, self.context = task_id, stamp, request, context
         self.started, self.attempts, self.deadline = started, [], started
+        self.hedged = False
 
     def sent_at(self, server):
         return next((t for s, t in reversed(self.attempts) if s == server), None)
@@ -61,11 +66,13 @@ class TaskFlow(object):
     :param on_failure, on_success: ``(server, why)`` / ``(server)``: evidence about servers.
     :param deadlines: an :class:`~server_select.core.attempts.AttemptClock`.
     :param ids: iterator of task ids (shared by the robot's streams: ids are per robot).
+    :param hedge: None, or the quantile of a server's round trips after which an
+        unanswered task is also sent to the next candidate.
     """
 
     def __init__(self, kind, timeout, candidates, make, publish, check, report, run_local=None,
                  on_failure=None, on_success=None, deadlines=None, ids=None,
-                 clock=time.monotonic, remember=2000, keep_rtts=2000):
+                 clock=time.monotonic, remember=2000, keep_rtts=2000, hedge=None):
         if not timeout > 0:
             raise ValueError('timeout must be positive, got %r' % (timeout,))
         self.kind, self.timeout = kind, float(timeout)
@@ -80,7 +87,8 @@ class TaskFlow(object):
         self._pending = collections.OrderedDict()     # task id -> _Pending, oldest first
         self._ended = collections.OrderedDict()       # task id -> answered (bool)
         self._remember = remember
-        self.sent = self.ok = self.failed = self.resent = self.switches = 0
+        self.hedge = hedge
+        self.sent = self.ok = self.failed = self.resent = self.switches = self.hedged = 0
         self._last_first = None
         self.ignored = collections.Counter()          # DUPLICATE / LATE / UNKNOWN / FOREIGN
         self.rtts = collections.deque(maxlen=keep_rtts)   # recent answered round trips
@@ -128,13 +136,17 @@ class TaskFlow(object):
                                now + self.deadlines.seconds(server))
         self._publish(pending.request, server)
 
-    def _next(self, pending):
-        """Send ``pending`` to the next candidate it has not tried; False if there is none."""
+    def _next(self, pending, hedge=False):
+        """Send ``pending`` to the next candidate it has not tried (a re-send, or a
+        ``hedge``); False if there is none."""
         tried = set(s for s, _ in pending.attempts)
         untried = [s for s in self._candidates() if s not in tried and s != LOCAL]
         if not untried:
             return False
-        self.resent += 1
+        if hedge:
+            self.hedged += 1
+        else:
+            self.resent += 1
         self._attempt(pending, untried[0])
         return True
 
@@ -187,11 +199,24 @@ class TaskFlow(object):
                                      % (now - pending.attempts[-1][1]))
                     if not self._next(pending):   # nobody left: wait for any late answer
                         pending.deadline = pending.started + self.timeout
+                elif self.hedge is not None and not pending.hedged:
+                    self._hedge(pending, now)
         return [self._end(Outcome(
             p.task_id, self.kind, p.stamp, p.attempts[0][0], NO_SERVER, False,
             'no result within task_timeout %.3g s (%d attempts: servers %s)'
             % (self.timeout, len(p.attempts), ', '.join(str(s) for s, _ in p.attempts)),
             None, len(p.attempts))) for p in ended]
+
+    def _hedge(self, pending, now):
+        """A copy to the next candidate once the first attempt is past its server's
+        ``hedge`` quantile (once per task; the first server is not blamed)."""
+        first, sent = pending.attempts[0]
+        delay = self.deadlines.hedge_seconds(first, self.hedge)
+        if len(pending.attempts) == 1 and (delay is None or now < sent + delay):
+            return
+        pending.hedged = True          # sent on, or already re-sent: no hedge
+        if len(pending.attempts) == 1:
+            self._next(pending, hedge=True)
 
     def _end(self, outcome):
         with self._lock:

@@ -88,7 +88,8 @@ class RobotNode(object):
         kinds = self._kinds(mode)
         flow_args = dict(timeout=param('task_timeout'), candidates=self.selection.candidates,
                          on_failure=self.on_failure, on_success=self.health.task_ok,
-                         ids=itertools.count(1))    # task ids are per robot, across streams
+                         ids=itertools.count(1),    # task ids are per robot, across streams
+                         hedge=param('hedge_quantile') if param('hedge') else None)
         retry = dict(factor=param('retry_factor'), floor=param('retry_floor'))
         self.streams = [
             TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready,

@@ -123,8 +123,9 @@ class TaskStream(object):
     def summary(self):
         flow = self.flow
         ignored = sum(flow.ignored.values())
-        return '%s: %d sent, %d ok, %d failed, %d pending, %d re-sent%s, round trip %s' % (
+        return '%s: %d sent, %d ok, %d failed, %d pending, %d re-sent%s%s, round trip %s' % (
             flow.kind, flow.sent, flow.ok, flow.failed, len(flow), flow.resent,
+            ', %d hedged' % flow.hedged if flow.hedge is not None else '',
             ', %d results ignored' % ignored if ignored else '',
             format_ms(summarize(list(flow.rtts)), ('median', 'p99', 'max')))
 

@@ -15,7 +15,8 @@ from server_select.core.stats import summarize
 from server_select.core.tables import fmt, markdown_table
 
 Flag = collections.namedtuple('Flag', 't robot server ranking means')
-Report = collections.namedtuple('Report', 't robot task ok rtt server answered_by error')
+Report = collections.namedtuple('Report', 't robot task ok rtt server answered_by error attempts')
+Report.__new__.__defaults__ = (1,)      # attempts: servers the task went to
 Sample = collections.namedtuple('Sample', 't robot server ok rtt')
 Run = collections.namedtuple('Run', 'meta flags reports samples servers')
 Servers = collections.namedtuple('Servers', 't servers')
@@ -46,7 +47,7 @@ def load(bag_path):
                                   list(msg.mean_latency)))
             elif name == 'task_report':
                 reports.append(Report(t, msg.robot_id, msg.task_id, msg.ok, msg.rtt,
-                                      msg.server_id, msg.answered_by, msg.error))
+                                      msg.server_id, msg.answered_by, msg.error, msg.attempts))
             elif name.startswith('latency_R'):
                 samples.append(Sample(t, msg.robot_id, msg.server_id, msg.ok, msg.rtt))
             elif name == 'latency_samples':     # the fleet profile's batch per probe round

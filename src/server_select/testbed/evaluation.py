@@ -38,7 +38,7 @@ class RunOptions(object):
     def __init__(self, fixed_server=1, window=default('window'), task_rate=default('task_rate'),
                  task_size=default('task_size'), probe_rate=default('probe_rate'),
                  probe_timeout=default('probe_timeout'), task_timeout=default('task_timeout'),
-                 start_delay=5.0, hysteresis=default('hysteresis'), prefix='ssb',
+                 start_delay=5.0, hysteresis=default('hysteresis'), prefix=None,
                  profile=default('profile')):
         self.fixed_server = fixed_server
         self.window = window

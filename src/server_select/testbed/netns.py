@@ -3,8 +3,11 @@
 A :class:`Testbed` gives every host of a scenario its own network namespace
 ``<prefix>-<host>`` and address ``<subnet>.<n>``, starts :mod:`server_select.testbed.linkemu`
 between them, runs commands inside hosts, and tears everything down on exit, Ctrl-C or
-error. A later run removes what a crashed one left (namespaces with its prefix and the
-processes inside them, a stale emulator). Needs root and /dev/net/tun.
+error. Each run has a namespace prefix of its own (by default ``ssb<pid>``), so two runs on
+one machine leave each other alone; a run removes only what it created, and what a run
+whose process has died left behind (namespaces with its prefix, the processes inside
+them, a stale emulator: the state file in ``/run`` names the owner). Needs root and
+/dev/net/tun.
 """
 
 import json
@@ -105,6 +108,24 @@ def cleanup(prefix):
     return removed
 
 
+def cleanup_abandoned():
+    """Clean up after every run whose owner process is gone; returns what was removed."""
+    removed = []
+    try:
+        states = [f for f in os.listdir(STATE_DIR) if f.endswith('.json')]
+    except OSError:
+        return removed
+    for name in states:
+        try:
+            with open(os.path.join(STATE_DIR, name)) as stream:
+                owner = json.load(stream).get('owner_pid')
+        except (OSError, ValueError):
+            continue
+        if owner and owner != os.getpid() and not _alive(owner):
+            removed += cleanup(name[:-len('.json')])
+    return removed
+
+
 def leftovers(prefix):
     """What of a testbed with ``prefix`` still exists (for tests of the teardown)."""
     found = [n for n in _netns_list() if n.startswith(prefix + '-')]
@@ -120,8 +141,9 @@ def leftovers(prefix):
 class Testbed(object):
     """The hosts of one scenario, up between ``__enter__`` and ``__exit__``."""
 
-    def __init__(self, scenario, scenario_path, run_dir, prefix='ssb', subnet='10.231.0',
+    def __init__(self, scenario, scenario_path, run_dir, prefix=None, subnet='10.231.0',
                  seed=0):
+        prefix = prefix or 'ssb%d' % os.getpid()
         self.scenario = scenario
         self.scenario_path = os.path.abspath(scenario_path)
         self.run_dir = os.path.abspath(run_dir)
@@ -151,7 +173,9 @@ class Testbed(object):
     def up(self):
         check_privileges()
         cleanup(self.prefix)
+        cleanup_abandoned()
         os.makedirs(self.run_dir, exist_ok=True)
+        self._write_state(None)
         for sig in (signal.SIGTERM, signal.SIGHUP):
             self._old_handlers[sig] = signal.signal(sig, self._on_signal)
         try:
@@ -169,9 +193,7 @@ class Testbed(object):
                  '--scenario', self.scenario_path, '--hosts', hosts_file, '--seed', str(self.seed),
                  '--stats', os.path.join(self.run_dir, 'link_stats.json')],
                 stdout=subprocess.PIPE, universal_newlines=True, start_new_session=True)
-            os.makedirs(STATE_DIR, exist_ok=True)
-            with open(os.path.join(STATE_DIR, self.prefix + '.json'), 'w') as stream:
-                json.dump({'emulator_pid': self.emulator.pid, 'run_dir': self.run_dir}, stream)
+            self._write_state(self.emulator.pid)
             line = self.emulator.stdout.readline().split()
             if len(line) != 2 or line[0] != 'ready':
                 raise EmulatorError('link emulator did not start (exit %s)' % self.emulator.wait())
@@ -179,6 +201,13 @@ class Testbed(object):
         except BaseException:
             self.down()
             raise
+
+    def _write_state(self, emulator_pid):
+        """What a later run needs to clean up after this one if its process dies."""
+        os.makedirs(STATE_DIR, exist_ok=True)
+        with open(os.path.join(STATE_DIR, self.prefix + '.json'), 'w') as stream:
+            json.dump({'owner_pid': os.getpid(), 'emulator_pid': emulator_pid,
+                       'run_dir': self.run_dir}, stream)
 
     def _on_signal(self, signum, _frame):
         raise KeyboardInterrupt('signal %d' % signum)

@@ -1,0 +1,115 @@
+"""Hedged tasks on lossy links (testbed, root): tail round trip vs extra requests.
+
+One robot sends sort tasks at ``--rate`` to two servers over links of ``--delay`` ms one
+way with ``--loss`` packet loss (a lost packet costs a TCP retransmission, 200 ms or
+more: the tail "The Tail at Scale" hedges against), the manager selecting. Each run is
+made with ``hedge:=false`` and ``hedge:=true`` (a copy to the next server once a task is
+past its server's p95 round trip), ``--runs`` times, interleaved. Printed per setting:
+tasks, failed (counted at the task timeout), round trip p50 / p99 / p99.9 / max, the
+share of tasks answered by a second server, and the extra requests per task (every
+attempt after the first: hedges and re-sends). Median of the runs, (min-max).
+"""
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import tempfile
+
+import numpy as np
+import yaml
+
+from server_select.core.tables import markdown_table
+from server_select.testbed import bag_analysis
+from server_select.testbed.evaluation import HostRun
+from server_select.testbed.netns import Testbed
+from server_select.testbed.scenario import Scenario
+
+TIMEOUT = 2.0
+
+
+def scenario(delay, loss, seconds):
+    return {'name': 'hedging', 'duration': seconds + 12,
+            'hosts': {'manager': {'role': 'manager'}, 'server1': {'role': 'server', 'id': 1},
+                      'server2': {'role': 'server', 'id': 2},
+                      'robot1': {'role': 'robot', 'id': 1}},
+            'default': {'delay': 0.5},
+            'links': {'robot1 server1': [{'at': 0, 'delay': delay, 'loss': loss}],
+                      'robot1 server2': [{'at': 0, 'delay': delay * 1.5, 'loss': loss}]}}
+
+
+def run_once(hedge, args, work, index):
+    data = scenario(args.delay, args.loss, args.seconds)
+    path = os.path.join(work, 'hedging.yaml')
+    with open(path, 'w') as stream:
+        yaml.safe_dump(data, stream)
+    name = '%s-%d' % ('hedge' if hedge else 'plain', index)
+    run_dir, bag = os.path.join(work, name), os.path.join(work, name + '.bag')
+    with Testbed(Scenario(data), path, run_dir, prefix='sshd') as tb:
+        run = HostRun(tb, tb.scenario, run_dir)
+        run.start_master()
+        run.launch('manager', 'manager.launch', 'robots:=1', 'servers:=1,2')
+        run.popen('manager', ['rosbag', 'record', '--tcpnodelay', '-O', bag, '/task_report'],
+                  'rosbag')
+        for server in (1, 2):
+            run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server)
+        run.launch('robot1', 'robot.launch', 'robot_id:=1', 'servers:=1,2',
+                   'task_rate:=%g' % args.rate, 'task_timeout:=%g' % TIMEOUT,
+                   'start_delay:=3', 'hedge:=%s' % ('true' if hedge else 'false'))
+        tb.sleep_until(tb.scenario.duration)
+    reports = [r for r in bag_analysis.load(bag).reports if r.t > 8.0]   # after warm-up
+    rtts = np.array([r.rtt if r.ok else TIMEOUT for r in reports])
+    attempts = [max(1, r.attempts) for r in reports]
+    p50, p99, p999 = np.percentile(rtts, [50, 99, 99.9]) if len(rtts) else (0, 0, 0)
+    return {'tasks': len(reports), 'failed': sum(1 for r in reports if not r.ok),
+            'p50': p50, 'p99': p99, 'p999': p999, 'max': float(rtts.max()) if len(rtts) else 0,
+            'second': sum(1 for r in reports if r.ok and r.answered_by != r.server) /
+            max(1, len(reports)), 'extra': (sum(attempts) - len(attempts)) / max(1, len(reports))}
+
+
+def table(results):
+    def spread(runs, key, fmt, scale=1.0):
+        values = [scale * r[key] for r in runs]
+        text = fmt % statistics.median(values)
+        return text + (' (%s-%s)' % (fmt % min(values), fmt % max(values))
+                       if len(values) > 1 else '')
+    return markdown_table(
+        ('hedge', 'tasks', 'failed', 'p50 ms', 'p99 ms', 'p99.9 ms', 'max ms',
+         'answered by a 2nd server %', 'extra requests per task %'),
+        [(setting, spread(runs, 'tasks', '%d'), spread(runs, 'failed', '%d'),
+          spread(runs, 'p50', '%.1f', 1e3), spread(runs, 'p99', '%.1f', 1e3),
+          spread(runs, 'p999', '%.1f', 1e3), spread(runs, 'max', '%.0f', 1e3),
+          spread(runs, 'second', '%.1f', 100), spread(runs, 'extra', '%.1f', 100))
+         for setting, runs in results.items()])
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--delay', type=float, default=5.0, help='one-way ms to server 1 '
+                        '(server 2: 1.5 x)')
+    parser.add_argument('--loss', type=float, default=0.01)
+    parser.add_argument('--rate', type=float, default=10.0)
+    parser.add_argument('--seconds', type=float, default=60.0, help='tasks sent per run')
+    parser.add_argument('--runs', type=int, default=2)
+    parser.add_argument('--out', default='results/bench')
+    args = parser.parse_args(argv)
+    results = {'off': [], 'on': []}
+    with tempfile.TemporaryDirectory(prefix='bench_hedging') as work:
+        for index in range(args.runs):
+            for setting in ('off', 'on'):
+                results[setting].append(run_once(setting == 'on', args, work, index))
+                print(table({setting: results[setting][-1:]}).splitlines()[-1],
+                      file=sys.stderr, flush=True)
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, 'hedging.json'), 'w') as stream:
+        json.dump(results, stream, indent=1)
+    print('\nSort tasks at %g/s over %g ms one way (server 2: %g ms), %g %% loss each way; '
+          'failed tasks counted at %g s; median (min-max) of %d runs\n\n%s\n'
+          % (args.rate, args.delay, args.delay * 1.5, 100 * args.loss, TIMEOUT, args.runs,
+             table(results)))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
