@@ -16,6 +16,9 @@ from server_select.ros.membership import GroupAssignmentsListener, ServerDiscove
 from server_select.ros.node import fleet, owned_by, param, run
 
 
+SLICES = 10     # the periodic flags go out in this many slices of the robots
+
+
 class ManagerNode(object):
     """The selection manager of paper 1.
 
@@ -74,7 +77,8 @@ class ManagerNode(object):
             raise ParamError('~robot_node: %r is not a node name with {id}: %s'
                              % (pattern, error))
         self._robot_nodes = {}
-        self._update_lock = threading.Lock()
+        self._locks = {}          # robot -> lock of its ranking and flag
+        self._slice = 0
         self.group = param('group')       # grouped: robots get their servers elsewhere
         self.discovery = ServerDiscovery(param('discovery_period')) \
             if param('discover') and self.group is None else None
@@ -105,7 +109,7 @@ class ManagerNode(object):
             if part is not None:
                 part.start()
         self.timers = [
-            rospy.Timer(rospy.Duration(1.0 / self.publish_rate), lambda _e: self.update_all(False)),
+            rospy.Timer(rospy.Duration(1.0 / (self.publish_rate * SLICES)), self.on_periodic),
             rospy.Timer(rospy.Duration(1.0 / self.update_rate), self.on_check)]
         rospy.loginfo('manager: robots %s, servers %s, window %.3g s, samples %s',
                       self.rankings.fixed_robots or 'as they come',
@@ -180,10 +184,14 @@ class ManagerNode(object):
         rospy.logwarn_throttle(5.0, 'manager: ignored a sample on %s published by %s: %s'
                                % (topic, publisher_of(msg), why))
 
-    def update_all(self, only_on_change):
-        for robot in self.rankings.robots():
-            if self.rankings.heard(robot):   # silent for a robot until it has sent samples
-                self.update(robot, only_on_change)
+    def on_periodic(self, _event):
+        """Every robot's flag once per ``1/~publish_rate`` s, a slice of the robots at a
+        time, so that re-ranking hundreds of robots never holds up a flag a sample asks
+        for."""
+        self._slice = (self._slice + 1) % SLICES
+        for index, robot in enumerate(self.rankings.robots()):
+            if index % SLICES == self._slice and self.rankings.heard(robot):
+                self.update(robot, only_on_change=False)
 
     def on_check(self, _event):
         """Between flags: re-rank the robots whose selected server has no good sample left
@@ -196,9 +204,9 @@ class ManagerNode(object):
     def update(self, robot, only_on_change):
         """Rank ``robot``'s servers now; publish unless unchanged and ``only_on_change``.
 
-        One update at a time: samples arrive on many threads, and a ranking computed
-        before another thread's sample must not be published after the newer one."""
-        with self._update_lock:
+        One update of a robot at a time: samples arrive on many threads, and a ranking
+        computed before another thread's sample must not be published after the newer one."""
+        with self._locks.setdefault(robot, threading.Lock()):
             ranking = self.rankings.rank(robot, rospy.get_time())
             if self.flags.offer(robot, ranking, only_on_change,
                                 lambda previous: choose(ranking, previous, self.hysteresis)):
