@@ -36,3 +36,18 @@ def test_every_benchmark_runs_and_reports(tmp_path):
         assert rows and all(r['achieved_' + unit] > 0 for r in rows), rows
     breakdown = json.loads((out / 'sort_breakdown.json').read_text())
     assert all(r['tasks'] > 0 and finite(r['rtt_ms']) for r in breakdown), breakdown
+
+
+def test_the_scale_benchmark_runs_and_reports(tmp_path):
+    """`make bench-scale` in a tiny configuration: flat per robot and grouped."""
+    proc = subprocess.run([sys.executable, '-m', 'server_select.bench.scale', '--sizes', '3x4',
+                           '--layouts', 'robot,pair', '--grouped-sizes', '4x4:2', '--limit',
+                           '6', '--measure', '2', '--out', str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:]
+    rows = json.loads((tmp_path / 'scale.json').read_text())
+    assert [r['layout'] for r in rows] == ['robot', 'pair', 'grouped']
+    for row in rows:        # every robot ranked, flags moved by the slow samples
+        assert finite(row['ranked_s']) and row['changes'] > 0, row
+        assert finite(row['manager_cpu']) and row['threads'] > 0, row

@@ -81,6 +81,7 @@ def test_rtt_follows_the_emulated_delay(runs):
 
 CRASHER = r'''
 import os, sys, time
+from server_select.testbed.scenario import Scenario
 from server_select.testbed.netns import Testbed
 tb = Testbed(Scenario.load(%(scenario)r), %(scenario)r, %(run)r, prefix='sscrash')
 tb.up()

@@ -1,6 +1,7 @@
 """What the benchmarks run on: a roscore of their own, a small fleet, the task reports."""
 
 import contextlib
+import json
 import os
 import socket
 import subprocess
@@ -108,3 +109,32 @@ class ReportListener(object):
 
 def us(summary):
     return dict((k, v * 1e6 if k != 'n' else v) for k, v in summary.items())
+
+
+@contextlib.contextmanager
+def scenario_run(data, work, name, prefix, record=('/task_report',)):
+    """The scenario ``data`` (a dict) up on the testbed under ``work/name`` with its
+    roscore and a rosbag recording ``record``: yields ``(HostRun, bag path)``; the run
+    lasts until the scenario's duration once the block has started the nodes. The link
+    emulator's counts are then in ``work/name/link_stats.json``."""
+    import yaml
+    from server_select.testbed.evaluation import HostRun
+    from server_select.testbed.netns import Testbed
+    from server_select.testbed.scenario import Scenario
+    path = os.path.join(work, name + '.yaml')
+    with open(path, 'w') as stream:
+        yaml.safe_dump(data, stream)
+    run_dir, bag = os.path.join(work, name), os.path.join(work, name + '.bag')
+    with Testbed(Scenario(data), path, run_dir, prefix=prefix) as tb:
+        run = HostRun(tb, tb.scenario, run_dir)
+        run.start_master()
+        run.popen('manager', ['rosbag', 'record', '--tcpnodelay', '-O', bag] + list(record),
+                  'rosbag')
+        yield run, bag
+        tb.sleep_until(tb.scenario.duration)
+
+
+def link_bytes(work, name):
+    """The link emulator's per-direction counts of the run ``work/name``."""
+    with open(os.path.join(work, name, 'link_stats.json')) as stream:
+        return json.load(stream)

@@ -18,13 +18,10 @@ import sys
 import tempfile
 
 import numpy as np
-import yaml
 
+from server_select.bench.harness import scenario_run
 from server_select.core.tables import markdown_table
 from server_select.testbed import bag_analysis
-from server_select.testbed.evaluation import HostRun
-from server_select.testbed.netns import Testbed
-from server_select.testbed.scenario import Scenario
 
 TIMEOUT = 2.0
 
@@ -41,23 +38,14 @@ def scenario(delay, loss, seconds):
 
 def run_once(hedge, args, work, index):
     data = scenario(args.delay, args.loss, args.seconds)
-    path = os.path.join(work, 'hedging.yaml')
-    with open(path, 'w') as stream:
-        yaml.safe_dump(data, stream)
     name = '%s-%d' % ('hedge' if hedge else 'plain', index)
-    run_dir, bag = os.path.join(work, name), os.path.join(work, name + '.bag')
-    with Testbed(Scenario(data), path, run_dir, prefix='sshd') as tb:
-        run = HostRun(tb, tb.scenario, run_dir)
-        run.start_master()
+    with scenario_run(data, work, name, 'sshd') as (run, bag):
         run.launch('manager', 'manager.launch', 'robots:=1', 'servers:=1,2')
-        run.popen('manager', ['rosbag', 'record', '--tcpnodelay', '-O', bag, '/task_report'],
-                  'rosbag')
         for server in (1, 2):
             run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server)
         run.launch('robot1', 'robot.launch', 'robot_id:=1', 'servers:=1,2',
                    'task_rate:=%g' % args.rate, 'task_timeout:=%g' % TIMEOUT,
                    'start_delay:=3', 'hedge:=%s' % ('true' if hedge else 'false'))
-        tb.sleep_until(tb.scenario.duration)
     reports = [r for r in bag_analysis.load(bag).reports if r.t > 8.0]   # after warm-up
     rtts = np.array([r.rtt if r.ok else TIMEOUT for r in reports])
     attempts = [max(1, r.attempts) for r in reports]

@@ -15,14 +15,10 @@ import os
 import sys
 import tempfile
 
-import yaml
-
+from server_select.bench.harness import link_bytes, scenario_run
 from server_select.core.paths import package_file
 from server_select.core.tables import markdown_table
 from server_select.testbed import bag_analysis
-from server_select.testbed.evaluation import HostRun
-from server_select.testbed.netns import Testbed
-from server_select.testbed.scenario import Scenario
 
 KINDS = {
     'sort': ['task_rate:=2'],
@@ -41,17 +37,9 @@ def scenario(servers, seconds):
 
 def run_once(routing, kind, servers, seconds, work):
     data = scenario(servers, seconds)
-    path = os.path.join(work, 'routing.yaml')
-    with open(path, 'w') as stream:
-        yaml.safe_dump(data, stream)
     name = '%s-%s-%d' % (routing, kind, servers)
-    run_dir, bag = os.path.join(work, name), os.path.join(work, name + '.bag')
     ids = ','.join(str(s) for s in range(1, servers + 1))
-    with Testbed(Scenario(data), path, run_dir, prefix='ssrb') as tb:
-        run = HostRun(tb, tb.scenario, run_dir)
-        run.start_master()
-        run.popen('manager', ['rosbag', 'record', '--tcpnodelay', '-O', bag, '/task_report'],
-                  'rosbag')
+    with scenario_run(data, work, name, 'ssrb') as (run, bag):
         for server in range(1, servers + 1):
             run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server,
                        'routing:=%s' % routing)
@@ -59,9 +47,7 @@ def run_once(routing, kind, servers, seconds, work):
             run.launch('robot%d' % robot, 'robot.launch', 'robot_id:=%d' % robot,
                        'servers:=%s' % ids, 'mode:=fixed', 'fixed_server:=1',
                        'routing:=%s' % routing, 'start_delay:=2', *KINDS[kind])
-        tb.sleep_until(tb.scenario.duration)
-    with open(os.path.join(run_dir, 'link_stats.json')) as stream:
-        link = json.load(stream)
+    link = link_bytes(work, name)
     reports = [r for r in bag_analysis.load(bag).reports if r.robot == 1]
     up = sum(v['bytes'] for k, v in link.items() if k.startswith('robot1>'))
     down = sum(v['bytes'] for k, v in link.items() if k.endswith('>robot1'))

@@ -15,15 +15,11 @@ import statistics
 import sys
 import tempfile
 
-import yaml
-
+from server_select.bench.harness import link_bytes, scenario_run
 from server_select.core.paths import package_file
 from server_select.core.stats import summarize
 from server_select.core.tables import markdown_table
 from server_select.testbed import bag_analysis
-from server_select.testbed.evaluation import HostRun
-from server_select.testbed.netns import Testbed
-from server_select.testbed.scenario import Scenario
 
 TIMEOUT = 5.0
 
@@ -38,28 +34,18 @@ def scenario(delay, rate, seconds):
 
 def run_once(transport, args, work):
     data = scenario(args.delay, args.rate, args.seconds)
-    path = os.path.join(work, 'transport.yaml')
-    with open(path, 'w') as stream:
-        yaml.safe_dump(data, stream)
-    run_dir = os.path.join(work, transport)
-    bag = os.path.join(work, '%s.bag' % transport)
-    with Testbed(Scenario(data), path, run_dir, prefix='sstr') as tb:
-        run = HostRun(tb, tb.scenario, run_dir)
-        run.start_master()
+    with scenario_run(data, work, transport, 'sstr') as (run, bag):
         run.launch('manager', 'manager.launch', 'robots:=1', 'servers:=1')
-        run.popen('manager', ['rosbag', 'record', '--tcpnodelay', '-O', bag, '/task_report'],
-                  'rosbag')
         run.launch('server1', 'server.launch', 'server_id:=1')
         run.launch('robot1', 'robot.launch', 'robot_id:=1', 'servers:=1', 'sort_tasks:=false',
                    'image_source:=search:%s' % package_file('config', 'search_area.yaml'),
                    'frame_rate:=%g' % args.fps, 'image_transport:=%s' % transport,
                    'jpeg_quality:=%d' % args.quality, 'task_timeout:=%g' % TIMEOUT,
                    'start_delay:=2')
-        tb.sleep_until(tb.scenario.duration)
-    with open(os.path.join(run_dir, 'link_stats.json')) as stream:
-        link = json.load(stream)
+    link = link_bytes(work, transport)
+    duration = data['duration']
     reports = bag_analysis.load(bag).reports
-    window = [r for r in reports if r.t >= tb.scenario.duration - args.seconds - 1]
+    window = [r for r in reports if r.t >= duration - args.seconds - 1]
     return {'sent': len(window), 'ok': sum(1 for r in window if r.ok),
             'fps': sum(1 for r in window if r.ok) / args.seconds,
             'rtt': summarize([r.rtt if r.ok else TIMEOUT for r in window]),
