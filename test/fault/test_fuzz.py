@@ -25,6 +25,7 @@ from server_select.nodes.robot import RobotNode
 from server_select.nodes.server import ServerNode
 from server_select.ros.camera import TopicSource
 from server_select.ros.plugins import PluginHandler
+from server_select.ros.routing import ResultRoutes
 from server_select.tasks.orb import Orb
 from server_select.vision.image_codec import encode, from_array
 from server_select.vision.search import sample_image
@@ -230,3 +231,11 @@ def test_plugin_tasks(nodes, robot, server, fmt, data, features):
                                      frame=CompressedImage(format=fmt, data=data),
                                      max_features=min(features, 2000)), False)
     assert handler.done + handler.rejected == before + (1 if server == 1 else 0)
+
+
+def test_direct_results_go_to_a_bounded_number_of_robots(ros):
+    """Tasks under made-up robot ids cannot make a server open result topics without end."""
+    routes = ResultRoutes('bounded_results', SortResult, connect_wait=0.0, most=2)
+    assert routes.publish(1, SortResult()) and routes.publish(2, SortResult())
+    assert not routes.publish(3, SortResult())
+    assert routes.publish(1, SortResult()) and len(routes.pubs) == 2

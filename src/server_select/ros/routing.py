@@ -14,6 +14,7 @@ import time
 import rospy
 
 from server_select.core import names
+from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet
 
 
@@ -97,6 +98,10 @@ class DirectRoute(object):
 ROUTES = {'broadcast': BroadcastRoute, 'direct': DirectRoute}
 
 
+def kind_name(kind):
+    return getattr(kind, 'kind', kind.task_topic)
+
+
 def _results(topic, kind, callback):
     return rospy.Subscriber(topic, kind.result_type, callback, queue_size=100,
                             tcp_nodelay=True, buff_size=1 << 24)
@@ -109,31 +114,40 @@ class ResultRoutes(object):
     master tells them), so the server makes a robot's publishers when the robot first
     probes it (:meth:`prepare`, off the probe's path), well before its first task. A
     result for a robot without a connected publisher still waits up to ``connect_wait`` s
-    for one instead of being lost.
+    for one instead of being lost. At most ``most`` robots get a publisher (a node sending
+    tasks under made-up robot ids must not exhaust the server): None beyond.
     """
 
-    def __init__(self, topic, msg_type, connect_wait=1.0):
+    def __init__(self, topic, msg_type, connect_wait=1.0, most=4096):
         self.topic, self.msg_type, self.connect_wait = topic, msg_type, connect_wait
+        self.most = most
         self._lock = threading.Lock()
         self.pubs = {}
 
     def prepare(self, robot):
-        """The publisher of ``robot``'s results (made now if it is not there yet)."""
+        """The publisher of ``robot``'s results (made now if it is not there yet; None
+        when ``most`` robots have one already)."""
         with self._lock:
             pub = self.pubs.get(robot)
+            if pub is None and len(self.pubs) >= self.most:
+                return None
             if pub is None:
                 pub = self.pubs[robot] = rospy.Publisher(
                     fleet(names.robot_topic(robot, self.topic)), self.msg_type, queue_size=100)
             return pub
 
     def publish(self, robot, result):
+        """Send ``result`` to ``robot``; False when it has no publisher (see ``most``)."""
         pub = self.prepare(robot)
+        if pub is None:
+            return False
         if not pub.get_num_connections():
             end = time.monotonic() + self.connect_wait
             while not pub.get_num_connections() and time.monotonic() < end \
                     and not rospy.is_shutdown():
                 time.sleep(0.005)
         pub.publish(result)
+        return True
 
 
 class ServerEndpoint(object):
@@ -167,7 +181,12 @@ class ServerEndpoint(object):
         if result is None:
             return
         if direct:
-            self.direct.publish(task.robot_id, result)
+            if not self.direct.publish(task.robot_id, result):
+                rospy.logwarn_throttle(5.0, 'server %d: no answer to %s task %d of robot %d '
+                                       '(published by %s): already %d robots have result '
+                                       'topics here' % (self.server_id, kind_name(self.kind),
+                                                        task.task_id, task.robot_id,
+                                                        publisher_of(task), self.direct.most))
         else:
             self.pub.publish(result)
 
