@@ -31,3 +31,10 @@ def test_run_report_counts_switches_and_tasks():
     assert s['rtt']['max'] == 2.0 and s['rtt']['median'] == pytest.approx(1.002)
     assert ('| R1 | S1 | S1 1.00, S2 2.00 | 1 | 2 | 1 | 1 | 1002.00 | 1900.20 | 1980.04 '
             '| 2000.00 | 2 (1) | 0.50 | 0.50 |') in table
+
+
+def test_median_and_range_of_repeated_runs():
+    from server_select.core.tables import median_range
+    assert median_range([3.0, 1.0, 2.0]) == '2.0 (1.0-3.0)'
+    assert median_range([1.0, 4.0], '%.0f') == '2 (1-4)'   # 2.5 rounds to even
+    assert median_range([7], '%d') == '7'

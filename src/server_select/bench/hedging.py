@@ -13,14 +13,13 @@ attempt after the first: hedges and re-sends). Median of the runs, (min-max).
 import argparse
 import json
 import os
-import statistics
 import sys
 import tempfile
 
 import numpy as np
 
 from server_select.bench.harness import scenario_run
-from server_select.core.tables import markdown_table
+from server_select.core.tables import markdown_table, median_range
 from server_select.testbed import bag_analysis
 
 TIMEOUT = 2.0
@@ -58,10 +57,7 @@ def run_once(hedge, args, work, index):
 
 def table(results):
     def spread(runs, key, fmt, scale=1.0):
-        values = [scale * r[key] for r in runs]
-        text = fmt % statistics.median(values)
-        return text + (' (%s-%s)' % (fmt % min(values), fmt % max(values))
-                       if len(values) > 1 else '')
+        return median_range([scale * r[key] for r in runs], fmt)
     return markdown_table(
         ('hedge', 'tasks', 'failed', 'p50 ms', 'p99 ms', 'p99.9 ms', 'max ms',
          'answered by a 2nd server %', 'extra requests per task %'),

@@ -11,14 +11,13 @@ bytes on the link per frame each way (the emulator counts them).
 import argparse
 import json
 import os
-import statistics
 import sys
 import tempfile
 
 from server_select.bench.harness import link_bytes, scenario_run
 from server_select.core.paths import package_file
 from server_select.core.stats import summarize
-from server_select.core.tables import markdown_table
+from server_select.core.tables import markdown_table, median_range
 from server_select.testbed import bag_analysis
 
 TIMEOUT = 5.0
@@ -55,11 +54,8 @@ def run_once(transport, args, work):
 
 def table(results):
     def spread(runs, key, fmt, scale=1.0):
-        values = [scale * (r[key] if not isinstance(key, tuple) else r[key[0]][key[1]])
-                  for r in runs]
-        text = fmt % statistics.median(values)
-        return text + (' (%s-%s)' % (fmt % min(values), fmt % max(values))
-                       if len(values) > 1 else '')
+        return median_range([scale * (r[key] if not isinstance(key, tuple) else
+                                      r[key[0]][key[1]]) for r in runs], fmt)
     return markdown_table(
         ('transport', 'frames sent', 'failed', 'frames/s', 'RTT median ms', 'RTT p95 ms',
          'kB/frame robot->server', 'kB/frame server->robot'),

@@ -19,3 +19,12 @@ def markdown_table(header, rows):
 def fmt(value, spec='%.2f', missing='-'):
     """``spec % value``, or ``missing`` when the value is None."""
     return missing if value is None else spec % value
+
+
+def median_range(values, spec='%.1f'):
+    """``median (min-max)`` of repeated runs' ``values``; just the value for one run."""
+    values = sorted(values)
+    middle = values[len(values) // 2] if len(values) % 2 else \
+        (values[len(values) // 2 - 1] + values[len(values) // 2]) / 2.0
+    text = spec % middle
+    return text + (' (%s-%s)' % (spec % values[0], spec % values[-1]) if len(values) > 1 else '')
