@@ -3,6 +3,7 @@ import math
 import pytest
 
 from server_select.core.health import ServerHealth
+from server_select.core.policy import Policy
 from server_select.core.selection import Selection
 from server_select.core.task_flow import LOCAL, NO_SERVER
 
@@ -54,7 +55,7 @@ def test_a_stale_or_empty_flag_hands_the_decision_to_the_robots_own_probes():
 
 
 def test_own_ranking_uses_the_managers_policy_with_hysteresis():
-    s, clock = select(hysteresis=0.002)
+    s, clock = select(policy=Policy('mean', margin=0.002))
     s.on_sample(1, True, 0.005)
     s.on_sample(2, True, 0.006)
     assert s.candidates()[0] == 1

@@ -19,7 +19,7 @@ def test_samples_older_than_window_are_dropped():
     assert w.stats(1, 1, 4.9).mean == pytest.approx(0.501)
     # the first sample is exactly `window` old at t=5.0: gone
     assert w.stats(1, 1, 5.0).mean == pytest.approx(0.002)
-    assert w.stats(1, 1, 9.0) == (None, 0, 0)
+    assert w.stats(1, 1, 9.0)[:3] == (None, 0, 0)
 
 
 def test_failed_samples_count_but_do_not_enter_the_mean():
@@ -34,7 +34,7 @@ def test_failed_samples_count_but_do_not_enter_the_mean():
 def test_only_failed_samples_give_no_mean():
     w = LatencyWindow(5.0)
     w.add(1, 2, 0.0, False, 0.0)
-    assert w.stats(1, 2, 0.5) == (None, 0, 1)
+    assert w.stats(1, 2, 0.5)[:3] == (None, 0, 1)
 
 
 def test_pairs_are_independent_and_unknown_pairs_are_empty():
@@ -43,7 +43,7 @@ def test_pairs_are_independent_and_unknown_pairs_are_empty():
     w.add(2, 1, 0.0, True, 0.009)
     assert w.stats(1, 1, 0.0).mean == pytest.approx(0.001)
     assert w.stats(2, 1, 0.0).mean == pytest.approx(0.009)
-    assert w.stats(3, 3, 0.0) == (None, 0, 0)
+    assert w.stats(3, 3, 0.0)[:3] == (None, 0, 0)
     stats = w.robot_stats(1, [1, 2], 0.0)
     assert stats[1].ok_count == 1 and stats[2].mean is None
 
@@ -84,5 +84,5 @@ def test_running_sums_match_a_recomputation_over_a_long_stream():
 def test_a_pair_without_samples_is_forgotten():
     w = LatencyWindow(1.0)
     w.add(1, 1, 0.0, True, 0.1)
-    assert w.stats(1, 1, 2.0) == (None, 0, 0)
+    assert w.stats(1, 1, 2.0)[:3] == (None, 0, 0)
     assert not w._pairs

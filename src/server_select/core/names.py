@@ -13,6 +13,7 @@ DETECTIONS_TOPIC = 'detections'
 FOUND_TARGETS_TOPIC = 'found_targets'
 KNOWN_TARGETS_SERVICE = '~known_targets'
 SAMPLES_TOPIC = 'latency_samples'       # fleet profile: one batch per robot probe round
+TASK_SAMPLES_TOPIC = 'task_samples'     # ~passive: robots' answered tasks as samples
 SERVERS_TOPIC = 'fleet_servers'         # fleet profile: the servers found in the master
 GROUPS_TOPIC = 'group_assignments'      # grouped deployments: robots to server groups
 

@@ -1,4 +1,4 @@
-"""Ranking of a robot's servers by mean latency, as in the paper."""
+"""Ranking of a robot's servers by latency, as in the paper (mean, stable sort)."""
 
 import collections
 
@@ -6,26 +6,41 @@ from server_select.msg import SelectionFlag
 
 NO_SERVER = SelectionFlag.NO_SERVER
 
-Ranking = collections.namedtuple('Ranking', 'selected ranking means counts excluded')
+Ranking = collections.namedtuple('Ranking', 'selected ranking means counts excluded errors')
+Ranking.__new__.__defaults__ = (None,)
+Ranking.__doc__ = """A robot's servers, best first: ``means`` holds each ranked server's
+latency statistic (the window mean in the paper; what ``SelectionFlag.mean_latency``
+carries), ``errors`` the standard errors of their means (None: not known)."""
 
 
-def rank_servers(pair_stats):
-    """Rank servers by mean round trip, lowest first.
+def latency(stats):
+    """The statistic a pair is ranked by: its ``value``, else (no statistic) its mean."""
+    return stats.value if stats.value is not None else stats.mean
+
+
+def rank_servers(pair_stats, fail_fast=False):
+    """Rank servers by latency statistic, lowest first.
 
     ``pair_stats`` maps server id to :class:`server_select.core.window.PairStats`. Servers
-    with no successful sample in the window are excluded. The candidates are put in
-    ascending id order and then sorted by mean with Python's ``sorted`` (Timsort, which
-    is stable), so equal means rank the lower server id first.
+    with no successful sample in the window are excluded, and with ``fail_fast`` those
+    whose newest sample failed (a server that stopped answering is left at its first
+    failed probe, not when its last good sample leaves the window). The candidates are put in
+    ascending id order and then sorted by their statistic with Python's ``sorted``
+    (Timsort, which is stable), so equal values rank the lower server id first.
     """
-    candidates = [s for s in sorted(pair_stats) if pair_stats[s].mean is not None]
-    excluded = [s for s in sorted(pair_stats) if pair_stats[s].mean is None]
-    ranking = sorted(candidates, key=lambda s: pair_stats[s].mean)
+    def ranked(s):
+        stats = pair_stats[s]
+        return stats.mean is not None and (stats.last_ok or not fail_fast)
+    candidates = [s for s in sorted(pair_stats) if ranked(s)]
+    excluded = [s for s in sorted(pair_stats) if not ranked(s)]
+    ranking = sorted(candidates, key=lambda s: latency(pair_stats[s]))
     return Ranking(
         selected=ranking[0] if ranking else NO_SERVER,
         ranking=ranking,
-        means=[pair_stats[s].mean for s in ranking],
+        means=[latency(pair_stats[s]) for s in ranking],
         counts=[pair_stats[s].ok_count for s in ranking],
         excluded=excluded,
+        errors=[pair_stats[s].se or 0.0 for s in ranking],
     )
 
 
@@ -33,9 +48,10 @@ def choose(ranking, current, hysteresis=0.0):
     """The server to select given the ``current`` one.
 
     With ``hysteresis`` 0 (the paper) this is the best-ranked server. Otherwise the
-    current server is kept while it is still ranked and its mean is within
-    ``hysteresis`` seconds of the best, which stops flapping between servers whose means
-    differ only by noise.
+    current server is kept while it is still ranked and its statistic is within
+    ``hysteresis`` seconds of the best, which stops flapping between servers whose
+    latencies differ only by noise. (:class:`server_select.core.policy.Policy` adds a
+    minimum dwell, a noise-scaled margin and a latency bound.)
     """
     if hysteresis > 0 and current in ranking.ranking:
         index = ranking.ranking.index(current)

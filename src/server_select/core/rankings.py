@@ -13,15 +13,17 @@ that enters or leaves the ranking, or a server whose mean falls below the select
 
 import threading
 
-from server_select.core.ranking import NO_SERVER, rank_servers
+from server_select.core.ranking import NO_SERVER, latency, rank_servers
 from server_select.core.window import LatencyWindow
 
 
 class FleetRankings(object):
     """Samples in, :class:`~server_select.core.ranking.Ranking` per robot out. Thread-safe."""
 
-    def __init__(self, window, robots=(), servers=()):
-        self.window = LatencyWindow(window)
+    def __init__(self, window, robots=(), servers=(), statistic='mean', tau=1.0,
+                 fail_fast=False):
+        self.window = LatencyWindow(window, statistic, tau)
+        self.fail_fast = fail_fast
         self.fixed_robots = list(robots)          # empty: learned
         self.fixed_servers = list(servers)        # empty: learned
         self._robot_set, self._server_set = set(robots), set(servers)
@@ -65,12 +67,14 @@ class FleetRankings(object):
             if new:
                 heard.add(server)
             selected = self._selected.get(robot, NO_SERVER)
-        if new or server == selected or had_mean != (stats.mean is not None):
+        if new or server == selected or had_mean != (stats.mean is not None) or \
+                (self.fail_fast and not ok):
             return True
         if stats.mean is None:
             return False
-        best = self.window.stats(robot, selected, now).mean if selected != NO_SERVER else None
-        return best is None or stats.mean < best
+        best = latency(self.window.stats(robot, selected, now)) if selected != NO_SERVER \
+            else None
+        return best is None or latency(stats) < best
 
     def selected_left(self, robot, now):
         """Whether the server ``robot``'s last flag selected has no good sample left (O(1):
@@ -94,7 +98,7 @@ class FleetRankings(object):
             return list(self.fixed_servers)
         with self._lock:
             heard = sorted(self._servers.get(robot, ()))
-        kept = [s for s in heard if any(self.window.stats(robot, s, now)[1:])]
+        kept = [s for s in heard if any(self.window.stats(robot, s, now)[1:3])]
         if len(kept) < len(heard):
             with self._lock:
                 self._servers[robot] = set(kept) | (self._servers.get(robot, set())
@@ -102,8 +106,10 @@ class FleetRankings(object):
         return kept
 
     def rank(self, robot, now):
-        """``robot``'s ranking now (paper rule: mean, stable sort, ties to the lower id)."""
-        return rank_servers(self.window.robot_stats(robot, self.servers(robot, now), now))
+        """``robot``'s ranking now (by the window's statistic, stable sort, ties to the lower
+        id)."""
+        return rank_servers(self.window.robot_stats(robot, self.servers(robot, now), now),
+                            self.fail_fast)
 
     def selected(self, robot, server):
         """Note the server ``robot``'s last flag selected."""

@@ -10,7 +10,8 @@ work in the robot. In ``select`` mode the robot's own evidence comes first: serv
 import threading
 import time
 
-from server_select.core.ranking import NO_SERVER, choose, rank_servers
+from server_select.core.policy import Chooser, Policy
+from server_select.core.ranking import NO_SERVER, rank_servers
 from server_select.core.task_flow import LOCAL
 from server_select.core.window import LatencyWindow
 
@@ -21,18 +22,21 @@ class Selection(object):
     """The robot's view of where tasks go. Thread-safe."""
 
     def __init__(self, robot_id, servers, mode, fixed_server=None, health=None, window=5.0,
-                 hysteresis=0.0, manager_timeout=3.0, clock=time.monotonic):
+                 policy=None, manager_timeout=3.0, clock=time.monotonic, statistic=None,
+                 tau=1.0):
         if mode not in MODES:
             raise ValueError('unknown mode %r' % (mode,))
         self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
         self.fixed_server = fixed_server
         self.health = health
-        self.hysteresis, self.manager_timeout = hysteresis, manager_timeout
-        self.window = LatencyWindow(window)
+        policy = policy or Policy()
+        self.manager_timeout = manager_timeout
+        self.window = LatencyWindow(window, statistic or policy.statistic(), tau)
+        self.probes = LatencyWindow(window)      # probes only: what a task is compared with
+        self._chooser = Chooser(policy)
         self._clock = clock
         self._lock = threading.Lock()
         self._flag = None          # (receive time, selected, ranking) of the last good flag
-        self._local = None         # the robot's own last choice
 
     def on_flag(self, robot_id, server_id, ranking):
         """A flag arrived: None if it is for another robot or taken, else why it is refused."""
@@ -64,9 +68,17 @@ class Selection(object):
         if self.health is not None:
             self.health.remove(server)
 
-    def on_sample(self, server, ok, rtt):
-        """One of the robot's own probe samples (ValueError for an impossible round trip)."""
-        self.window.add(self.robot_id, server, self._clock(), ok, rtt)
+    def on_sample(self, server, ok, rtt, probe=True):
+        """One of the robot's own samples: a probe, or (``probe`` False) an answered task
+        with ``~passive`` (ValueError for an impossible round trip)."""
+        now = self._clock()
+        self.window.add(self.robot_id, server, now, ok, rtt)
+        if probe:
+            self.probes.add(self.robot_id, server, now, ok, rtt)
+
+    def probe_latency(self, server):
+        """The mean of the robot's probes of ``server`` in the window (None: none)."""
+        return self.probes.stats(self.robot_id, server, self._clock()).mean
 
     def manager_ranking(self):
         """The fresh manager ranking (selected server first), or None when the last flag is
@@ -79,12 +91,13 @@ class Selection(object):
         return [selected] + [s for s in ranking if s != selected]
 
     def own_ranking(self):
-        """The robot's own ranking from its probe samples, by the manager's policy."""
-        ranking = rank_servers(self.window.robot_stats(self.robot_id, self.servers,
-                                                       self._clock()))
+        """The robot's own ranking from its samples, by the manager's policy."""
+        now = self._clock()
         with self._lock:
-            self._local = choose(ranking, self._local, self.hysteresis)
-            selected = self._local
+            servers = list(self.servers)
+        ranking = rank_servers(self.window.robot_stats(self.robot_id, servers, now))
+        with self._lock:
+            selected = self._chooser.choose(ranking, now)
         return [s for s in [selected] if s != NO_SERVER] + \
             [s for s in ranking.ranking if s != selected]
 

@@ -8,6 +8,7 @@ node's default", and the evaluation takes its defaults from it.
 import collections
 
 from server_select.core.groups import parse_groups
+from server_select.core.policy import POLICIES
 from server_select.core.params import (one_of, parse_bool, parse_count, parse_id,
                                        parse_members, parse_mode, parse_names, parse_non_negative,
                                        parse_number, parse_plugins, parse_positive,
@@ -82,6 +83,21 @@ PARAMS = {
     'update_rate': Param(10.0, parse_positive, 're-evaluation rate between samples (Hz)'),
     'hysteresis': Param(0.0, parse_non_negative, 'keep the current server while within this '
                         'of the best (s); 0: the paper'),
+    'policy': Param('mean', one_of(*POLICIES), 'which ranked server a robot gets: mean (the '
+                    'paper), hysteresis, bound or peak_ewma (README "Policies")'),
+    'statistic': Param('mean', one_of('mean', 'median', 'trimmed'), 'what the window ranks '
+                       'by (policies mean, hysteresis, bound)'),
+    'dwell': Param(0.0, parse_non_negative, 'policy hysteresis: no move within this long of '
+                   'the last one (s)'),
+    'margin_z': Param(0.0, parse_non_negative, 'policy hysteresis: the margin grows by this '
+                      'many standard errors of the two means'),
+    'latency_bound': Param(0.05, parse_positive, 'policy bound: keep the current server while '
+                           'its statistic is under this (s)'),
+    'fail_fast': Param(False, parse_bool, 'rank no server whose newest sample failed (the '
+                       'paper: only when no good sample is left in the window)'),
+    'ewma_tau': Param(1.0, parse_positive, 'policy peak_ewma: decay time of a spike (s)'),
+    'passive': Param(False, parse_bool, "robots' answered tasks are latency samples too "
+                     '(on task_samples, to the manager)'),
     'manager_timeout': Param(3.0, parse_positive, 'a flag older than this is stale: the robot '
                              'ranks its servers itself (s)'),
     'eject_time': Param(1.0, parse_positive, 'first ejection of a failing server (s); doubles '

@@ -64,6 +64,8 @@ class TaskFlow(object):
     :param report: ``(Outcome) -> None``, called once per task.
     :param run_local: ``(task_id, stamp) -> error or None``: the work done in the robot.
     :param on_failure, on_success: ``(server, why)`` / ``(server)``: evidence about servers.
+    :param on_answer: ``(server, rtt)``: an accepted answer and the round trip of the
+        attempt it answered (a latency sample of what tasks get).
     :param deadlines: an :class:`~server_select.core.attempts.AttemptClock`.
     :param ids: iterator of task ids (shared by the robot's streams: ids are per robot).
     :param hedge: None, or the quantile of a server's round trips after which an
@@ -72,7 +74,8 @@ class TaskFlow(object):
 
     def __init__(self, kind, timeout, candidates, make, publish, check, report, run_local=None,
                  on_failure=None, on_success=None, deadlines=None, ids=None,
-                 clock=time.monotonic, remember=2000, keep_rtts=2000, hedge=None):
+                 clock=time.monotonic, remember=2000, keep_rtts=2000, hedge=None,
+                 on_answer=None):
         if not timeout > 0:
             raise ValueError('timeout must be positive, got %r' % (timeout,))
         self.kind, self.timeout = kind, float(timeout)
@@ -80,6 +83,7 @@ class TaskFlow(object):
         self._check, self._report, self._run_local = check, report, run_local
         self._on_failure = on_failure or (lambda server, why: None)
         self._on_success = on_success or (lambda server: None)
+        self._on_answer = on_answer or (lambda server, rtt: None)
         self.deadlines = deadlines or AttemptClock(self.timeout)
         self._ids = ids if ids is not None else itertools.count(1)
         self._clock = clock
@@ -172,6 +176,7 @@ class TaskFlow(object):
             if ok:
                 del self._pending[task_id]
                 self.deadlines.add(answered_by, now - sent_at)
+                answer_rtt = now - sent_at
             else:
                 self._on_failure(answered_by, error)
                 if self._next(pending):
@@ -179,6 +184,7 @@ class TaskFlow(object):
                 del self._pending[task_id]
         if ok:
             self._on_success(answered_by)
+            self._on_answer(answered_by, answer_rtt)
         return self._end(Outcome(task_id, self.kind, pending.stamp, pending.attempts[0][0],
                                  answered_by, ok, error, now - pending.started,
                                  len(pending.attempts)))

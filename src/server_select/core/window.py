@@ -1,11 +1,32 @@
-"""Sliding windows of latency samples, one per (robot, server) pair."""
+"""Sliding windows of latency samples, one per (robot, server) pair.
+
+A pair's latency *statistic* is what a policy ranks by (:data:`STATISTICS`):
+
+- ``mean``: the mean of the window's successful samples (the paper);
+- ``median``: their median, and ``trimmed``: their mean without the highest and lowest
+  quarter (at least one of each once there are three), so that one probe that needed a
+  TCP retransmission cannot reorder a ranking;
+- ``peak_ewma``: a peak-sensitive moving average (Finagle's "peak EWMA"): a sample above
+  the value replaces it at once, one below pulls it down with weight
+  ``1 - exp(-dt / tau)``. It reacts to a spike or a slowdown at the next sample and
+  forgets it over a few ``tau``.
+"""
 
 import collections
 import math
 import threading
 
+STATISTICS = ('mean', 'median', 'trimmed', 'peak_ewma')
+
 Sample = collections.namedtuple('Sample', 'time ok rtt')
-PairStats = collections.namedtuple('PairStats', 'mean ok_count failed_count')
+PairStats = collections.namedtuple('PairStats', 'mean ok_count failed_count value se last_ok')
+PairStats.__new__.__defaults__ = (None, None, True)
+PairStats.__doc__ = """A pair's window: ``mean`` of the successful samples (None: none),
+their count, the failed count, ``value`` the window's statistic (None: no successful
+sample), ``se`` the standard error of the mean (0 with fewer than two samples) and
+``last_ok`` whether the newest sample succeeded."""
+
+EMPTY = PairStats(None, 0, 0, None, None, True)
 
 
 def valid_rtt(rtt):
@@ -14,18 +35,42 @@ def valid_rtt(rtt):
         math.isfinite(rtt) and rtt >= 0
 
 
+def trimmed_mean(values):
+    """The mean of ``values`` without their highest and lowest quarter (at least one each
+    from three values on)."""
+    values = sorted(values)
+    cut = max(1, len(values) // 4) if len(values) >= 3 else 0
+    kept = values[cut:len(values) - cut]
+    return sum(kept) / len(kept)
+
+
+def median(values):
+    values = sorted(values)
+    half = len(values) // 2
+    return values[half] if len(values) % 2 else (values[half - 1] + values[half]) / 2.0
+
+
 class _Pair(object):
-    """One pair's samples and their running sums (O(1) amortised per sample)."""
-    __slots__ = ('samples', 'rtt_sum', 'ok_count')
+    """One pair's samples and their running sums (O(1) amortised per sample for the mean
+    and the peak EWMA; the median and trimmed mean cost O(n log n) of the window's n)."""
+    __slots__ = ('samples', 'rtt_sum', 'sq_sum', 'ok_count', 'ewma', 'ewma_time')
 
     def __init__(self):
-        self.samples, self.rtt_sum, self.ok_count = collections.deque(), 0.0, 0
+        self.samples, self.rtt_sum, self.sq_sum, self.ok_count = collections.deque(), 0.0, 0.0, 0
+        self.ewma = self.ewma_time = None
 
-    def append(self, sample):
+    def append(self, sample, tau):
         self.samples.append(sample)
         if sample.ok:
             self.rtt_sum += sample.rtt
+            self.sq_sum += sample.rtt * sample.rtt
             self.ok_count += 1
+            if self.ewma is None or sample.rtt >= self.ewma:
+                self.ewma = sample.rtt
+            else:
+                weight = math.exp(-max(0.0, sample.time - self.ewma_time) / tau)
+                self.ewma = self.ewma * weight + sample.rtt * (1.0 - weight)
+            self.ewma_time = sample.time
 
     def prune(self, horizon):
         samples = self.samples
@@ -34,14 +79,27 @@ class _Pair(object):
             if old.ok:
                 self.ok_count -= 1
                 self.rtt_sum -= old.rtt
+                self.sq_sum -= old.rtt * old.rtt
         if not self.ok_count:
-            self.rtt_sum = 0.0      # no rounding residue survives an empty window
+            self.rtt_sum = self.sq_sum = 0.0     # no rounding residue survives an empty window
+            self.ewma = self.ewma_time = None    # a pair back from silence starts afresh
 
-    def stats(self):
+    def stats(self, statistic):
         failed = len(self.samples) - self.ok_count
-        if not self.ok_count:
-            return PairStats(None, 0, failed)
-        return PairStats(max(0.0, self.rtt_sum / self.ok_count), self.ok_count, failed)
+        n = self.ok_count
+        last_ok = self.samples[-1].ok if self.samples else True
+        if not n:
+            return PairStats(None, 0, failed, None, None, last_ok)
+        mean = max(0.0, self.rtt_sum / n)
+        variance = max(0.0, self.sq_sum / n - mean * mean) * n / (n - 1) if n > 1 else 0.0
+        if statistic == 'mean':
+            value = mean
+        elif statistic == 'peak_ewma':
+            value = self.ewma
+        else:
+            ok = [s.rtt for s in self.samples if s.ok]
+            value = median(ok) if statistic == 'median' else trimmed_mean(ok)
+        return PairStats(mean, n, failed, value, math.sqrt(variance / n), last_ok)
 
 
 class LatencyWindow(object):
@@ -49,21 +107,27 @@ class LatencyWindow(object):
 
     Times are those of the caller's clock (the manager's receive time, because robot and
     manager clocks are not shared). Each pair keeps running sums, so adding a sample and
-    reading a pair's mean cost O(1) amortised, whatever the number of pairs. Thread-safe:
-    subscriber callbacks add, a timer reads.
+    reading a pair's mean cost O(1) amortised, whatever the number of pairs. ``statistic``
+    (one of :data:`STATISTICS`) is the pair's ``value``; ``tau`` (s) is the peak EWMA's
+    decay time. Thread-safe: subscriber callbacks add, a timer reads.
     """
 
-    def __init__(self, window):
+    def __init__(self, window, statistic='mean', tau=1.0):
         if not window > 0:
             raise ValueError('window must be positive, got %r' % (window,))
-        self.window = float(window)
+        if statistic not in STATISTICS:
+            raise ValueError('unknown statistic %r (expected one of %s)'
+                             % (statistic, ', '.join(STATISTICS)))
+        if not tau > 0:
+            raise ValueError('tau must be positive, got %r' % (tau,))
+        self.window, self.statistic, self.tau = float(window), statistic, float(tau)
         self._lock = threading.Lock()
         self._pairs = {}
 
     def add(self, robot_id, server_id, now, ok, rtt):
         """Record one sample; failed samples carry no latency. A successful sample whose
         ``rtt`` is not a finite number >= 0 raises ValueError (and is not recorded).
-        Returns whether the pair had a mean before, and its :class:`PairStats` after."""
+        Returns whether the pair had a value before, and its :class:`PairStats` after."""
         if ok and not valid_rtt(rtt):
             raise ValueError('round trip %r is not a finite number >= 0' % (rtt,))
         with self._lock:
@@ -71,20 +135,20 @@ class LatencyWindow(object):
             if pair is None:
                 pair = self._pairs[(robot_id, server_id)] = _Pair()
             pair.prune(now - self.window)
-            had_mean = pair.ok_count > 0
-            pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')))
-            return had_mean, pair.stats()
+            had_value = pair.ok_count > 0
+            pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')), self.tau)
+            return had_value, pair.stats(self.statistic)
 
     def stats(self, robot_id, server_id, now):
-        """Mean round trip of the successful samples in the window (None when none)."""
+        """The pair's :class:`PairStats` over the window now."""
         with self._lock:
             pair = self._pairs.get((robot_id, server_id))
             if pair is None:
-                return PairStats(None, 0, 0)
+                return EMPTY
             pair.prune(now - self.window)
             if not pair.samples:       # nothing left: forget the pair
                 del self._pairs[(robot_id, server_id)]
-            return pair.stats()
+            return pair.stats(self.statistic)
 
     def robot_stats(self, robot_id, servers, now):
         """``{server_id: PairStats}`` for each of ``servers``."""

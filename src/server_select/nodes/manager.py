@@ -6,7 +6,7 @@ import rospy
 
 from server_select.core import names
 from server_select.core.params import ParamError
-from server_select.core.ranking import choose
+from server_select.core.policy import Chooser, from_params
 from server_select.core.rankings import FleetRankings
 from server_select.core.window import valid_rtt
 from server_select.msg import LatencySample, LatencySamples
@@ -44,8 +44,12 @@ class ManagerNode(object):
         - ``~discover`` (false; (fleet) true): publish the servers found in the master on
           ``fleet_servers`` every ``~discovery_period`` s (2.0).
         - ``~window`` (s, 5.0), ``~publish_rate`` (Hz, 1.0), ``~update_rate`` (Hz, 10.0)
-        - ``~hysteresis`` (s, 0.0): keep the current server while its mean is within this
-          of the best one (0: always the best, as in the paper).
+        - ``~policy`` (``mean``), ``~statistic`` (``mean``), ``~hysteresis`` (s, 0.0),
+          ``~dwell``, ``~margin_z``, ``~latency_bound``, ``~ewma_tau``, ``~fail_fast``: the
+          selection policy
+          (``core/policy.py``; the defaults are the paper: always the lowest mean).
+        - ``~passive`` (false): also take the robots' answered tasks on ``task_samples``
+          as samples (what tasks really get: network, queueing and work).
         - ``~robot_node`` (``/robot{id}``): the node, or the namespace of the nodes, whose
           samples count for robot {id} (``*``: any publisher).
         - ``~fleet_ns`` (``/``): namespace of the fleet-level topics and services.
@@ -54,7 +58,8 @@ class ManagerNode(object):
           to it (``group_assignments``), and ignores the others' samples.
     :ROS Subscribers:
         - ``latency_R<r>S<s>`` (server_select/LatencySample) for every robot r and server s,
-          or ``latency_samples`` (server_select/LatencySamples).
+          or ``latency_samples`` (server_select/LatencySamples); ``task_samples``
+          (server_select/LatencySamples, ``~passive``).
     :ROS Publishers:
         - ``server_select_flag`` (server_select/SelectionFlag)
         - ``fleet_servers`` (server_select/FleetServers, latched; with ``~discover``)
@@ -62,14 +67,16 @@ class ManagerNode(object):
 
     def __init__(self):
         self.stream = param('sample_stream')
-        self.rankings = FleetRankings(param('window'), param('robots'), param('servers'))
+        self.policy, statistic = from_params(param)
+        self.rankings = FleetRankings(param('window'), param('robots'), param('servers'),
+                                      statistic, param('ewma_tau'), param('fail_fast'))
+        self.passive = param('passive')
         for name in ('robots', 'servers'):
             if self.stream == 'pair' and not getattr(self.rankings, 'fixed_' + name):
                 raise ParamError('~%s: expected a non-empty list of ids (an empty one needs '
                                  '~sample_stream robot: one topic per pair)' % name)
         self.publish_rate = param('publish_rate')
         self.update_rate = param('update_rate')
-        self.hysteresis = param('hysteresis')
         self.robot_node = pattern = param('robot_node')      # None: any publisher
         try:
             pattern and pattern.format(id=1)
@@ -78,6 +85,7 @@ class ManagerNode(object):
                              % (pattern, error))
         self._robot_nodes = {}
         self._locks = {}          # robot -> lock of its ranking and flag
+        self._choosers = {}       # robot -> its Chooser (the policy's state)
         self._slice = 0
         self.group = param('group')       # grouped: robots get their servers elsewhere
         self.discovery = ServerDiscovery(param('discovery_period')) \
@@ -105,16 +113,22 @@ class ManagerNode(object):
             self.sample_subs = [rospy.Subscriber(fleet(names.SAMPLES_TOPIC), LatencySamples,
                                                  self.on_batch, queue_size=1000,
                                                  tcp_nodelay=True)]
+        if self.passive:      # answered tasks: samples of what the robots really get
+            self.sample_subs.append(rospy.Subscriber(
+                fleet(names.TASK_SAMPLES_TOPIC), LatencySamples, self.on_batch,
+                callback_args=names.TASK_SAMPLES_TOPIC, queue_size=1000, tcp_nodelay=True))
         for part in (self.discovery, self.assignments):
             if part is not None:
                 part.start()
         self.timers = [
             rospy.Timer(rospy.Duration(1.0 / (self.publish_rate * SLICES)), self.on_periodic),
             rospy.Timer(rospy.Duration(1.0 / self.update_rate), self.on_check)]
-        rospy.loginfo('manager: robots %s, servers %s, window %.3g s, samples %s',
-                      self.rankings.fixed_robots or 'as they come',
+        rospy.loginfo('manager: robots %s, servers %s, window %.3g s of %s, policy %s, '
+                      'samples %s%s', self.rankings.fixed_robots or 'as they come',
                       self.rankings.fixed_servers or 'as probed', self.rankings.window.window,
-                      'per pair' if self.stream == 'pair' else 'in one batch per robot round')
+                      self.rankings.window.statistic, self.policy.describe(),
+                      'per pair' if self.stream == 'pair' else 'in one batch per robot round',
+                      ' and answered tasks' if self.passive else '')
 
     def on_sample(self, sample, pair):
         """One sample on the topic of ``pair`` (paper layout)."""
@@ -132,8 +146,8 @@ class ManagerNode(object):
         robots = [r for r, g in assigned.items() if g == self.group]
         self.rankings.set_members(robots, groups.get(self.group, []))
 
-    def on_batch(self, batch):
-        """One robot's probe round (fleet layout)."""
+    def on_batch(self, batch, topic=names.SAMPLES_TOPIC):
+        """One robot's probe round (fleet layout), or its answered tasks (``~passive``)."""
         robot = batch.robot_id
         if self.group is not None and self.rankings.admits_robot(robot):
             return      # a robot of another group: not ours to rank
@@ -142,7 +156,7 @@ class ManagerNode(object):
         if why is None and not len(batch.ok) == len(batch.rtt) == count:
             why = 'arrays of %d servers, %d ok, %d rtt' % (count, len(batch.ok), len(batch.rtt))
         if why:
-            self.warn(names.SAMPLES_TOPIC, batch, why)
+            self.warn(topic, batch, why)
             return
         now = rospy.get_time()
         changed = False
@@ -153,7 +167,7 @@ class ManagerNode(object):
             if why is None and ok and not valid_rtt(rtt):
                 why = 'round trip %r of server %d is not a finite number >= 0' % (rtt, server)
             if why:
-                self.warn(names.SAMPLES_TOPIC, batch, why)
+                self.warn(topic, batch, why)
             elif self.rankings.add(robot, server, now, ok, rtt):
                 changed = True
         if changed:     # one ranking per batch: O(1) per sample
@@ -207,9 +221,11 @@ class ManagerNode(object):
         One update of a robot at a time: samples arrive on many threads, and a ranking
         computed before another thread's sample must not be published after the newer one."""
         with self._locks.setdefault(robot, threading.Lock()):
-            ranking = self.rankings.rank(robot, rospy.get_time())
+            now = rospy.get_time()
+            ranking = self.rankings.rank(robot, now)
+            chooser = self._choosers.setdefault(robot, Chooser(self.policy))
             if self.flags.offer(robot, ranking, only_on_change,
-                                lambda previous: choose(ranking, previous, self.hysteresis)):
+                                lambda previous: chooser.choose(ranking, now, previous)):
                 self.rankings.selected(robot, self.flags.selected(robot))
 
 

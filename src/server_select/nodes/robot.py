@@ -1,5 +1,6 @@
 """Robot: probes every server, follows the manager's selection and sends tasks."""
 
+import functools
 import itertools
 import time
 
@@ -9,6 +10,7 @@ from server_select.core import names
 from server_select.core.attempts import AttemptClock
 from server_select.core.health import ServerHealth
 from server_select.core.params import ParamError, parse_fixed_server
+from server_select.core.policy import from_params
 from server_select.core.selection import Selection
 from server_select.core.task_flow import LOCAL, NO_SERVER
 from server_select.msg import SelectionFlag
@@ -16,6 +18,7 @@ from server_select.ros.camera import TopicSource
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.node import fleet, param, run
 from server_select.ros.plugins import load as load_plugin
+from server_select.ros.passive import TaskSamples
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
 from server_select.ros.prober import Prober
 from server_select.ros.routing import ROUTES
@@ -31,9 +34,8 @@ class RobotNode(object):
     the no-offloading reference). Two streams, each optional: sort tasks (``~task_size``
     random int32 at ``~task_rate``) and camera frames (``~image_source`` at
     ``~frame_rate``). Each task ends in exactly one ``task_report``: a checked result, an
-    error result, or a timeout after ``~task_timeout``. With camera frames, the robot
-    takes part in the cooperative search: targets detected in its frames are recorded
-    once in a registry shared through ``found_targets``.
+    error result, or a timeout after ``~task_timeout``. With camera frames, it takes part
+    in the cooperative search (targets shared through ``found_targets``).
 
     :ROS Parameters: (all, with defaults: README "Nodes" and ``core/settings.py``)
         - ``~robot_id``; ``~servers`` (may be empty with ``~discover`` or
@@ -41,21 +43,17 @@ class RobotNode(object):
         - ``~mode``, ``~fixed_server``, ``~probe_rate``, ``~probe_timeout``, the task
           streams' (``~sort_tasks``, ``~task_rate``, ``~image_source`` or
           ``~image_topic``, ``~frame_rate``, ``~task_plugins``, ...), failover and health
-          (``~retry_factor``, ``~eject_time``, ...), ``~manager_node`` or, grouped,
-          ``~group_manager_node``; ``~start_delay`` (rospy drops what is sent before a
-          recorder connects)
+          (``~retry_factor``, ...), policy (``~policy``, ...), ``~passive``,
+          ``~manager_node`` or, grouped, ``~group_manager_node``; ``~start_delay``
     :ROS Publishers:
-        - ``latency_R<robot_id>S<s>`` per server, or ``latency_samples`` (fleet)
+        - ``latency_R<robot_id>S<s>`` or ``latency_samples`` (fleet); ``task_samples``
         - ``data``, ``task_image``, or per server ``server_<s>/data``, ... (fleet)
         - ``task_report`` (server_select/TaskReport), ``found_targets`` (FoundTarget)
     :ROS Subscribers:
         - ``server_select_flag``; ``processed_data``, ``processed_image``, or
           ``robot_<robot_id>/processed_data``, ... (fleet); ``detections``,
           ``found_targets``; ``fleet_servers`` (``~discover``) or ``group_assignments``
-    :ROS Services:
-        - ``~known_targets`` (server_select/KnownTargets): the targets found so far.
-    :ROS Services called:
-        - ``latency_S<s>`` (server_select/LatencyProbe)
+    :ROS Services: ``~known_targets`` (server_select/KnownTargets); calls ``latency_S<s>``
     """
 
     def __init__(self):
@@ -67,16 +65,9 @@ class RobotNode(object):
                                                     param('top_manager_node'))):
             raise ParamError('~servers: expected a non-empty list of ids (an empty one needs '
                              '~discover, and a mode other than fixed)')
-        fixed = param('fixed_server', default=servers[0] if servers else None,
-                      parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
-        eject_time, eject_max = param('eject_time'), param('eject_max')
-        if eject_time > eject_max:
-            raise ParamError('~eject_time %g is longer than ~eject_max %g'
-                             % (eject_time, eject_max))
-        self.health = ServerHealth(servers, eject_time, eject_max, param('probation_probes'))
-        self.selection = Selection(self.robot_id, servers, mode, fixed, self.health,
-                                   param('window'), param('hysteresis'),
-                                   param('manager_timeout'))
+        self.selection = self._selection(servers, mode)
+        self.passive = TaskSamples(self.robot_id, self.selection) \
+            if param('passive') and mode == 'select' else None
         self.prober = Prober(self.robot_id, servers, param('probe_rate'), param('probe_timeout'),
                              on_sample=self.on_sample, stream=param('sample_stream'))
         self.start_delay = param('start_delay')
@@ -93,7 +84,9 @@ class RobotNode(object):
         retry = dict(factor=param('retry_factor'), floor=param('retry_floor'))
         self.streams = [
             TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready,
-                       dict(flow_args, deadlines=AttemptClock(flow_args['timeout'], **retry)),
+                       dict(flow_args, deadlines=AttemptClock(flow_args['timeout'], **retry),
+                            on_answer=functools.partial(self.passive.on_answer, kind.kind)
+                            if self.passive else None),
                        local=mode == 'local', expected_publisher=self.server_node,
                        route=ROUTES[param('routing')])
             for kind, rate in kinds]
@@ -105,6 +98,19 @@ class RobotNode(object):
         self._start_after = None
         self._local_decision = False
         self.timers = []
+
+    def _selection(self, servers, mode):
+        fixed = param('fixed_server', default=servers[0] if servers else None,
+                      parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
+        eject_time, eject_max = param('eject_time'), param('eject_max')
+        if eject_time > eject_max:
+            raise ParamError('~eject_time %g is longer than ~eject_max %g'
+                             % (eject_time, eject_max))
+        self.health = ServerHealth(servers, eject_time, eject_max, param('probation_probes'))
+        policy, statistic = from_params(param)
+        return Selection(self.robot_id, servers, mode, fixed, self.health, param('window'),
+                         policy, param('manager_timeout'), statistic=statistic,
+                         tau=param('ewma_tau'))
 
     def _kinds(self, mode):
         """(task kind, rate) of each stream the parameters ask for."""

@@ -1,0 +1,101 @@
+"""Selection policies: which ranked server a robot gets, given the one it has (no rospy).
+
+The same :class:`Policy` runs in the manager (per robot) and in a robot deciding alone.
+It takes a :class:`~server_select.core.ranking.Ranking` (servers best first by the
+window's statistic) and the current choice, and returns the server to select:
+
+- ``mean``: the best-ranked server (the paper's rule with the ``mean`` statistic); a
+  ``margin`` > 0 keeps the current server while it is within it of the best (what
+  ``~hysteresis`` always did).
+- ``hysteresis``: keep the current server unless the best beats it by more than
+  ``margin`` + ``z`` x the standard error of the difference of their means (a margin that
+  grows with the noise), and never move within ``dwell`` s of the last move unless the
+  current server has left the ranking.
+- ``bound`` (FogROS2-LS): keep the current server while its statistic is at most
+  ``bound`` s; else move to the best.
+- ``peak_ewma`` (Finagle / Linkerd): the best by a peak-sensitive moving average (the
+  window's ``peak_ewma`` statistic): a spike or a slowdown shows at the next sample.
+
+A server that leaves the ranking (no good sample in the window) is always left at once.
+"""
+
+import math
+
+from server_select.core.ranking import NO_SERVER
+
+POLICIES = ('mean', 'hysteresis', 'bound', 'peak_ewma')
+
+
+class Policy(object):
+    """One policy's rule and parameters (stateless: the caller keeps the current choice
+    and when it was made)."""
+
+    def __init__(self, kind='mean', margin=0.0, dwell=0.0, z=0.0, bound=0.05):
+        if kind not in POLICIES:
+            raise ValueError('unknown policy %r (expected one of %s)'
+                             % (kind, ', '.join(POLICIES)))
+        for name, value in (('margin', margin), ('dwell', dwell), ('z', z), ('bound', bound)):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise ValueError('%s must be a finite number >= 0, got %r' % (name, value))
+        self.kind, self.margin, self.dwell, self.z, self.bound = kind, margin, dwell, z, bound
+
+    def statistic(self, requested='mean'):
+        """The window statistic this policy ranks by (``requested`` unless peak_ewma)."""
+        return 'peak_ewma' if self.kind == 'peak_ewma' else requested
+
+    def choose(self, ranking, current, since=None, now=None):
+        """The server to select; ``current`` was selected at ``since`` (same clock as
+        ``now``; None: unknown, no dwell applies)."""
+        best = ranking.selected
+        if current is None or current == NO_SERVER or current not in ranking.ranking:
+            return best
+        here = ranking.means[ranking.ranking.index(current)]
+        if self.kind == 'bound':
+            return current if here <= self.bound else best
+        if self.kind == 'hysteresis':
+            if since is not None and now is not None and now - since < self.dwell:
+                return current
+            return current if here - ranking.means[0] <= self._margin(ranking, current) \
+                else best
+        return current if self.margin > 0 and here - ranking.means[0] <= self.margin else best
+
+    def _margin(self, ranking, current):
+        errors = ranking.errors
+        if not self.z or errors is None:
+            return self.margin
+        here, first = errors[ranking.ranking.index(current)], errors[0]
+        return self.margin + self.z * math.sqrt(here * here + first * first)
+
+    def describe(self):
+        if self.kind == 'hysteresis':
+            return 'hysteresis (margin %.3g ms + %g se, dwell %.3g s)' % (
+                self.margin * 1e3, self.z, self.dwell)
+        if self.kind == 'bound':
+            return 'bound (keep while under %.3g ms)' % (self.bound * 1e3)
+        return self.kind + (' (margin %.3g ms)' % (self.margin * 1e3) if self.margin else '')
+
+
+class Chooser(object):
+    """A :class:`Policy` with the current choice of one robot and when it was made."""
+
+    def __init__(self, policy):
+        self.policy, self.current, self.since = policy, None, None
+
+    def choose(self, ranking, now, current=None):
+        """The server to select now (``current``: what was last published, if the caller
+        knows better than this chooser, e.g. after a restart)."""
+        if current is not None and current != self.current:
+            self.current, self.since = current, None
+        selected = self.policy.choose(ranking, self.current, self.since, now)
+        if selected != self.current:
+            self.current, self.since = selected, now
+        return selected
+
+
+def from_params(get):
+    """The :class:`Policy` and the window statistic that parameters ask for (``get(name)``
+    reads one: ``policy``, ``statistic``, ``hysteresis``, ``dwell``, ``margin_z``,
+    ``latency_bound``)."""
+    policy = Policy(get('policy'), get('hysteresis'), get('dwell'), get('margin_z'),
+                    get('latency_bound'))
+    return policy, policy.statistic(get('statistic'))

@@ -1,0 +1,38 @@
+"""A robot's answered tasks as latency samples (``~passive``): its own ranking and the
+manager's ``task_samples``."""
+
+import threading
+
+import rospy
+
+from server_select.core import names
+from server_select.core.passive import TaskBaseline
+from server_select.msg import LatencySamples
+from server_select.ros.node import fleet
+
+
+class TaskSamples(object):
+    """Turns answered tasks into samples (:mod:`server_select.core.passive`) for a
+    :class:`~server_select.core.selection.Selection` and publishes each on
+    ``task_samples`` (one LatencySamples per answered task)."""
+
+    def __init__(self, robot_id, selection):
+        self.robot_id, self.selection = robot_id, selection
+        self.baseline, self._lock = TaskBaseline(), threading.Lock()
+        self.pub = rospy.Publisher(fleet(names.TASK_SAMPLES_TOPIC), LatencySamples,
+                                   queue_size=100, tcp_nodelay=True)
+        self.count = 0
+
+    def on_answer(self, kind, server, rtt):
+        """A task of ``kind`` answered by ``server`` after ``rtt`` s (a TaskFlow hook)."""
+        with self._lock:
+            sample = self.baseline.sample(kind, rtt, self.selection.probe_latency(server))
+            if sample is not None:
+                self.count += 1
+        if sample is None:
+            return      # the kind's baseline is still being learned
+        self.selection.on_sample(server, True, sample, probe=False)
+        batch = LatencySamples(robot_id=self.robot_id, round=self.count, server_id=[server],
+                               ok=[True], rtt=[sample])
+        batch.header.stamp = rospy.Time.now()
+        self.pub.publish(batch)
