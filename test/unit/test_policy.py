@@ -73,8 +73,8 @@ def test_near_equal_servers_the_mean_flaps_hysteresis_does_not(seed):
     plain = run(jittery(seed), Policy('mean'), rate=2.0, window=2.0, until=300.0)
     steady = run(jittery(seed), Policy('hysteresis', margin=0.0002, z=2.5, dwell=5.0),
                  rate=2.0, window=2.0, until=300.0)
-    print('seed %d: mean %d switches, hysteresis %d' % (seed, switches(plain),
-                                                         switches(steady)))
+    print('seed %d: mean %d switches, hysteresis %d'
+          % (seed, switches(plain), switches(steady)))
     assert switches(plain) >= 20
     assert switches(steady) <= 10                     # <= 2 per minute over 5 minutes
     on_best = sum(1 for _, s in steady if s == 1) / float(len(steady))

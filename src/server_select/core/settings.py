@@ -72,6 +72,8 @@ PARAMS = {
     'min_neighbors': Param(5, parse_positive_int, 'cascade neighbours for a detection'),
     'min_size': Param(24, parse_positive_int, 'smallest target (px)'),
     'max_task_len': Param(1000000, parse_positive_int, 'larger sort tasks get an error result'),
+    'work_delay': Param(0.0, parse_non_negative, 'each task takes this much longer (s): a '
+                        'slower or busier machine; rosparam set changes it at run time'),
     'queue_size': Param(100, parse_positive_int, 'task subscriber queue length'),
     'max_image_pixels': Param(1 << 24, parse_positive_int, 'larger frames get an error result'),
     'image_topic': Param('', parse_text, 'camera frames from this sensor_msgs/Image or '

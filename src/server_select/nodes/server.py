@@ -69,6 +69,7 @@ class ServerNode(object):
         self.queue_size = param('queue_size')
         self.max_image_pixels = param('max_image_pixels')
         self.jpeg_quality = param('jpeg_quality')
+        self.work_delay = param('work_delay')
         try:
             self.detector = make_detector(param)
         except DetectorError as error:
@@ -98,7 +99,24 @@ class ServerNode(object):
         rospy.loginfo('server %d: probe service %s, tasks on %s',
                       self.server_id, self.probe_srv.resolved_name,
                       ', '.join(t for e in self.endpoints for t in e.topics))
+        self.work_timer = rospy.Timer(rospy.Duration(1.0), self.on_work_check)
         rospy.on_shutdown(self.on_shutdown)
+
+    def on_work_check(self, _event):
+        """``~work_delay`` again (``rosparam set`` changes it while the server runs)."""
+        try:
+            delay = param('work_delay')
+        except ParamError as error:
+            rospy.logwarn_throttle(30.0, 'server %d: %s (keeping %g s)'
+                                   % (self.server_id, error, self.work_delay))
+            return
+        if delay != self.work_delay:
+            rospy.loginfo('server %d: each task now takes %g s more', self.server_id, delay)
+            self.work_delay = delay
+
+    def _work(self):
+        if self.work_delay:
+            time.sleep(self.work_delay)
 
     def on_probe(self, req):
         if self.direct and req.robot_id not in self._known_robots:
@@ -121,6 +139,7 @@ class ServerNode(object):
         try:
             result.data = sort_values(task.data, self.max_task_len)
             result.ok = True
+            self._work()
         except TaskError as error:
             self._reject(result, 'task', task, error)
         result.process_time = time.perf_counter() - start
@@ -145,6 +164,7 @@ class ServerNode(object):
             self._annotated(result, annotated, img.header if not packed.data else None,
                             packed.header)
             result.ok = True
+            self._work()
             result.detection_count = len(boxes)
             self.detections_pub.publish(Detections(
                 header=task.header, robot_id=task.robot_id, task_id=task.task_id,
@@ -181,6 +201,7 @@ class ServerNode(object):
                 self.tasks_failed += 1
 
     def on_shutdown(self):
+        self.work_timer.shutdown()
         self._pool.shutdown(wait=False)
         rospy.loginfo('server %d: %d tasks done, %d rejected%s', self.server_id,
                       self.tasks_done, self.tasks_failed,

@@ -16,6 +16,9 @@ A scenario is a YAML mapping::
         - {at: 30, ramp: 20, over: 40}      # linear from the value at t=30 to 20 ms at t=70
         - {at: 80, down: true}              # every packet dropped
         - {at: 90, delay: 5, jitter: 0.5, loss: 0.01}   # up again
+    # a server host may also hang (every process in it stopped with SIGSTOP, then
+    # SIGCONT) and get slower (each task takes this many ms more, at run time):
+    #   server2: {role: server, id: 2, hang: [[40, 55]], work: [{at: 40, delay: 25}]}
 
 Each event may set ``delay`` (ms, a step), ``ramp`` + ``over`` (ms, s: linear change),
 ``jitter`` (ms: a packet's delay is uniform in delay +- jitter), ``loss`` (0..1),
@@ -30,16 +33,15 @@ import collections
 import yaml
 
 from server_select.core.ranking import NO_SERVER
+from server_select.testbed.fields import (ScenarioError, hang_times,  # noqa: F401 (re-exported)
+                                          number as _number, work_times)
 
 ROLES = ('manager', 'server', 'robot')
 
 LinkState = collections.namedtuple('LinkState', 'delay jitter loss down rate')
 LinkState.__new__.__defaults__ = (0.0,)   # rate: MB/s each way, 0 = unlimited
-Host = collections.namedtuple('Host', 'name role id start stop')
-
-
-class ScenarioError(ValueError):
-    """A scenario file that cannot be used; the message says where."""
+Host = collections.namedtuple('Host', 'name role id start stop hang work')
+Host.__new__.__defaults__ = ((), ())   # hang: [(from, to)] s; work: [(at s, delay s)]
 
 
 def pair_key(a, b):
@@ -173,7 +175,10 @@ class Scenario(object):
                 stop = _number(stop, 'hosts: %s stop' % name, start)
             if role == 'manager' and (start or stop is not None):
                 raise ScenarioError('hosts: the manager runs for the whole scenario')
-            result[name] = Host(name, role, ident, start, stop)
+            hang, work = hang_times(spec.get('hang'), name), work_times(spec.get('work'), name)
+            if role != 'server' and (hang or work):
+                raise ScenarioError('hosts: only a server may hang or get work (%s)' % name)
+            result[name] = Host(name, role, ident, start, stop, hang, work)
         if sum(1 for h in result.values() if h.role == 'manager') != 1:
             raise ScenarioError('hosts: exactly one host must have role manager')
         return result
@@ -198,7 +203,8 @@ class Scenario(object):
 
     def ranking(self, robot_id, t):
         """The robot's servers whose links are up at ``t``, nearest first, and those down
-        (or not running: a host's ``start`` / ``stop`` times).
+        (or not running: a host's ``start`` / ``stop`` times, or hung). A server's ``work``
+        is not counted: the oracle knows the network, not the servers' load.
 
         Returns ``([(one-way delay ms, server id), ...], [down server ids])``: lowest delay
         first, ties to the lower server id (the choice of an oracle that knows the scenario).
@@ -207,7 +213,8 @@ class Scenario(object):
         up, down = [], []
         for server in sorted(self.of_role('server'), key=lambda h: h.id):
             state = self.link(robot.name, server.name, t)
-            running = server.start <= t and (server.stop is None or t < server.stop)
+            running = server.start <= t and (server.stop is None or t < server.stop) and \
+                not any(a <= t < b for a, b in server.hang)
             (down if state.down or not running else up).append((state.delay, server.id))
         return sorted(up, key=lambda pair: pair[0]), [s for _, s in down]
 
@@ -215,13 +222,3 @@ class Scenario(object):
         """The truly nearest server of a robot at ``t`` (NO_SERVER if every link is down)."""
         ranked, _ = self.ranking(robot_id, t)
         return ranked[0][1] if ranked else NO_SERVER
-
-
-def _number(value, where, minimum=None, maximum=None):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ScenarioError('%s: expected a number, got %r' % (where, value))
-    value = float(value)
-    if value != value or (minimum is not None and value < minimum) or \
-            (maximum is not None and value > maximum):
-        raise ScenarioError('%s: %g is out of range' % (where, value))
-    return value
