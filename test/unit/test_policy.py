@@ -162,7 +162,7 @@ def test_from_params_and_bad_values():
         LatencyWindow(5.0, 'mode')
 
 
-def test_fail_fast_leaves_a_server_at_its_first_failed_sample():
+def test_fail_fast_leaves_a_server_after_failed_samples_in_a_row():
     w = LatencyWindow(5.0)
     for t in range(5):
         w.add(1, 1, t, True, 0.002)
@@ -170,7 +170,11 @@ def test_fail_fast_leaves_a_server_at_its_first_failed_sample():
     w.add(1, 1, 5.0, False, 0.0)
     stats = w.robot_stats(1, [1, 2], 5.0)
     assert rank_servers(stats).selected == 1                 # the paper: still 1
-    fast = rank_servers(stats, fail_fast=True)
+    assert rank_servers(stats, fail_fast=2).selected == 1    # one loss is not an outage
+    w.add(1, 1, 5.5, False, 0.0)
+    stats = w.robot_stats(1, [1, 2], 5.5)
+    assert rank_servers(stats).selected == 1
+    fast = rank_servers(stats, fail_fast=2)
     assert (fast.selected, fast.excluded) == (2, [1])
     w.add(1, 1, 6.0, True, 0.002)                            # answers again: back at once
-    assert rank_servers(w.robot_stats(1, [1, 2], 6.0), fail_fast=True).selected == 1
+    assert rank_servers(w.robot_stats(1, [1, 2], 6.0), fail_fast=2).selected == 1

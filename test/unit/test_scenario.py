@@ -123,3 +123,34 @@ def test_bad_start_and_stop_times(spec, message):
 def test_the_manager_runs_throughout():
     with pytest.raises(ScenarioError, match='whole scenario'):
         scenario(hosts=dict(HOSTS, m={'role': 'manager', 'stop': 5}))
+
+
+def test_suite_scenarios_load():
+    import glob
+    import os
+    folder = os.path.join(os.path.dirname(__file__), '..', '..', 'config', 'suite')
+    names = sorted(os.path.basename(p) for p in glob.glob(os.path.join(folder, '*.yaml')))
+    assert names == ['crossing.yaml', 'hung_server.yaml', 'link_flap.yaml',
+                     'loaded_server.yaml', 'near_equal.yaml']
+    for name in names:
+        assert Scenario.load(os.path.join(folder, name)).duration <= 110
+
+
+def test_a_hung_server_is_not_ranked_its_work_is_not_seen_by_the_oracle():
+    hosts = dict(HOSTS, s2={'role': 'server', 'id': 2, 'hang': [[10, 20]],
+                            'work': [{'at': 5, 'delay': 25}, {'at': 30, 'delay': 0}]})
+    s = scenario({'r1 s2': [{'at': 0, 'delay': 0.5}]}, hosts=hosts)
+    assert s.hosts['s2'].hang == ((10.0, 20.0),)
+    assert s.hosts['s2'].work == ((5.0, 0.025), (30.0, 0.0))
+    assert [s.nearest_server(1, t) for t in (5, 10, 19.9, 20)] == [2, 1, 1, 2]
+
+
+@pytest.mark.parametrize('spec, message', [
+    ({'role': 'server', 'id': 2, 'hang': [[10, 5]]}, 'hang'),
+    ({'role': 'server', 'id': 2, 'hang': [10, 20]}, 'hang'),
+    ({'role': 'server', 'id': 2, 'work': [{'at': 5}]}, 'work'),
+    ({'role': 'server', 'id': 2, 'work': [{'at': 5, 'delay': -1}]}, 'work'),
+    ({'role': 'robot', 'id': 2, 'hang': [[1, 2]]}, 'only a server')])
+def test_bad_hang_and_work(spec, message):
+    with pytest.raises(ScenarioError, match=message):
+        scenario(hosts=dict(HOSTS, s2=spec))

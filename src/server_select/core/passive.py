@@ -2,16 +2,18 @@
 
 A task's round trip is the network *and* the server's queueing and work: what the
 application really gets. A probe's is the network only. So that the two can share one
-window and one ranking, a task's round trip enters it less the work any server needs for a
-task of its kind: the kind's *baseline*, a low quantile of the recent differences between
-a task's round trip and its server's probe latency at the time. What a slow, loaded or
-queueing server adds above that baseline is what makes it rank worse than its probes
-alone would; on an idle server a task sample is about its probe latency.
+window and one ranking, a task's round trip enters it less the work the *fastest* server
+needs for a task of its kind: the kind's *baseline*. For each server the robot has sent
+tasks to, the median of the recent differences between a task's round trip and that
+server's probe latency at the time is its overhead; the baseline is the lowest overhead
+of any server. What a slow, loaded or queueing server adds above that is what makes it
+rank worse than its probes alone would; on the fastest server a task sample is, on
+average, its probe latency (a median: jitter does not bias it).
 
-The baseline is learned from the robot's own answers (any server) and forgets: it holds
-the last ``keep`` differences per kind. A server loaded from the start, the only one a
-robot ever used, is not told apart (there is no unloaded answer to compare with); it is as
-soon as the robot has used another one.
+The overheads are the robot's own and forget: each holds the last ``keep`` differences.
+A server loaded from the start, the only one a robot ever used, is not told apart (there
+is no faster answer to compare with); it is as soon as the robot has used another one, or
+once its load started after more than half of its ``keep`` differences were taken.
 """
 
 import collections
@@ -19,33 +21,40 @@ import math
 
 
 class TaskBaseline(object):
-    """Per task kind, the work a task adds to a probe round trip on an idle path."""
+    """Per task kind, the work a task adds to a probe round trip on the fastest server."""
 
-    def __init__(self, keep=200, quantile=0.1, min_count=5):
-        if not 0 <= quantile < 1 or keep < 1 or min_count < 1:
-            raise ValueError('keep >= 1, min_count >= 1 and 0 <= quantile < 1, got %r %r %r'
-                             % (keep, min_count, quantile))
-        self.keep, self.quantile, self.min_count = keep, quantile, min_count
-        self._differences = {}
+    def __init__(self, keep=200, min_count=5):
+        if keep < 1 or min_count < 1:
+            raise ValueError('keep and min_count must be >= 1, got %r %r' % (keep, min_count))
+        self.keep, self.min_count = keep, min_count
+        self._differences = {}       # (kind, server) -> deque of task rtt - probe latency
 
-    def baseline(self, kind):
-        """The kind's baseline (s), or None while fewer than ``min_count`` are known."""
-        differences = self._differences.get(kind)
+    def overhead(self, kind, server):
+        """The median difference of ``server``'s tasks of ``kind`` (None: too few)."""
+        differences = self._differences.get((kind, server))
         if differences is None or len(differences) < self.min_count:
             return None
         ordered = sorted(differences)
-        return ordered[int(math.floor(self.quantile * (len(ordered) - 1)))]
+        half = len(ordered) // 2
+        return ordered[half] if len(ordered) % 2 else (ordered[half - 1] + ordered[half]) / 2.0
 
-    def sample(self, kind, rtt, probe_latency):
-        """Learn from one answered task of ``kind`` (``rtt`` s; ``probe_latency``: its
-        server's probe latency now, None if unknown); return the latency sample it is
-        (``rtt`` less the baseline, at least ``probe_latency``'s floor of 0), or None while
-        the baseline is still being learned."""
+    def baseline(self, kind):
+        """The kind's baseline (s): the lowest overhead of any server (None: none known)."""
+        known = [self.overhead(k, s) for k, s in list(self._differences) if k == kind]
+        known = [o for o in known if o is not None]
+        return min(known) if known else None
+
+    def sample(self, kind, server, rtt, probe_latency):
+        """Learn from one task of ``kind`` answered by ``server`` after ``rtt`` s
+        (``probe_latency``: that server's probe latency now, None if unknown); return the
+        latency sample it is (``rtt`` less the baseline, >= 0), or None while no baseline is
+        known yet."""
         if probe_latency is None or not (math.isfinite(rtt) and rtt >= 0):
             return None
-        differences = self._differences.get(kind)
+        differences = self._differences.get((kind, server))
         if differences is None:
-            differences = self._differences[kind] = collections.deque(maxlen=self.keep)
+            differences = self._differences[(kind, server)] = collections.deque(
+                maxlen=self.keep)
         differences.append(rtt - probe_latency)
         base = self.baseline(kind)
         return None if base is None else max(0.0, rtt - base)

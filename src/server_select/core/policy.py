@@ -8,9 +8,10 @@ window's statistic) and the current choice, and returns the server to select:
   ``margin`` > 0 keeps the current server while it is within it of the best (what
   ``~hysteresis`` always did).
 - ``hysteresis``: keep the current server unless the best beats it by more than
-  ``margin`` + ``z`` x the standard error of the difference of their means (a margin that
-  grows with the noise), and never move within ``dwell`` s of the last move unless the
-  current server has left the ranking.
+  ``margin`` + ``z`` x the standard error of the difference of their statistics (a margin
+  that grows with the noise; the errors are robust ones, from the median absolute
+  deviation, so a step in the current server's latency does not widen it), and never move
+  within ``dwell`` s of the last move unless the current server has left the ranking.
 - ``bound`` (FogROS2-LS): keep the current server while its statistic is at most
   ``bound`` s; else move to the best.
 - ``peak_ewma`` (Finagle / Linkerd): the best by a peak-sensitive moving average (the
@@ -42,6 +43,11 @@ class Policy(object):
     def statistic(self, requested='mean'):
         """The window statistic this policy ranks by (``requested`` unless peak_ewma)."""
         return 'peak_ewma' if self.kind == 'peak_ewma' else requested
+
+    @property
+    def robust(self):
+        """Whether the policy needs the windows' robust standard errors."""
+        return self.kind == 'hysteresis' and self.z > 0
 
     def choose(self, ranking, current, since=None, now=None):
         """The server to select; ``current`` was selected at ``since`` (same clock as

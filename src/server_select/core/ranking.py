@@ -18,19 +18,19 @@ def latency(stats):
     return stats.value if stats.value is not None else stats.mean
 
 
-def rank_servers(pair_stats, fail_fast=False):
+def rank_servers(pair_stats, fail_fast=0):
     """Rank servers by latency statistic, lowest first.
 
     ``pair_stats`` maps server id to :class:`server_select.core.window.PairStats`. Servers
-    with no successful sample in the window are excluded, and with ``fail_fast`` those
-    whose newest sample failed (a server that stopped answering is left at its first
-    failed probe, not when its last good sample leaves the window). The candidates are put in
+    with no successful sample in the window are excluded, and with ``fail_fast`` > 0 those
+    whose ``fail_fast`` newest samples failed (a server that stopped answering is left
+    then, not when its last good sample leaves the window). The candidates are put in
     ascending id order and then sorted by their statistic with Python's ``sorted``
     (Timsort, which is stable), so equal values rank the lower server id first.
     """
     def ranked(s):
         stats = pair_stats[s]
-        return stats.mean is not None and (stats.last_ok or not fail_fast)
+        return stats.mean is not None and not (fail_fast and stats.failed_run >= fail_fast)
     candidates = [s for s in sorted(pair_stats) if ranked(s)]
     excluded = [s for s in sorted(pair_stats) if not ranked(s)]
     ranking = sorted(candidates, key=lambda s: latency(pair_stats[s]))

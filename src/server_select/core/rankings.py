@@ -21,8 +21,8 @@ class FleetRankings(object):
     """Samples in, :class:`~server_select.core.ranking.Ranking` per robot out. Thread-safe."""
 
     def __init__(self, window, robots=(), servers=(), statistic='mean', tau=1.0,
-                 fail_fast=False):
-        self.window = LatencyWindow(window, statistic, tau)
+                 fail_fast=0, robust=False):
+        self.window = LatencyWindow(window, statistic, tau, robust)
         self.fail_fast = fail_fast
         self.fixed_robots = list(robots)          # empty: learned
         self.fixed_servers = list(servers)        # empty: learned

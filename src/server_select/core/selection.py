@@ -31,7 +31,7 @@ class Selection(object):
         self.health = health
         policy = policy or Policy()
         self.manager_timeout = manager_timeout
-        self.window = LatencyWindow(window, statistic or policy.statistic(), tau)
+        self.window = LatencyWindow(window, statistic or policy.statistic(), tau, policy.robust)
         self.probes = LatencyWindow(window)      # probes only: what a task is compared with
         self._chooser = Chooser(policy)
         self._clock = clock

@@ -19,14 +19,16 @@ import threading
 STATISTICS = ('mean', 'median', 'trimmed', 'peak_ewma')
 
 Sample = collections.namedtuple('Sample', 'time ok rtt')
-PairStats = collections.namedtuple('PairStats', 'mean ok_count failed_count value se last_ok')
-PairStats.__new__.__defaults__ = (None, None, True)
+PairStats = collections.namedtuple('PairStats',
+                                   'mean ok_count failed_count value se failed_run')
+PairStats.__new__.__defaults__ = (None, None, 0)
 PairStats.__doc__ = """A pair's window: ``mean`` of the successful samples (None: none),
 their count, the failed count, ``value`` the window's statistic (None: no successful
-sample), ``se`` the standard error of the mean (0 with fewer than two samples) and
-``last_ok`` whether the newest sample succeeded."""
+sample), ``se`` the standard error of the mean (0 with fewer than two samples; with
+``robust``, from the median absolute deviation, which a step in the latency does not
+inflate) and ``failed_run`` how many of the newest samples failed in a row."""
 
-EMPTY = PairStats(None, 0, 0, None, None, True)
+EMPTY = PairStats(None, 0, 0, None, None, 0)
 
 
 def valid_rtt(rtt):
@@ -53,14 +55,17 @@ def median(values):
 class _Pair(object):
     """One pair's samples and their running sums (O(1) amortised per sample for the mean
     and the peak EWMA; the median and trimmed mean cost O(n log n) of the window's n)."""
-    __slots__ = ('samples', 'rtt_sum', 'sq_sum', 'ok_count', 'ewma', 'ewma_time')
+    __slots__ = ('samples', 'rtt_sum', 'sq_sum', 'ok_count', 'ewma', 'ewma_time',
+                 'failed_run')
 
     def __init__(self):
         self.samples, self.rtt_sum, self.sq_sum, self.ok_count = collections.deque(), 0.0, 0.0, 0
         self.ewma = self.ewma_time = None
+        self.failed_run = 0
 
     def append(self, sample, tau):
         self.samples.append(sample)
+        self.failed_run = 0 if sample.ok else self.failed_run + 1
         if sample.ok:
             self.rtt_sum += sample.rtt
             self.sq_sum += sample.rtt * sample.rtt
@@ -84,22 +89,26 @@ class _Pair(object):
             self.rtt_sum = self.sq_sum = 0.0     # no rounding residue survives an empty window
             self.ewma = self.ewma_time = None    # a pair back from silence starts afresh
 
-    def stats(self, statistic):
+    def stats(self, statistic, robust=False):
         failed = len(self.samples) - self.ok_count
         n = self.ok_count
-        last_ok = self.samples[-1].ok if self.samples else True
         if not n:
-            return PairStats(None, 0, failed, None, None, last_ok)
+            return PairStats(None, 0, failed, None, None, self.failed_run)
         mean = max(0.0, self.rtt_sum / n)
         variance = max(0.0, self.sq_sum / n - mean * mean) * n / (n - 1) if n > 1 else 0.0
+        ok = [s.rtt for s in self.samples if s.ok] if robust or statistic in (
+            'median', 'trimmed') else None
         if statistic == 'mean':
             value = mean
         elif statistic == 'peak_ewma':
             value = self.ewma
         else:
-            ok = [s.rtt for s in self.samples if s.ok]
             value = median(ok) if statistic == 'median' else trimmed_mean(ok)
-        return PairStats(mean, n, failed, value, math.sqrt(variance / n), last_ok)
+        if robust and n > 1:
+            middle = median(ok)
+            variance = (1.4826 * median([abs(v - middle) for v in ok])) ** 2
+        return PairStats(mean, n, failed, value, math.sqrt(variance / n),
+                         self.failed_run)
 
 
 class LatencyWindow(object):
@@ -109,10 +118,11 @@ class LatencyWindow(object):
     manager clocks are not shared). Each pair keeps running sums, so adding a sample and
     reading a pair's mean cost O(1) amortised, whatever the number of pairs. ``statistic``
     (one of :data:`STATISTICS`) is the pair's ``value``; ``tau`` (s) is the peak EWMA's
-    decay time. Thread-safe: subscriber callbacks add, a timer reads.
+    decay time; ``robust``: standard errors from the median absolute deviation (O(n log n)
+    per read). Thread-safe: subscriber callbacks add, a timer reads.
     """
 
-    def __init__(self, window, statistic='mean', tau=1.0):
+    def __init__(self, window, statistic='mean', tau=1.0, robust=False):
         if not window > 0:
             raise ValueError('window must be positive, got %r' % (window,))
         if statistic not in STATISTICS:
@@ -121,6 +131,7 @@ class LatencyWindow(object):
         if not tau > 0:
             raise ValueError('tau must be positive, got %r' % (tau,))
         self.window, self.statistic, self.tau = float(window), statistic, float(tau)
+        self.robust = bool(robust)
         self._lock = threading.Lock()
         self._pairs = {}
 
@@ -137,7 +148,7 @@ class LatencyWindow(object):
             pair.prune(now - self.window)
             had_value = pair.ok_count > 0
             pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')), self.tau)
-            return had_value, pair.stats(self.statistic)
+            return had_value, pair.stats(self.statistic, self.robust)
 
     def stats(self, robot_id, server_id, now):
         """The pair's :class:`PairStats` over the window now."""
@@ -148,7 +159,7 @@ class LatencyWindow(object):
             pair.prune(now - self.window)
             if not pair.samples:       # nothing left: forget the pair
                 del self._pairs[(robot_id, server_id)]
-            return pair.stats(self.statistic)
+            return pair.stats(self.statistic, self.robust)
 
     def robot_stats(self, robot_id, servers, now):
         """``{server_id: PairStats}`` for each of ``servers``."""

@@ -69,7 +69,8 @@ class ManagerNode(object):
         self.stream = param('sample_stream')
         self.policy, statistic = from_params(param)
         self.rankings = FleetRankings(param('window'), param('robots'), param('servers'),
-                                      statistic, param('ewma_tau'), param('fail_fast'))
+                                      statistic, param('ewma_tau'), param('fail_fast'),
+                                      self.policy.robust)
         self.passive = param('passive')
         for name in ('robots', 'servers'):
             if self.stream == 'pair' and not getattr(self.rankings, 'fixed_' + name):

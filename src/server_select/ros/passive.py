@@ -26,7 +26,8 @@ class TaskSamples(object):
     def on_answer(self, kind, server, rtt):
         """A task of ``kind`` answered by ``server`` after ``rtt`` s (a TaskFlow hook)."""
         with self._lock:
-            sample = self.baseline.sample(kind, rtt, self.selection.probe_latency(server))
+            sample = self.baseline.sample(kind, server, rtt,
+                                          self.selection.probe_latency(server))
             if sample is not None:
                 self.count += 1
         if sample is None:

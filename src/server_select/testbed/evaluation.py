@@ -33,12 +33,13 @@ RECORDED = ('/(latency_R[0-9]+S[0-9]+|latency_samples|fleet_servers|server_selec
 
 
 class RunOptions(object):
-    """What a run does besides the scenario (the nodes' defaults reproduce the paper)."""
+    """What a run does besides the scenario (the nodes' defaults reproduce the paper;
+    ``window``, ``probe_rate`` and ``hysteresis`` None: the profile's)."""
 
-    def __init__(self, fixed_server=1, window=default('window'), task_rate=default('task_rate'),
-                 task_size=default('task_size'), probe_rate=default('probe_rate'),
+    def __init__(self, fixed_server=1, window=None, task_rate=default('task_rate'),
+                 task_size=default('task_size'), probe_rate=None,
                  probe_timeout=default('probe_timeout'), task_timeout=default('task_timeout'),
-                 start_delay=5.0, hysteresis=default('hysteresis'), prefix=None,
+                 start_delay=5.0, hysteresis=None, prefix=None,
                  profile=default('profile')):
         self.fixed_server = fixed_server
         self.window = window
@@ -51,6 +52,12 @@ class RunOptions(object):
         self.hysteresis = hysteresis
         self.prefix = prefix
         self.profile = profile
+
+
+def _given(options, *names):
+    """Launch arguments of the ``options`` set (None: the profile's default)."""
+    return ['%s:=%g' % (n, getattr(options, n)) for n in names
+            if getattr(options, n) is not None]
 
 
 def _ids(hosts):
@@ -99,7 +106,7 @@ class HostRun(object):
             self.launch(manager, 'manager.launch', 'profile:=%s' % options.profile,
                         'robots:=%s' % ('[]' if fleet else _ids(robots)),
                         'servers:=%s' % ('[]' if fleet else _ids(servers)),
-                        'window:=%g' % options.window, 'hysteresis:=%g' % options.hysteresis)
+                        *_given(options, 'window', 'hysteresis'))
         self.popen(manager, ['rosbag', 'record', '--tcpnodelay', '-O', bag, '-e', RECORDED],
                    'rosbag')
         for server in servers:
@@ -117,12 +124,12 @@ class HostRun(object):
                         'servers:=%s' % ('[]' if learned else _ids(servers)),
                         'mode:=%s' % ('fixed' if mode == 'fixed' else 'select'),
                         'fixed_server:=%d' % options.fixed_server,
-                        'probe_rate:=%g' % options.probe_rate,
                         'probe_timeout:=%g' % options.probe_timeout,
                         'task_rate:=%g' % options.task_rate, 'task_size:=%d' % options.task_size,
                         'task_timeout:=%g' % options.task_timeout,
                         'start_delay:=%g' % options.start_delay,
-                        'manager_node:=%s' % ('/oracle' if mode == 'oracle' else '/manager'))
+                        'manager_node:=%s' % ('/oracle' if mode == 'oracle' else '/manager'),
+                        *_given(options, 'probe_rate'))
 
     def server_lifetime(self, server, options):
         """A server that starts late or stops early (the scenario's ``start`` / ``stop``):
@@ -168,6 +175,10 @@ def run_mode(scenario_path, mode, out_dir, options=None, log=print):
 
 
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    if '--suite' in argv:       # the scenario suite (testbed/suite_cli.py)
+        from server_select.testbed.suite_cli import main as suite_main
+        return suite_main(argv)
     parser = argparse.ArgumentParser(
         description='Run the selection experiment on the testbed and analyse the bags.')
     parser.add_argument('--scenario', required=True, help='scenario YAML file')
@@ -177,8 +188,8 @@ def main(argv=None):
     parser.add_argument('--fixed-server', type=int, default=1)
     parser.add_argument('--task-rate', type=float, default=default('task_rate'))
     parser.add_argument('--task-size', type=int, default=default('task_size'))
-    parser.add_argument('--window', type=float, default=default('window'))
-    parser.add_argument('--hysteresis', type=float, default=default('hysteresis'))
+    parser.add_argument('--window', type=float, help="default: the profile's")
+    parser.add_argument('--hysteresis', type=float, help="default: the profile's")
     parser.add_argument('--profile', choices=('paper', 'fleet'), default=default('profile'),
                         help='node defaults (default: paper, the paper as written)')
     parser.add_argument('--analyze-only', action='store_true',

@@ -50,7 +50,7 @@ def _netns_list():
     return [line.split()[0] for line in out.splitlines() if line.strip()]
 
 
-def _netns_pids(netns):
+def netns_pids(netns):
     out = subprocess.run(['ip', 'netns', 'pids', netns], stdout=subprocess.PIPE,
                          stderr=subprocess.DEVNULL, universal_newlines=True, check=False).stdout
     return [int(p) for p in out.split()]
@@ -102,7 +102,7 @@ def cleanup(prefix):
         os.unlink(state)
     for netns in _netns_list():
         if netns.startswith(prefix + '-'):
-            _kill_all(_netns_pids(netns))
+            _kill_all(netns_pids(netns))
             subprocess.run(['ip', 'netns', 'del', netns], check=False)
             removed.append(netns)
     return removed

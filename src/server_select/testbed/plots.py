@@ -3,7 +3,7 @@
 import warnings
 
 
-def _pyplot():
+def pyplot():
     """matplotlib's pyplot, drawing to files. Where Debian's python3-matplotlib is installed
     beside the venv's, its mpl_toolkits makes matplotlib warn that 3-D plots are unavailable:
     none is drawn here, so that warning is not shown."""
@@ -17,7 +17,7 @@ def _pyplot():
 
 def plot_task_rtt(runs, path):
     """Task round trip vs task index, one panel per robot, one line per mode (Fig. 8)."""
-    plt = _pyplot()
+    plt = pyplot()
     robots = sorted(set(r.robot for run in runs.values() for r in run.reports))
     fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
     for ax, robot in zip(axes[:, 0], robots):
@@ -39,7 +39,7 @@ def plot_task_rtt(runs, path):
 
 def plot_latency(run, path, title):
     """Probe round trip per pair over time, the selected server overlaid, per robot."""
-    plt = _pyplot()
+    plt = pyplot()
     robots = sorted(set(s.robot for s in run.samples) | set(f.robot for f in run.flags))
     servers = sorted(set(s.server for s in run.samples))
     colors = dict((s, 'C%d' % i) for i, s in enumerate(servers))

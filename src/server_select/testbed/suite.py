@@ -1,0 +1,205 @@
+"""The scenario suite: every way of selecting a server, side by side, on each scenario.
+
+One run of a scenario gives each *variant* (a mode, a profile and parameters: the paper's
+baseline pinned to one server, the oracle, the paper's rule, the fleet profile, each
+policy alone, the fleet profile with hedged tasks) its own copy of every robot: robot
+``r`` of variant ``k`` is robot ``10 k + r`` on a host of its own with the same links as
+the scenario's robot ``r``. The servers (and the network) are shared, so all variants
+meet the same link changes at the same moment and their ratios are measured side by side;
+each select variant has a manager of its own (``manager_<variant>``). Runs are repeated
+(``--repeats``), each in a fresh testbed with its own namespace prefix.
+
+The bags (``<out>/<scenario>/run<i>.bag`` with a ``.json`` beside each) are the only input
+of :mod:`server_select.testbed.suite_report`.
+"""
+
+import collections
+import json
+import os
+import signal
+import threading
+import xml.etree.ElementTree as ElementTree
+
+import yaml
+
+from server_select.core.paths import package_file
+from server_select.testbed.evaluation import RECORDED, HostRun, RunOptions, _ids
+from server_select.testbed.linkemu import EmulatorError
+from server_select.testbed.netns import Testbed, netns_pids
+from server_select.testbed.scenario import Scenario, ScenarioError
+
+Variant = collections.namedtuple('Variant', 'mode profile params')
+
+# What the suite compares. Parameters go to the variant's manager and robots (each takes
+# the ones its launch file has).
+VARIANTS = collections.OrderedDict([
+    ('fixed', Variant('fixed', 'paper', {})),
+    ('oracle', Variant('oracle', 'paper', {})),
+    ('oracle_fleet', Variant('oracle', 'fleet', {})),
+    ('paper', Variant('select', 'paper', {})),
+    ('fleet', Variant('select', 'fleet', {})),
+    ('hysteresis', Variant('select', 'paper', dict(policy='hysteresis', hysteresis=0.0005,
+                                                   margin_z=2.5, dwell=5.0))),
+    ('bound', Variant('select', 'paper', {'policy': 'bound', 'latency_bound': 0.02})),
+    ('peak_ewma', Variant('select', 'paper', {'policy': 'peak_ewma'})),
+    ('fleet_hedge', Variant('select', 'fleet', {'hedge': True})),
+    ('fleet_probes', Variant('select', 'fleet', {'passive': False})),
+])
+SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
+             'hung_server')
+REPLICA = 10        # robot r of variant k is robot REPLICA * k + r
+MEASURE_FROM = 35.0  # s of scenario time: nodes are up, every variant sends tasks
+SUITE_RECORDED = RECORDED[:-1] + '|task_samples)'
+
+
+def scenario_path(name):
+    """The suite's scenario file ``name`` (``paper_moving`` is the paper's experiment)."""
+    if name == 'paper_moving':
+        return package_file('config', 'paper_moving.yaml')
+    return package_file('config', 'suite', name + '.yaml')
+
+
+def replica_id(variant_index, robot_id):
+    if not 0 <= robot_id < REPLICA:
+        raise ScenarioError('the suite replicates robots with ids 0-%d, not %d'
+                            % (REPLICA - 1, robot_id))
+    return REPLICA * variant_index + robot_id
+
+
+def expand(data, variants):
+    """The scenario ``data`` (a mapping) with a copy of every robot host and its links per
+    variant (index from 1, in ``variants`` order); returns (data, {robot id: (variant,
+    scenario robot id)})."""
+    data = json.loads(json.dumps(data))      # a deep copy
+    hosts = data['hosts']
+    robots = [(name, spec) for name, spec in hosts.items() if spec.get('role') == 'robot']
+    owners = {}
+    for name, _ in robots:
+        del hosts[name]
+    links = data.get('links') or {}
+    for index, variant in enumerate(variants, start=1):
+        for name, spec in robots:
+            copy = 'r%dv%d' % (spec['id'], index)
+            rid = replica_id(index, spec['id'])
+            hosts[copy] = dict(spec, id=rid)
+            owners[rid] = (variant, spec['id'])
+            for key, events in list(links.items()):
+                pair = str(key).replace(',', ' ').replace('-', ' ').split()
+                if name in pair:
+                    other = pair[1] if pair[0] == name else pair[0]
+                    links['%s %s' % (copy, other)] = events
+    data['links'] = dict((k, v) for k, v in links.items()
+                         if not any(n in k.split() for n, _ in robots))
+    data['name'] = data.get('name', 'scenario')
+    return data, owners
+
+
+def launch_args(name):
+    """The arguments launch file ``name`` declares."""
+    root = ElementTree.parse(package_file('launch', name)).getroot()
+    return set(arg.get('name') for arg in root.iter('arg'))
+
+
+def _args(params, accepted):
+    return ['%s:=%s' % (k, str(v).lower() if isinstance(v, bool) else v)
+            for k, v in sorted(params.items()) if k in accepted]
+
+
+class SuiteRun(HostRun):
+    """One run of one scenario with every variant side by side."""
+
+    def start_variants(self, variants, owners, options, bag):
+        manager = self.scenario.manager.name
+        robots_of = collections.defaultdict(list)
+        for rid, (variant, _) in sorted(owners.items()):
+            robots_of[variant].append(rid)
+        manager_args, robot_args = launch_args('manager.launch'), launch_args('robot.launch')
+        self.popen(manager, ['rosbag', 'record', '--tcpnodelay', '-O', bag, '-e',
+                             SUITE_RECORDED], 'rosbag')
+        for name in variants:
+            variant, ids = VARIANTS[name], ','.join(str(r) for r in robots_of[name])
+            if variant.mode == 'oracle':
+                self.launch(manager, 'oracle.launch', 'scenario:=%s' % self.scenario.source,
+                            't0:=%.6f' % self.tb.t0, 'robots:=%s' % ids)
+            elif variant.mode == 'select':
+                self.launch(manager, 'manager.launch', 'name:=manager_%s' % name,
+                            'profile:=%s' % variant.profile, 'robots:=%s' % ids,
+                            'servers:=%s' % ('[]' if variant.profile == 'fleet' else
+                                             _ids(self.scenario.of_role('server'))),
+                            *_args(variant.params, manager_args))
+        for server in self.scenario.of_role('server'):
+            self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
+                        'routing:=direct')      # takes broadcast and direct tasks
+            threading.Thread(target=self.server_events, args=(server,), daemon=True).start()
+        for robot in self.scenario.of_role('robot'):
+            name = owners[robot.id][0]
+            self.start_robot(robot, name, VARIANTS[name], options, robot_args)
+
+    def start_robot(self, robot, name, variant, options, accepted):
+        learned = variant.profile == 'fleet' and variant.mode == 'select'
+        params = dict(variant.params, task_rate=options.task_rate,
+                      task_timeout=options.task_timeout,
+                      start_delay=options.start_delay)
+        self.launch(robot.name, 'robot.launch', 'robot_id:=%d' % robot.id,
+                    'profile:=%s' % variant.profile,
+                    'servers:=%s' % ('[]' if learned else
+                                     _ids(self.scenario.of_role('server'))),
+                    'mode:=%s' % ('fixed' if variant.mode == 'fixed' else 'select'),
+                    'fixed_server:=%d' % options.fixed_server,
+                    'manager_node:=%s' % ('/oracle' if variant.mode == 'oracle' else
+                                          '/manager_%s' % name),
+                    *_args(params, accepted))
+
+    def server_events(self, server):
+        """The scenario's hang and work times of ``server``, as they come."""
+        events = [(a, 'stop') for a, _ in server.hang] + [(b, 'cont') for _, b in server.hang]
+        events += [(at, delay) for at, delay in server.work]
+        for at, what in sorted(events, key=lambda e: e[0]):
+            self.tb.sleep_until(at)
+            if what in ('stop', 'cont'):
+                sig = signal.SIGSTOP if what == 'stop' else signal.SIGCONT
+                for pid in netns_pids(self.tb.hosts[server.name]['netns']):
+                    try:
+                        os.kill(pid, sig)
+                    except ProcessLookupError:
+                        pass
+            else:
+                self.tb.run(self.scenario.manager.name, ['rosparam', 'set', '/server%d/work_delay'
+                                                         % server.id, repr(what)],
+                            env=self.env(self.scenario.manager.name))
+
+
+def run_scenario(name, out_dir, repeat, variants, options, log=print):
+    """Run scenario ``name`` once with ``variants`` side by side; the bag's path."""
+    with open(scenario_path(name)) as stream:
+        data, owners = expand(yaml.safe_load(stream), variants)
+    run_dir = os.path.abspath(os.path.join(out_dir, name, 'run%d' % repeat))
+    os.makedirs(run_dir, exist_ok=True)
+    path = os.path.join(run_dir, 'scenario.yaml')
+    with open(path, 'w') as stream:
+        yaml.safe_dump(data, stream)
+    scenario = Scenario.load(path)
+    bag = os.path.join(out_dir, name, 'run%d.bag' % repeat)
+    if os.path.exists(bag):
+        os.unlink(bag)
+    with Testbed(scenario, path, run_dir, prefix=options.prefix) as tb:
+        run = SuiteRun(tb, scenario, run_dir)
+        run.start_master()
+        run.start_variants(variants, owners, options, bag)
+        log('%s run %d: %d variants, %d robots, until %.0f s (%s)'
+            % (name, repeat, len(variants), len(owners), scenario.duration, run_dir))
+        tb.sleep_until(scenario.duration)
+        meta = {'scenario': path, 'scenario_name': name, 'variants': list(variants),
+                'owners': dict((str(k), v) for k, v in owners.items()), 't0': tb.t0,
+                'duration': scenario.duration, 'measure_from': MEASURE_FROM,
+                'options': vars(options)}
+    with open(bag + '.json', 'w') as stream:
+        json.dump(meta, stream, indent=1)
+    if not os.path.exists(bag):
+        raise EmulatorError('no bag was written for %s (see %s/rosbag.log)' % (name, run_dir))
+    return bag
+
+
+def default_options():
+    """The suite's run options: the nodes' defaults; tasks start 10 s after a robot."""
+    return RunOptions(start_delay=10.0)

@@ -1,0 +1,68 @@
+"""The scenario suite's pure parts: replicated robots, figures and ratios."""
+
+import collections
+
+import pytest
+
+from server_select.testbed.bag_analysis import Flag, Report
+from server_select.testbed.scenario import Scenario, ScenarioError
+from server_select.testbed.suite import expand, launch_args, replica_id, scenario_path
+from server_select.testbed import suite_report
+
+DATA = {'name': 't', 'duration': 60,
+        'hosts': {'manager': {'role': 'manager'}, 'server1': {'role': 'server', 'id': 1},
+                  'server2': {'role': 'server', 'id': 2}, 'robot1': {'role': 'robot', 'id': 1}},
+        'default': {'delay': 5},
+        'links': {'robot1 server1': [{'at': 0, 'delay': 1}, {'at': 30, 'delay': 9}]}}
+
+
+def test_every_variant_gets_a_copy_of_each_robot_with_its_links():
+    data, owners = expand(DATA, ['oracle', 'paper'])
+    assert owners == {11: ('oracle', 1), 21: ('paper', 1)}
+    s = Scenario(data)
+    assert sorted(h.id for h in s.of_role('robot')) == [11, 21]
+    for rid in (11, 21):
+        assert [s.nearest_server(rid, t) for t in (0, 29, 30)] == [1, 1, 2]
+    assert 'robot1' not in data['hosts'] and 'robot1' in DATA['hosts']   # a copy
+    with pytest.raises(ScenarioError):
+        replica_id(1, 10)
+
+
+def test_launch_args_and_scenario_files_are_the_packages():
+    assert {'policy', 'passive', 'fail_fast'} <= launch_args('manager.launch')
+    assert {'hedge', 'policy', 'passive'} <= launch_args('robot.launch')
+    assert Scenario.load(scenario_path('near_equal')).name == 'near_equal'
+
+
+def report(t, robot, ok=True, rtt=0.01):
+    return Report(t, robot, int(t * 10), ok, rtt if ok else float('nan'), 1, 1, '', 1)
+
+
+def test_figures_count_failed_tasks_at_the_timeout_and_switches_per_minute():
+    reports = [report(t, 11) for t in range(10, 70)] + [report(40.5, 11, ok=False)]
+    flags = [Flag(t, 11, 1 if t < 40 else 2, [], []) for t in range(0, 70)]
+    changes = [(38.0, 11, 2)]
+    f = suite_report.figures(reports, flags, [11], changes, 10.0, 70.0, 2.0)
+    assert (f.tasks, f.failed) == (61, 1)
+    assert f.mean == pytest.approx((60 * 0.01 + 2.0) / 61)
+    assert f.switches_per_min == pytest.approx(1.0)      # one switch in 60 s, one robot
+    assert (f.reaction_mean, f.missed) == (2.0, 0)
+    assert suite_report.flag_switches(flags, 50.0, 70.0) == 0
+
+
+def test_ratios_are_to_the_oracle_with_the_same_routing_and_median_over_runs():
+    F = suite_report.Figures
+    run = collections.OrderedDict([
+        ('oracle', F(10, 0, 0.010, 0.020, 0, None, None, 0)),
+        ('oracle_fleet', F(10, 0, 0.008, 0.016, 0, None, None, 0)),
+        ('paper', F(10, 0, 0.011, 0.030, 2.0, 1.0, 2.0, 0)),
+        ('fleet', F(10, 1, 0.010, 0.020, 0.5, 0.5, 0.5, 0))])
+    rel = suite_report.ratios([run])[0]
+    assert rel['paper'] == pytest.approx((1.1, 1.5))
+    assert rel['fleet'] == pytest.approx((1.25, 1.25))
+    rows = suite_report.scenario_rows([run, run, run])
+    assert rows[2][:6] == ['paper', 3, '10 (10-10)', '0 (0-0)', '11.00 (11.00-11.00)',
+                           '1.100 (1.100-1.100)']
+    table = suite_report.targets_table({'near_equal': [run]})
+    assert '| near_equal | mean | <= 1.05 | 1.250 | no (by +0.200) |' in table
+    assert '| near_equal | switches | <= 2 | 0.500 | yes |' in table
