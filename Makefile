@@ -20,7 +20,7 @@ DEMO_DURATION ?= 30
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
-.PHONY: all deps build demo demo-loopback search-demo evaluate bench bench-emulator bench-memory \
+.PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
   bench-scale bench-routing bench-hedging \
   test unit-test testbed-test fault-test catkin-test rostest lint clean
 all: build
@@ -86,6 +86,10 @@ search-demo: build
 SCENARIO ?= config/paper_moving.yaml
 evaluate: build
 	@$(ROSENV) cd $(TOP) && $(PY) scripts/evaluate --scenario $(SCENARIO) --out results/eval
+
+# Every selection variant side by side on the scenario suite, 3 runs each: results/suite.
+evaluate-suite: build
+	@$(ROSENV) cd $(TOP) && $(PY) scripts/evaluate --suite --out results/suite
 
 # The second paper's tables and throughput: results/bench/*.json and REPORT.md.
 bench: build

@@ -142,7 +142,7 @@ PROFILES = {
               'robots': [], 'servers': [],
               # the scenario suite's winner (README, "The scenario suite")
               'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 2.0, 'dwell': 3.0,
-              'window': 2.0, 'probe_rate': 2.0, 'passive': True, 'fail_fast': 2},
+              'window': 2.0, 'probe_rate': 2.0, 'passive': True, 'fail_fast': 2, 'hedge': True},
 }
 
 

@@ -6,8 +6,7 @@ between them, runs commands inside hosts, and tears everything down on exit, Ctr
 error. Each run has a namespace prefix of its own (by default ``ssb<pid>``), so two runs on
 one machine leave each other alone; a run removes only what it created, and what a run
 whose process has died left behind (namespaces with its prefix, the processes inside
-them, a stale emulator: the state file in ``/run`` names the owner). Needs root and
-/dev/net/tun.
+them, a stale emulator: the state file in ``/run`` names the owner). Needs root, TUN.
 """
 
 import json
@@ -167,8 +166,7 @@ class Testbed(object):
         return self
 
     def __exit__(self, *exc):
-        self.down()
-        return False
+        return self.down()
 
     def up(self):
         check_privileges()
@@ -236,7 +234,9 @@ class Testbed(object):
                               universal_newlines=True, timeout=timeout, **kwargs)
 
     def down(self):
-        """Stop everything started, the emulator, and delete the namespaces."""
+        """Stop all that was started and delete the namespaces (signals wait till done)."""
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            self._old_handlers.setdefault(sig, signal.signal(sig, signal.SIG_IGN))
         for proc in reversed(self.processes):
             stop_group(proc)
         self.processes = []
@@ -247,3 +247,4 @@ class Testbed(object):
         for sig, handler in self._old_handlers.items():
             signal.signal(sig, handler)
         self._old_handlers = {}
+        return False

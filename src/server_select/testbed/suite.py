@@ -42,8 +42,12 @@ VARIANTS = collections.OrderedDict([
                                                    margin_z=2.5, dwell=5.0))),
     ('bound', Variant('select', 'paper', {'policy': 'bound', 'latency_bound': 0.02})),
     ('peak_ewma', Variant('select', 'paper', {'policy': 'peak_ewma'})),
-    ('fleet_hedge', Variant('select', 'fleet', {'hedge': True})),
+    ('fleet_no_hedge', Variant('select', 'fleet', {'hedge': False})),
     ('fleet_probes', Variant('select', 'fleet', {'passive': False})),
+    ('fleet_B', Variant('select', 'fleet', {'margin_z': 3.0})),
+    ('fleet_B15', Variant('select', 'fleet', {'margin_z': 3.0, 'window': 1.5,
+                                              'probe_rate': 4.0})),
+    ('fleet_B4', Variant('select', 'fleet', {'margin_z': 3.0, 'probe_rate': 4.0})),
 ])
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server')
@@ -53,10 +57,18 @@ SUITE_RECORDED = RECORDED[:-1] + '|task_samples)'
 
 
 def scenario_path(name):
-    """The suite's scenario file ``name`` (``paper_moving`` is the paper's experiment)."""
+    """The suite's scenario file ``name`` (``paper_moving`` is the paper's experiment; a
+    name ending in ``.yaml`` is a file of the caller's)."""
+    if name.endswith('.yaml'):
+        return os.path.abspath(name)
     if name == 'paper_moving':
         return package_file('config', 'paper_moving.yaml')
     return package_file('config', 'suite', name + '.yaml')
+
+
+def short_name(name):
+    """The folder of scenario ``name`` in the output (a file's name without .yaml)."""
+    return os.path.basename(name)[:-len('.yaml')] if name.endswith('.yaml') else name
 
 
 def replica_id(variant_index, robot_id):
@@ -120,7 +132,7 @@ class SuiteRun(HostRun):
             variant, ids = VARIANTS[name], ','.join(str(r) for r in robots_of[name])
             if variant.mode == 'oracle':
                 self.launch(manager, 'oracle.launch', 'scenario:=%s' % self.scenario.source,
-                            't0:=%.6f' % self.tb.t0, 'robots:=%s' % ids)
+                            't0:=%.6f' % self.tb.t0, 'robots:=%s' % ids, 'name:=%s' % name)
             elif variant.mode == 'select':
                 self.launch(manager, 'manager.launch', 'name:=manager_%s' % name,
                             'profile:=%s' % variant.profile, 'robots:=%s' % ids,
@@ -146,33 +158,45 @@ class SuiteRun(HostRun):
                                      _ids(self.scenario.of_role('server'))),
                     'mode:=%s' % ('fixed' if variant.mode == 'fixed' else 'select'),
                     'fixed_server:=%d' % options.fixed_server,
-                    'manager_node:=%s' % ('/oracle' if variant.mode == 'oracle' else
-                                          '/manager_%s' % name),
+                    'manager_node:=/%s' % (name if variant.mode == 'oracle' else
+                                           'manager_' + name),
                     *_args(params, accepted))
 
     def server_events(self, server):
-        """The scenario's hang and work times of ``server``, as they come."""
+        """The scenario's hang and work times of ``server``, as they come (each one logged
+        in ``events.log`` of the run)."""
         events = [(a, 'stop') for a, _ in server.hang] + [(b, 'cont') for _, b in server.hang]
         events += [(at, delay) for at, delay in server.work]
         for at, what in sorted(events, key=lambda e: e[0]):
             self.tb.sleep_until(at)
             if what in ('stop', 'cont'):
                 sig = signal.SIGSTOP if what == 'stop' else signal.SIGCONT
+                count = 0
                 for pid in netns_pids(self.tb.hosts[server.name]['netns']):
                     try:
                         os.kill(pid, sig)
+                        count += 1
                     except ProcessLookupError:
                         pass
+                done = '%s to %d processes' % (sig.name, count)
             else:
-                self.tb.run(self.scenario.manager.name, ['rosparam', 'set', '/server%d/work_delay'
-                                                         % server.id, repr(what)],
-                            env=self.env(self.scenario.manager.name))
+                manager = self.scenario.manager.name
+                proc = self.tb.run(manager, ['rosparam', 'set', '/server%d/work_delay'
+                                             % server.id, repr(what)], env=self.env(manager))
+                done = 'work_delay %g s (rosparam exit %d)' % (what, proc.returncode)
+            with open(os.path.join(self.run_dir, 'events.log'), 'a') as log:
+                log.write('%.3f %s: %s\n' % (self.tb.scenario_time(), server.name, done))
 
 
 def run_scenario(name, out_dir, repeat, variants, options, log=print):
     """Run scenario ``name`` once with ``variants`` side by side; the bag's path."""
-    with open(scenario_path(name)) as stream:
-        data, owners = expand(yaml.safe_load(stream), variants)
+    path = scenario_path(name)
+    name = short_name(name)
+    try:
+        with open(path) as stream:
+            data, owners = expand(yaml.safe_load(stream), variants)
+    except (OSError, yaml.YAMLError, AttributeError, KeyError, TypeError) as error:
+        raise ScenarioError('%s: not a scenario the suite can use (%s)' % (path, error))
     run_dir = os.path.abspath(os.path.join(out_dir, name, 'run%d' % repeat))
     os.makedirs(run_dir, exist_ok=True)
     path = os.path.join(run_dir, 'scenario.yaml')

@@ -8,7 +8,8 @@ import sys
 
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.scenario import Scenario, ScenarioError
-from server_select.testbed.suite import SCENARIOS, VARIANTS, default_options, run_scenario
+from server_select.testbed.suite import (SCENARIOS, VARIANTS, default_options, run_scenario,
+                                         short_name)
 from server_select.testbed import suite_report
 
 
@@ -19,7 +20,8 @@ def parse(argv):
                     'repeatedly, and compare them (README, "The scenario suite").')
     parser.add_argument('--suite', action='store_true', help=argparse.SUPPRESS)
     parser.add_argument('--scenarios', default=','.join(SCENARIOS),
-                        help='comma-separated (default: %(default)s)')
+                        help='comma-separated names, or scenario files (.yaml) '
+                             '(default: %(default)s)')
     parser.add_argument('--variants', default=','.join(VARIANTS),
                         help='comma-separated (default: %(default)s)')
     parser.add_argument('--repeats', type=int, default=3, help='runs per scenario (3)')
@@ -29,7 +31,8 @@ def parse(argv):
     args = parser.parse_args(argv)
     args.scenarios = [s for s in args.scenarios.split(',') if s]
     args.variants = [v for v in args.variants.split(',') if v]
-    bad = [s for s in args.scenarios if s not in SCENARIOS] + \
+    bad = [s for s in args.scenarios if s not in SCENARIOS and not (
+        s.endswith('.yaml') and os.path.isfile(s))] + \
         [v for v in args.variants if v not in VARIANTS]
     if bad or not args.scenarios or 'oracle' not in args.variants or args.repeats < 1:
         parser.error('unknown scenarios or variants %s, or no oracle (ratios are to the '
@@ -42,7 +45,7 @@ def report(args):
     from server_select.testbed.bag_analysis import oracle_changes
     from server_select.testbed.suite_plots import plot_cdf, plot_time
     results, text = collections.OrderedDict(), []
-    for name in args.scenarios:
+    for name in (short_name(s) for s in args.scenarios):
         folder = os.path.join(args.out, name)
         runs = suite_report.load_runs(folder)
         if not runs:
