@@ -247,3 +247,17 @@ def test_no_hedge_without_history_or_without_another_server_or_when_off():
     off.clock.now += 0.05
     off.flow.tick()
     assert off.flow.hedged == 0 and len(off.published) == 21
+
+
+def test_answers_of_tasks_sent_once_are_latency_samples_hedged_ones_are_not():
+    answers = []
+    w = World(candidates=(3, 4), hedge=0.95,
+              on_answer=lambda server, rtt: answers.append((server, rtt)))
+    _learn(w, 3, [0.010] * 19 + [0.020])
+    assert len(answers) == 20 and answers[-1] == (3, pytest.approx(0.020))
+    task = w.flow.send_next('s')
+    w.clock.now += 0.025
+    w.flow.tick()                                 # hedged to server 4
+    w.clock.now += 0.001
+    assert w.answer(task, 4).ok
+    assert len(answers) == 20                     # the race's winner is not sampled

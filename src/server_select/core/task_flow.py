@@ -64,8 +64,9 @@ class TaskFlow(object):
     :param report: ``(Outcome) -> None``, called once per task.
     :param run_local: ``(task_id, stamp) -> error or None``: the work done in the robot.
     :param on_failure, on_success: ``(server, why)`` / ``(server)``: evidence about servers.
-    :param on_answer: ``(server, rtt)``: an accepted answer and the round trip of the
-        attempt it answered (a latency sample of what tasks get).
+    :param on_answer: ``(server, rtt)``: an accepted answer of a task sent once, and its
+        round trip (a latency sample of what tasks get; the answer of a hedged or re-sent
+        task is not one: only the faster of two servers answers it).
     :param deadlines: an :class:`~server_select.core.attempts.AttemptClock`.
     :param ids: iterator of task ids (shared by the robot's streams: ids are per robot).
     :param hedge: None, or the quantile of a server's round trips after which an
@@ -184,7 +185,8 @@ class TaskFlow(object):
                 del self._pending[task_id]
         if ok:
             self._on_success(answered_by)
-            self._on_answer(answered_by, answer_rtt)
+            if len(pending.attempts) == 1:    # the winner of a race is no fair sample
+                self._on_answer(answered_by, answer_rtt)
         return self._end(Outcome(task_id, self.kind, pending.stamp, pending.attempts[0][0],
                                  answered_by, ok, error, now - pending.started,
                                  len(pending.attempts)))

@@ -162,6 +162,25 @@ class SuiteRun(HostRun):
                                            'manager_' + name),
                     *_args(params, accepted))
 
+    def robot_cpu(self):
+        """``{robot id: CPU %}``: user + system time of each robot node over its life."""
+        tick, out = os.sysconf('SC_CLK_TCK'), {}
+        with open('/proc/uptime') as stream:
+            uptime = float(stream.read().split()[0])
+        for host in self.scenario.of_role('robot'):
+            for pid in netns_pids(self.tb.hosts[host.name]['netns']):
+                try:
+                    with open('/proc/%d/stat' % pid) as stream:
+                        fields = stream.read().rsplit(')', 1)[1].split()
+                    with open('/proc/%d/cmdline' % pid) as stream:
+                        command = stream.read()
+                except OSError:
+                    continue
+                if '__name:=robot' in command:
+                    life = max(1e-9, uptime - int(fields[19]) / float(tick))
+                    out[str(host.id)] = 100.0 * (int(fields[11]) + int(fields[12])) / tick / life
+        return out
+
     def server_events(self, server):
         """The scenario's hang and work times of ``server``, as they come (each one logged
         in ``events.log`` of the run)."""
@@ -213,7 +232,8 @@ def run_scenario(name, out_dir, repeat, variants, options, log=print):
         log('%s run %d: %d variants, %d robots, until %.0f s (%s)'
             % (name, repeat, len(variants), len(owners), scenario.duration, run_dir))
         tb.sleep_until(scenario.duration)
-        meta = {'scenario': path, 'scenario_name': name, 'variants': list(variants),
+        meta = {'robot_cpu': run.robot_cpu(), 'scenario': path, 'scenario_name': name,
+                'variants': list(variants),
                 'owners': dict((str(k), v) for k, v in owners.items()), 't0': tb.t0,
                 'duration': scenario.duration, 'measure_from': MEASURE_FROM,
                 'options': vars(options)}

@@ -21,7 +21,8 @@ from server_select.testbed.scenario import Scenario
 from server_select.testbed.suite import VARIANTS
 
 Figures = collections.namedtuple('Figures', 'tasks failed mean p99 switches_per_min '
-                                 'reaction_mean reaction_max missed')
+                                 'reaction_mean reaction_max missed samples_per_s robot_cpu')
+Figures.__new__.__defaults__ = (None, None)
 TARGETS = {      # scenario: what the fleet profile is to reach
     'paper_moving': dict(mean=1.05, p99=1.2, failed=0, reaction=1.5),
     'crossing': dict(mean=1.05, p99=1.2, failed=0, reaction=1.5),
@@ -37,10 +38,10 @@ def load_runs(scenario_dir):
 
 
 def split(run, owners):
-    """``{variant: (reports, flags, [robot ids])}`` of one run."""
+    """``{variant: (reports, flags, [robot ids], probe samples)}`` of one run."""
     parts = collections.OrderedDict()
     for rid, (variant, _) in sorted(owners.items()):
-        parts.setdefault(variant, ([], [], []))[2].append(rid)
+        parts.setdefault(variant, ([], [], [], []))[2].append(rid)
     where = dict((rid, variant) for rid, (variant, _) in owners.items())
     for report in run.reports:
         if report.robot in where:
@@ -48,6 +49,9 @@ def split(run, owners):
     for flag in run.flags:
         if flag.robot in where:
             parts[where[flag.robot]][1].append(flag)
+    for sample in run.samples:
+        if sample.robot in where:
+            parts[where[sample.robot]][3].append(sample)
     return parts
 
 
@@ -65,8 +69,9 @@ def flag_switches(flags, start, end):
     return count
 
 
-def figures(reports, flags, robots, changes, start, end, timeout):
-    """:class:`Figures` of one variant in one run."""
+def figures(reports, flags, robots, changes, start, end, timeout, samples=(), cpu=None):
+    """:class:`Figures` of one variant in one run (``cpu``: its robots' mean CPU share,
+    %)."""
     measured = [r for r in reports if start <= r.t <= end]
     rtt = summarize([r.rtt if r.ok else timeout for r in measured])
     minutes = max(1e-9, (end - start) / 60.0)
@@ -76,7 +81,9 @@ def figures(reports, flags, robots, changes, start, end, timeout):
     return Figures(len(measured), sum(1 for r in measured if not r.ok), rtt.get('mean'),
                    rtt.get('p99'), flag_switches(flags, start, end) / minutes / len(robots),
                    sum(reached) / len(reached) if reached else None,
-                   max(reached) if reached else None, len(reactions) - len(reached))
+                   max(reached) if reached else None, len(reactions) - len(reached),
+                   sum(1 for x in samples if start <= x.t <= end) / max(1e-9, end - start),
+                   cpu)
 
 
 def run_figures(meta, run):
@@ -85,10 +92,15 @@ def run_figures(meta, run):
     scenario = Scenario.load(meta['scenario'])
     start, end = meta['measure_from'], meta['duration']
     changes = oracle_changes(scenario, sorted(owners), start, end)
-    timeout = meta['options']['task_timeout']
+    timeout, cpu = meta['options']['task_timeout'], meta.get('robot_cpu', {})
+
+    def share(robots):
+        known = [cpu[str(r)] for r in robots if str(r) in cpu]
+        return sum(known) / len(known) if known else None
     return collections.OrderedDict(
-        (variant, figures(reports, flags, robots, changes, start, end, timeout))
-        for variant, (reports, flags, robots) in split(run, owners).items())
+        (variant, figures(reports, flags, robots, changes, start, end, timeout, samples,
+                          share(robots)))
+        for variant, (reports, flags, robots, samples) in split(run, owners).items())
 
 
 def reference(variant, variants):
@@ -134,13 +146,15 @@ def scenario_rows(per_run):
                      _cell([f.switches_per_min for f in runs], '%.2f'),
                      _cell([f.reaction_mean for f in runs], '%.2f'),
                      _cell([f.reaction_max for f in runs], '%.2f'),
-                     _cell([f.missed for f in runs], '%d')])
+                     _cell([f.missed for f in runs], '%d'),
+                     _cell([f.samples_per_s for f in runs], '%.0f'),
+                     _cell([f.robot_cpu for f in runs], '%.1f')])
     return rows
 
 
 HEADER = ('variant', 'runs', 'tasks', 'failed', 'mean ms', 'mean / oracle', 'p99 ms',
           'p99 / oracle', 'switches /min /robot', 'reaction mean s', 'reaction max s',
-          'changes not reached')
+          'changes not reached', 'probe samples /s', 'robot CPU %')
 
 
 def scenario_table(per_run):
