@@ -131,7 +131,7 @@ def test_suite_scenarios_load():
     folder = os.path.join(os.path.dirname(__file__), '..', '..', 'config', 'suite')
     names = sorted(os.path.basename(p) for p in glob.glob(os.path.join(folder, '*.yaml')))
     assert names == ['crossing.yaml', 'hung_server.yaml', 'link_flap.yaml',
-                     'loaded_server.yaml', 'near_equal.yaml']
+                     'loaded_server.yaml', 'near_equal.yaml', 'search_sweep.yaml']
     for name in names:
         assert Scenario.load(os.path.join(folder, name)).duration <= 110
 

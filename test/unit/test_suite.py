@@ -6,7 +6,7 @@ import pytest
 
 from server_select.testbed.bag_analysis import Flag, Report
 from server_select.testbed.scenario import Scenario, ScenarioError
-from server_select.testbed.suite import expand, launch_args, replica_id, scenario_path
+from server_select.testbed.suite_scenario import expand, launch_args, replica_id, scenario_path
 from server_select.testbed import suite_report
 
 DATA = {'name': 't', 'duration': 60,
@@ -66,3 +66,23 @@ def test_ratios_are_to_the_oracle_with_the_same_routing_and_median_over_runs():
     table = suite_report.targets_table({'near_equal': [run]})
     assert '| near_equal | mean | <= 1.05 | 1.250 | no (by +0.200) |' in table
     assert '| near_equal | switches | <= 2 | 0.500 | yes |' in table
+
+
+def test_the_search_scenario_follows_the_robots_sweep():
+    import yaml
+    from server_select.testbed import sweep
+    from server_select.testbed.suite_scenario import scenario_robot_args
+    from server_select.vision.search import SearchWorld
+    area = scenario_path('search_sweep').replace('suite/search_sweep.yaml', 'search_area.yaml')
+    data = sweep.scenario(area, duration=40.0)
+    s = Scenario(data)
+    where = sweep.positions(SearchWorld.load(area), 2, 100.0)[0]
+    for t in (5.0, 17.5, 31.0):           # the nearest server is the nearest in the area
+        x, y = where(t)
+        nearest = min(sweep.SERVERS, key=lambda p: (p[1] - x) ** 2 + (p[2] - y) ** 2)[0]
+        assert s.nearest_server(1, t) == nearest
+    assert len(set(s.nearest_server(1, t) for t in range(40))) >= 2     # it moves
+    shipped = yaml.safe_load(open(scenario_path('search_sweep')))
+    args = scenario_robot_args(shipped['suite']['robot_args'], 1234.5)
+    assert args['sweep_start'] == '1234.500000' and args['image_source'].startswith('search:/')
+    assert args['image_source'].endswith('config/search_area.yaml')

@@ -65,6 +65,8 @@ PARAMS = {
     'robot_index': Param(0, parse_count, "this robot's strip of a search area"),
     'robot_count': Param(1, parse_positive_int, 'number of strips of a search area'),
     'speed': Param(200.0, parse_positive, 'sweep speed over a search area (area pixels/s)'),
+    'sweep_start': Param(0.0, parse_non_negative, 'when the sweep of a search area began '
+                         '(epoch s; 0: at the node\'s start), to share a clock with others'),
     'merge_radius': Param(150.0, parse_positive, 'detections this close are one target (px)'),
     'detector': Param('haar', one_of('haar', 'hog'), 'Haar cascade or HOG people detector'),
     'cascade': Param(DEFAULT_CASCADE, parse_text, 'cascade file name or path'),
@@ -141,8 +143,8 @@ PROFILES = {
     'fleet': {'routing': 'direct', 'sample_stream': 'robot', 'discover': True,
               'robots': [], 'servers': [],
               # the scenario suite's winner (README, "The scenario suite")
-              'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 2.0, 'dwell': 3.0,
-              'window': 2.0, 'probe_rate': 2.0, 'passive': True, 'fail_fast': 2, 'hedge': True},
+              'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
+              'window': 1.5, 'probe_rate': 4.0, 'passive': True, 'fail_fast': 2, 'hedge': True},
 }
 
 

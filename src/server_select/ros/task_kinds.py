@@ -58,7 +58,7 @@ class ImageKind(object):
     result_topic, result_type = names.IMAGE_RESULT_TOPIC, ImageResult
 
     def __init__(self, robot_id, source, encoding, search=None, detector=None,
-                 max_pixels=1 << 24, transport='raw', quality=80):
+                 max_pixels=1 << 24, transport='raw', quality=80, start=0.0):
         self.robot_id = robot_id
         self.source = source
         self.encoding = encoding
@@ -66,7 +66,8 @@ class ImageKind(object):
         self.search = search          # a SearchParticipant, or None
         self.detector = detector      # mode local only
         self.max_pixels = max_pixels
-        self.t0 = time.monotonic()
+        # the source's time zero: now, or the epoch time ``start`` (a shared clock)
+        self.t0 = time.monotonic() - (time.time() - start if start else 0.0)
 
     def ready(self):
         """Whether a frame is there to send (a camera topic may not have sent one yet)."""
@@ -130,4 +131,5 @@ def image_kind(robot_id, mode, param):
             raise ParamError('~detector/~cascade: %s' % error)
     search = SearchParticipant(robot_id, param('merge_radius'), getattr(source, 'world', None))
     return ImageKind(robot_id, source, param('image_encoding'), search, detector,
-                     param('max_image_pixels'), param('image_transport'), param('jpeg_quality'))
+                     param('max_image_pixels'), param('image_transport'), param('jpeg_quality'),
+                     param('sweep_start'))

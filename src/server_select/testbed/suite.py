@@ -18,15 +18,15 @@ import json
 import os
 import signal
 import threading
-import xml.etree.ElementTree as ElementTree
 
 import yaml
 
-from server_select.core.paths import package_file
 from server_select.testbed.evaluation import RECORDED, HostRun, RunOptions, _ids
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.netns import Testbed, netns_pids
 from server_select.testbed.scenario import Scenario, ScenarioError
+from server_select.testbed.suite_scenario import (expand, launch_args, scenario_path,
+                                                  scenario_robot_args, short_name)
 
 Variant = collections.namedtuple('Variant', 'mode profile params')
 
@@ -44,72 +44,12 @@ VARIANTS = collections.OrderedDict([
     ('peak_ewma', Variant('select', 'paper', {'policy': 'peak_ewma'})),
     ('fleet_no_hedge', Variant('select', 'fleet', {'hedge': False})),
     ('fleet_probes', Variant('select', 'fleet', {'passive': False})),
-    ('fleet_B', Variant('select', 'fleet', {'margin_z': 3.0})),
-    ('fleet_B15', Variant('select', 'fleet', {'margin_z': 3.0, 'window': 1.5,
-                                              'probe_rate': 4.0})),
-    ('fleet_B4', Variant('select', 'fleet', {'margin_z': 3.0, 'probe_rate': 4.0})),
+    ('fleet_2hz', Variant('select', 'fleet', {'probe_rate': 2.0, 'window': 2.0})),
 ])
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
-             'hung_server')
-REPLICA = 10        # robot r of variant k is robot REPLICA * k + r
+             'hung_server', 'search_sweep')
 MEASURE_FROM = 35.0  # s of scenario time: nodes are up, every variant sends tasks
 SUITE_RECORDED = RECORDED[:-1] + '|task_samples)'
-
-
-def scenario_path(name):
-    """The suite's scenario file ``name`` (``paper_moving`` is the paper's experiment; a
-    name ending in ``.yaml`` is a file of the caller's)."""
-    if name.endswith('.yaml'):
-        return os.path.abspath(name)
-    if name == 'paper_moving':
-        return package_file('config', 'paper_moving.yaml')
-    return package_file('config', 'suite', name + '.yaml')
-
-
-def short_name(name):
-    """The folder of scenario ``name`` in the output (a file's name without .yaml)."""
-    return os.path.basename(name)[:-len('.yaml')] if name.endswith('.yaml') else name
-
-
-def replica_id(variant_index, robot_id):
-    if not 0 <= robot_id < REPLICA:
-        raise ScenarioError('the suite replicates robots with ids 0-%d, not %d'
-                            % (REPLICA - 1, robot_id))
-    return REPLICA * variant_index + robot_id
-
-
-def expand(data, variants):
-    """The scenario ``data`` (a mapping) with a copy of every robot host and its links per
-    variant (index from 1, in ``variants`` order); returns (data, {robot id: (variant,
-    scenario robot id)})."""
-    data = json.loads(json.dumps(data))      # a deep copy
-    hosts = data['hosts']
-    robots = [(name, spec) for name, spec in hosts.items() if spec.get('role') == 'robot']
-    owners = {}
-    for name, _ in robots:
-        del hosts[name]
-    links = data.get('links') or {}
-    for index, variant in enumerate(variants, start=1):
-        for name, spec in robots:
-            copy = 'r%dv%d' % (spec['id'], index)
-            rid = replica_id(index, spec['id'])
-            hosts[copy] = dict(spec, id=rid)
-            owners[rid] = (variant, spec['id'])
-            for key, events in list(links.items()):
-                pair = str(key).replace(',', ' ').replace('-', ' ').split()
-                if name in pair:
-                    other = pair[1] if pair[0] == name else pair[0]
-                    links['%s %s' % (copy, other)] = events
-    data['links'] = dict((k, v) for k, v in links.items()
-                         if not any(n in k.split() for n, _ in robots))
-    data['name'] = data.get('name', 'scenario')
-    return data, owners
-
-
-def launch_args(name):
-    """The arguments launch file ``name`` declares."""
-    root = ElementTree.parse(package_file('launch', name)).getroot()
-    return set(arg.get('name') for arg in root.iter('arg'))
 
 
 def _args(params, accepted):
@@ -120,12 +60,12 @@ def _args(params, accepted):
 class SuiteRun(HostRun):
     """One run of one scenario with every variant side by side."""
 
-    def start_variants(self, variants, owners, options, bag):
+    def start_variants(self, variants, owners, options, bag, robot_args=None):
         manager = self.scenario.manager.name
         robots_of = collections.defaultdict(list)
         for rid, (variant, _) in sorted(owners.items()):
             robots_of[variant].append(rid)
-        manager_args, robot_args = launch_args('manager.launch'), launch_args('robot.launch')
+        manager_args, robot_args_of = launch_args('manager.launch'), launch_args('robot.launch')
         self.popen(manager, ['rosbag', 'record', '--tcpnodelay', '-O', bag, '-e',
                              SUITE_RECORDED], 'rosbag')
         for name in variants:
@@ -143,15 +83,17 @@ class SuiteRun(HostRun):
             self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
                         'routing:=direct')      # takes broadcast and direct tasks
             threading.Thread(target=self.server_events, args=(server,), daemon=True).start()
+        extra = scenario_robot_args(robot_args, self.tb.t0)
         for robot in self.scenario.of_role('robot'):
-            name = owners[robot.id][0]
-            self.start_robot(robot, name, VARIANTS[name], options, robot_args)
+            name, original = owners[robot.id]
+            args = dict(extra, robot_index=original - 1) if extra else {}
+            self.start_robot(robot, name, VARIANTS[name], options, robot_args_of, args)
 
-    def start_robot(self, robot, name, variant, options, accepted):
+    def start_robot(self, robot, name, variant, options, accepted, extra):
         learned = variant.profile == 'fleet' and variant.mode == 'select'
         params = dict(variant.params, task_rate=options.task_rate,
                       task_timeout=options.task_timeout,
-                      start_delay=options.start_delay)
+                      start_delay=options.start_delay, **extra)
         self.launch(robot.name, 'robot.launch', 'robot_id:=%d' % robot.id,
                     'profile:=%s' % variant.profile,
                     'servers:=%s' % ('[]' if learned else
@@ -213,7 +155,10 @@ def run_scenario(name, out_dir, repeat, variants, options, log=print):
     name = short_name(name)
     try:
         with open(path) as stream:
-            data, owners = expand(yaml.safe_load(stream), variants)
+            data = yaml.safe_load(stream)
+        suite = data.pop('suite', None) or {}
+        variants = [v for v in variants if v in suite.get('variants', variants)]
+        data, owners = expand(data, variants)
     except (OSError, yaml.YAMLError, AttributeError, KeyError, TypeError) as error:
         raise ScenarioError('%s: not a scenario the suite can use (%s)' % (path, error))
     run_dir = os.path.abspath(os.path.join(out_dir, name, 'run%d' % repeat))
@@ -228,7 +173,7 @@ def run_scenario(name, out_dir, repeat, variants, options, log=print):
     with Testbed(scenario, path, run_dir, prefix=options.prefix) as tb:
         run = SuiteRun(tb, scenario, run_dir)
         run.start_master()
-        run.start_variants(variants, owners, options, bag)
+        run.start_variants(variants, owners, options, bag, suite.get('robot_args'))
         log('%s run %d: %d variants, %d robots, until %.0f s (%s)'
             % (name, repeat, len(variants), len(owners), scenario.duration, run_dir))
         tb.sleep_until(scenario.duration)

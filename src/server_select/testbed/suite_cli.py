@@ -8,8 +8,8 @@ import sys
 
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.scenario import Scenario, ScenarioError
-from server_select.testbed.suite import (SCENARIOS, VARIANTS, default_options, run_scenario,
-                                         short_name)
+from server_select.testbed.suite import SCENARIOS, VARIANTS, default_options, run_scenario
+from server_select.testbed.suite_scenario import short_name
 from server_select.testbed import suite_report
 
 
