@@ -40,6 +40,7 @@ def report(t, robot, ok=True, rtt=0.01):
 
 def test_figures_count_failed_tasks_at_the_timeout_and_switches_per_minute():
     reports = [report(t, 11) for t in range(10, 70)] + [report(40.5, 11, ok=False)]
+    reports[0] = reports[0]._replace(attempts=2)          # hedged or re-sent once
     flags = [Flag(t, 11, 1 if t < 40 else 2, [], []) for t in range(0, 70)]
     changes = [(38.0, 11, 2)]
     f = suite_report.figures(reports, flags, [11], changes, 10.0, 70.0, 2.0)
@@ -47,6 +48,7 @@ def test_figures_count_failed_tasks_at_the_timeout_and_switches_per_minute():
     assert f.mean == pytest.approx((60 * 0.01 + 2.0) / 61)
     assert f.switches_per_min == pytest.approx(1.0)      # one switch in 60 s, one robot
     assert (f.reaction_mean, f.missed) == (2.0, 0)
+    assert f.extra_sends == pytest.approx(100.0 / 61)
     assert suite_report.flag_switches(flags, 50.0, 70.0) == 0
 
 

@@ -21,8 +21,9 @@ from server_select.testbed.scenario import Scenario
 from server_select.testbed.suite import VARIANTS
 
 Figures = collections.namedtuple('Figures', 'tasks failed mean p99 switches_per_min '
-                                 'reaction_mean reaction_max missed samples_per_s robot_cpu')
-Figures.__new__.__defaults__ = (None, None)
+                                 'reaction_mean reaction_max missed samples_per_s robot_cpu '
+                                 'extra_sends')
+Figures.__new__.__defaults__ = (None, None, None)
 TARGETS = {      # scenario: what the fleet profile is to reach
     'paper_moving': dict(mean=1.05, p99=1.2, failed=0, reaction=1.5),
     'crossing': dict(mean=1.05, p99=1.2, failed=0, reaction=1.5),
@@ -83,7 +84,8 @@ def figures(reports, flags, robots, changes, start, end, timeout, samples=(), cp
                    sum(reached) / len(reached) if reached else None,
                    max(reached) if reached else None, len(reactions) - len(reached),
                    sum(1 for x in samples if start <= x.t <= end) / max(1e-9, end - start),
-                   cpu)
+                   cpu, 100.0 * sum(max(0, r.attempts - 1) for r in measured)
+                   / max(1, len(measured)))
 
 
 def run_figures(meta, run):
@@ -148,13 +150,15 @@ def scenario_rows(per_run):
                      _cell([f.reaction_max for f in runs], '%.2f'),
                      _cell([f.missed for f in runs], '%d'),
                      _cell([f.samples_per_s for f in runs], '%.0f'),
-                     _cell([f.robot_cpu for f in runs], '%.1f')])
+                     _cell([f.robot_cpu for f in runs], '%.1f'),
+                     _cell([f.extra_sends for f in runs], '%.1f')])
     return rows
 
 
 HEADER = ('variant', 'runs', 'tasks', 'failed', 'mean ms', 'mean / oracle', 'p99 ms',
           'p99 / oracle', 'switches /min /robot', 'reaction mean s', 'reaction max s',
-          'changes not reached', 'probe samples /s', 'robot CPU %')
+          'changes not reached', 'probe samples /s', 'robot CPU %',
+          'extra sends % (hedged, re-sent)')
 
 
 def scenario_table(per_run):
