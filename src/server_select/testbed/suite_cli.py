@@ -8,7 +8,8 @@ import sys
 
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.scenario import Scenario, ScenarioError
-from server_select.testbed.suite import SCENARIOS, VARIANTS, default_options, run_scenario
+from server_select.testbed.suite import (MEASURE_FROM, SCENARIOS, VARIANTS, default_options,
+                                         run_scenario)
 from server_select.testbed.suite_scenario import short_name
 from server_select.testbed import suite_report
 
@@ -72,10 +73,13 @@ def report(args):
         raise FileNotFoundError('no suite bags in %s' % args.out)
     head = ['# Scenario suite', '', 'Each cell: median of the runs (min-max). Round trips '
             'from `task_report` after %.0f s of scenario time, a failed task counted at '
-            'the task timeout; ratios to the oracle of the same run.' % 30.0, '',
+            'the task timeout; ratios to the oracle of the same run and task routing.'
+            % MEASURE_FROM, '',
             '## Summary: mean / oracle, p99 / oracle, failed tasks (medians)', '',
-            suite_report.summary_table(results), '', '## The fleet profile against its '
-            'targets', '', suite_report.targets_table(results), '']
+            suite_report.summary_table(results), '']
+    if any(name in suite_report.TARGETS for name in results):
+        head += ['## The fleet profile against its targets', '',
+                 suite_report.targets_table(results), '']
     suite_report.write_json(results, os.path.join(args.out, 'summary.json'))
     out = '\n'.join(head + text) + '\n'
     with open(os.path.join(args.out, 'report.md'), 'w') as stream:
