@@ -174,6 +174,20 @@ def run_mode(scenario_path, mode, out_dir, options=None, log=print):
     return bag
 
 
+def guarded(prog, work):
+    """Run ``work()``; 0, or 2 (a testbed or scenario error, said on stderr) or 130
+    (interrupted; the testbed was torn down on the way out)."""
+    try:
+        work()
+    except (EmulatorError, ScenarioError) as error:
+        print('%s: %s' % (prog, error), file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print('%s: interrupted; the testbed was torn down' % prog, file=sys.stderr)
+        return 130
+    return 0
+
+
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     if '--suite' in argv:       # the scenario suite (testbed/suite_cli.py)
@@ -203,16 +217,10 @@ def main(argv=None):
     options = RunOptions(fixed_server=args.fixed_server, window=args.window,
                          task_rate=args.task_rate, task_size=args.task_size,
                          hysteresis=args.hysteresis, profile=args.profile)
-    try:
-        if not args.analyze_only:
-            for mode in modes:
-                run_mode(args.scenario, mode, out, options)
-    except (EmulatorError, ScenarioError) as error:
-        print('evaluate: %s' % error, file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print('evaluate: interrupted; the testbed was torn down', file=sys.stderr)
-        return 130
+    status = guarded('evaluate', lambda: None if args.analyze_only else [
+        run_mode(args.scenario, mode, out, options) for mode in modes])
+    if status:
+        return status
     from server_select.testbed import bag_analysis
     report = bag_analysis.analyze(out, modes)
     print(report)

@@ -6,8 +6,8 @@ import collections
 import os
 import sys
 
-from server_select.testbed.linkemu import EmulatorError
-from server_select.testbed.scenario import Scenario, ScenarioError
+from server_select.testbed.evaluation import guarded
+from server_select.testbed.scenario import Scenario
 from server_select.testbed.suite import (MEASURE_FROM, SCENARIOS, VARIANTS, default_options,
                                          run_scenario)
 from server_select.testbed.suite_scenario import short_name
@@ -90,16 +90,10 @@ def report(args):
 def main(argv=None):
     args = parse(sys.argv[1:] if argv is None else argv)
     options = default_options()
-    try:
-        if not args.analyze_only:
-            for repeat in range(1, args.repeats + 1):
-                for name in args.scenarios:
-                    run_scenario(name, args.out, repeat, args.variants, options)
-    except (EmulatorError, ScenarioError) as error:
-        print('evaluate --suite: %s' % error, file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print('evaluate --suite: interrupted; the testbed was torn down', file=sys.stderr)
-        return 130
+    status = guarded('evaluate --suite', lambda: None if args.analyze_only else [
+        run_scenario(name, args.out, repeat, args.variants, options)
+        for repeat in range(1, args.repeats + 1) for name in args.scenarios])
+    if status:
+        return status
     print(report(args))
     return 0
