@@ -45,7 +45,11 @@ VARIANTS = collections.OrderedDict([
     ('fleet_no_hedge', Variant('select', 'fleet', {'hedge': False})),
     ('fleet_probes', Variant('select', 'fleet', {'passive': False})),
     ('fleet_2hz', Variant('select', 'fleet', {'probe_rate': 2.0, 'window': 2.0})),
+    # not in the default run: ask for them with --variants
+    ('fleet_trimmed', Variant('select', 'fleet', {'statistic': 'trimmed'})),
+    ('fleet_median', Variant('select', 'fleet', {'statistic': 'median'})),
 ])
+DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ('fleet_trimmed', 'fleet_median'))
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server', 'search_sweep')
 MEASURE_FROM = 35.0  # s of scenario time: nodes are up, every variant sends tasks

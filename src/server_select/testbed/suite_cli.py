@@ -8,8 +8,8 @@ import sys
 
 from server_select.testbed.evaluation import guarded
 from server_select.testbed.scenario import Scenario
-from server_select.testbed.suite import (MEASURE_FROM, SCENARIOS, VARIANTS, default_options,
-                                         run_scenario)
+from server_select.testbed.suite import (DEFAULT_VARIANTS, MEASURE_FROM, SCENARIOS, VARIANTS,
+                                         default_options, run_scenario)
 from server_select.testbed.suite_scenario import short_name
 from server_select.testbed import suite_report
 
@@ -23,8 +23,9 @@ def parse(argv):
     parser.add_argument('--scenarios', default=','.join(SCENARIOS),
                         help='comma-separated names, or scenario files (.yaml) '
                              '(default: %(default)s)')
-    parser.add_argument('--variants', default=','.join(VARIANTS),
-                        help='comma-separated (default: %(default)s)')
+    parser.add_argument('--variants', default=','.join(DEFAULT_VARIANTS),
+                        help='comma-separated, of %s (default: %%(default)s)'
+                        % ', '.join(VARIANTS))
     parser.add_argument('--repeats', type=int, default=3, help='runs per scenario (3)')
     parser.add_argument('--out', default='results/suite', help='output folder')
     parser.add_argument('--analyze-only', action='store_true',
