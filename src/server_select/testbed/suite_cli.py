@@ -36,7 +36,8 @@ def parse(argv):
     bad = [s for s in args.scenarios if s not in SCENARIOS and not (
         s.endswith('.yaml') and os.path.isfile(s))] + \
         [v for v in args.variants if v not in VARIANTS]
-    if bad or not args.scenarios or 'oracle' not in args.variants or args.repeats < 1:
+    oracle = [v for v in args.variants if VARIANTS[v].mode == 'oracle'] if not bad else []
+    if bad or not args.scenarios or not oracle or args.repeats < 1:
         parser.error('unknown scenarios or variants %s, or no oracle (ratios are to the '
                      'oracle), or --repeats < 1' % bad)
     return args
