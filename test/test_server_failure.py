@@ -40,7 +40,7 @@ class ServerFailureTest(unittest.TestCase):
         victim = rec.latest_flags()[1].server_id
         os.kill(node_pid('/server%d' % victim, rospy.get_name()),
                 signal.SIGKILL)
-        killed_at = time.monotonic()
+        killed_at, killed_stamp = time.monotonic(), rospy.get_time()
 
         def excluded_everywhere():
             latest = {}
@@ -56,9 +56,12 @@ class ServerFailureTest(unittest.TestCase):
             first = next(r for r in rec.snapshot(rec.flags)
                          if r.time > killed_at and r.msg.robot_id == robot
                          and victim not in r.msg.ranking)
-            self.assertLessEqual(first.time - killed_at, bound,
-                                 'robot %d: server %d excluded after %.2f s'
-                                 % (robot, victim, first.time - killed_at))
+            # by the manager's publish stamp: when this test process takes the flag in
+            # (it also records every task and report) is not the manager's reaction
+            after = first.msg.header.stamp.to_sec() - killed_stamp
+            why = 'robot %d: server %d excluded after %.2f s (received after %.2f s)' % (
+                robot, victim, after, first.time - killed_at)
+            self.assertLessEqual(after, bound, why)
             self.assertNotEqual(first.msg.server_id, victim)
             self.assertIn(first.msg.server_id, servers)
 
