@@ -1,6 +1,7 @@
 import pytest
 
-from server_select.core.ranking import NO_SERVER, choose, rank_servers
+from server_select.core.policy import Policy
+from server_select.core.ranking import NO_SERVER, rank_servers
 from server_select.core.window import LatencyWindow, PairStats
 
 
@@ -45,6 +46,11 @@ def test_window_and_ranking_together_stale_server_drops_out():
     assert [selected[t].selected for t in range(5, 9)] == [1, 1, 1, 1]
     # the last good sample (t=4) is a full window old at t=9: server 1 drops out
     assert selected[9].selected == 2 and selected[9].excluded == [1]
+
+
+def choose(ranking, current, hysteresis):
+    """The paper's rule with ``~hysteresis`` (policy ``mean`` with that margin)."""
+    return Policy('mean', margin=hysteresis).choose(ranking, current)
 
 
 def test_choose_without_hysteresis_is_the_best():

@@ -18,6 +18,7 @@ once its load started after more than half of its ``keep`` differences were take
 
 import collections
 import math
+import statistics
 
 
 class TaskBaseline(object):
@@ -34,9 +35,7 @@ class TaskBaseline(object):
         differences = self._differences.get((kind, server))
         if differences is None or len(differences) < self.min_count:
             return None
-        ordered = sorted(differences)
-        half = len(ordered) // 2
-        return ordered[half] if len(ordered) % 2 else (ordered[half - 1] + ordered[half]) / 2.0
+        return statistics.median(differences)
 
     def baseline(self, kind):
         """The kind's baseline (s): the lowest overhead of any server (None: none known)."""

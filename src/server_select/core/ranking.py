@@ -42,19 +42,3 @@ def rank_servers(pair_stats, fail_fast=0):
         excluded=excluded,
         errors=[pair_stats[s].se or 0.0 for s in ranking],
     )
-
-
-def choose(ranking, current, hysteresis=0.0):
-    """The server to select given the ``current`` one.
-
-    With ``hysteresis`` 0 (the paper) this is the best-ranked server. Otherwise the
-    current server is kept while it is still ranked and its statistic is within
-    ``hysteresis`` seconds of the best, which stops flapping between servers whose
-    latencies differ only by noise. (:class:`server_select.core.policy.Policy` adds a
-    minimum dwell, a noise-scaled margin and a latency bound.)
-    """
-    if hysteresis > 0 and current in ranking.ranking:
-        index = ranking.ranking.index(current)
-        if ranking.means[index] - ranking.means[0] <= hysteresis:
-            return current
-    return ranking.selected

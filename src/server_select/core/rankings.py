@@ -98,12 +98,17 @@ class FleetRankings(object):
             return list(self.fixed_servers)
         with self._lock:
             heard = sorted(self._servers.get(robot, ()))
-        kept = [s for s in heard if any(self.window.stats(robot, s, now)[1:3])]
+        kept = [s for s in heard if self._sampled(self.window.stats(robot, s, now))]
         if len(kept) < len(heard):
             with self._lock:
                 self._servers[robot] = set(kept) | (self._servers.get(robot, set())
                                                     - set(heard))
         return kept
+
+    @staticmethod
+    def _sampled(stats):
+        """Whether the window holds any sample of the pair, good or failed."""
+        return stats.ok_count > 0 or stats.failed_count > 0
 
     def rank(self, robot, now):
         """``robot``'s ranking now (by the window's statistic, stable sort, ties to the lower

@@ -23,7 +23,7 @@ class Selection(object):
 
     def __init__(self, robot_id, servers, mode, fixed_server=None, health=None, window=5.0,
                  policy=None, manager_timeout=3.0, clock=time.monotonic, statistic=None,
-                 tau=1.0):
+                 tau=1.0, passive=False):
         if mode not in MODES:
             raise ValueError('unknown mode %r' % (mode,))
         self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
@@ -32,7 +32,10 @@ class Selection(object):
         policy = policy or Policy()
         self.manager_timeout = manager_timeout
         self.window = LatencyWindow(window, statistic or policy.statistic(), tau, policy.robust)
-        self.probes = LatencyWindow(window)      # probes only: what a task is compared with
+        # probes only, what a task sample is compared with: a window of its own only when
+        # task samples share the main one (``passive``)
+        self.passive = passive
+        self.probes = LatencyWindow(window) if passive else self.window
         self._chooser = Chooser(policy)
         self._clock = clock
         self._lock = threading.Lock()
@@ -73,7 +76,7 @@ class Selection(object):
         with ``~passive`` (ValueError for an impossible round trip)."""
         now = self._clock()
         self.window.add(self.robot_id, server, now, ok, rtt)
-        if probe:
+        if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
 
     def probe_latency(self, server):

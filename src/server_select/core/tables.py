@@ -1,5 +1,7 @@
 """Markdown tables, the one format every report, benchmark and summary prints."""
 
+import statistics
+
 
 def markdown_table(header, rows):
     """A Markdown table: ``header`` is a list of column titles, ``rows`` lists of cells.
@@ -24,7 +26,5 @@ def fmt(value, spec='%.2f', missing='-'):
 def median_range(values, spec='%.1f'):
     """``median (min-max)`` of repeated runs' ``values``; just the value for one run."""
     values = sorted(values)
-    middle = values[len(values) // 2] if len(values) % 2 else \
-        (values[len(values) // 2 - 1] + values[len(values) // 2]) / 2.0
-    text = spec % middle
+    text = spec % statistics.median(values)
     return text + (' (%s-%s)' % (spec % values[0], spec % values[-1]) if len(values) > 1 else '')

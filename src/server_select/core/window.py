@@ -15,6 +15,7 @@ A pair's latency *statistic* is what a policy ranks by (:data:`STATISTICS`):
 import collections
 import math
 import threading
+from statistics import median
 
 STATISTICS = ('mean', 'median', 'trimmed', 'peak_ewma')
 
@@ -44,12 +45,6 @@ def trimmed_mean(values):
     cut = max(1, len(values) // 4) if len(values) >= 3 else 0
     kept = values[cut:len(values) - cut]
     return sum(kept) / len(kept)
-
-
-def median(values):
-    values = sorted(values)
-    half = len(values) // 2
-    return values[half] if len(values) % 2 else (values[half - 1] + values[half]) / 2.0
 
 
 class _Pair(object):

@@ -67,7 +67,7 @@ class RobotNode(object):
                              '~discover, and a mode other than fixed)')
         self.selection = self._selection(servers, mode)
         self.passive = TaskSamples(self.robot_id, self.selection) \
-            if param('passive') and mode == 'select' else None
+            if self.selection.passive else None
         self.prober = Prober(self.robot_id, servers, param('probe_rate'), param('probe_timeout'),
                              on_sample=self.on_sample, stream=param('sample_stream'))
         self.start_delay = param('start_delay')
@@ -110,7 +110,7 @@ class RobotNode(object):
         policy, statistic = from_params(param)
         return Selection(self.robot_id, servers, mode, fixed, self.health, param('window'),
                          policy, param('manager_timeout'), statistic=statistic,
-                         tau=param('ewma_tau'))
+                         tau=param('ewma_tau'), passive=param('passive') and mode == 'select')
 
     def _kinds(self, mode):
         """(task kind, rate) of each stream the parameters ask for."""

@@ -13,6 +13,7 @@ import collections
 import glob
 import json
 import os
+import statistics
 
 from server_select.core.stats import summarize
 from server_select.core.tables import fmt, markdown_table, median_range
@@ -179,9 +180,9 @@ def summary_table(results):
             per_run = results[name]
             rel = [r[variant] for r in ratios(per_run) if variant in r]
             failed = [r[variant].failed for r in per_run if variant in r]
-            row.append('%s / %s / %s' % (_cell([x[0] for x in rel], '%.2f').split(' ')[0],
-                                         _cell([x[1] for x in rel], '%.2f').split(' ')[0],
-                                         _cell(failed, '%d').split(' ')[0]))
+            row.append('%s / %s / %s' % (fmt(_median([x[0] for x in rel])),
+                                         fmt(_median([x[1] for x in rel])),
+                                         fmt(_median(failed), '%d')))
         rows.append(row)
     return markdown_table(['variant'] + scenarios, rows)
 
@@ -212,11 +213,9 @@ def targets_table(results, variant='fleet'):
 
 
 def _median(values):
-    values = sorted(v for v in values if v is not None)
-    if not values:
-        return None
-    half = len(values) // 2
-    return values[half] if len(values) % 2 else (values[half - 1] + values[half]) / 2.0
+    """The median of the known ``values`` (None: none known)."""
+    known = [v for v in values if v is not None]
+    return statistics.median(known) if known else None
 
 
 def write_json(results, path):
