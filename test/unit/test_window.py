@@ -86,3 +86,14 @@ def test_a_pair_without_samples_is_forgotten():
     w.add(1, 1, 0.0, True, 0.1)
     assert w.stats(1, 1, 2.0)[:3] == (None, 0, 0)
     assert not w._pairs
+
+
+def test_round_trips_beyond_an_hour_are_refused_so_sums_cannot_overflow():
+    from server_select.core.window import MAX_RTT, valid_rtt
+    assert valid_rtt(MAX_RTT) and not valid_rtt(MAX_RTT * 1.001) and not valid_rtt(1.7e308)
+    w = LatencyWindow(5.0)
+    for _ in range(3):
+        with pytest.raises(ValueError, match='from 0 to 3600'):
+            w.add(1, 1, 0.0, True, 1.7e308)
+    w.add(1, 1, 0.0, True, MAX_RTT)
+    assert w.stats(1, 1, 0.0).mean == MAX_RTT

@@ -32,10 +32,17 @@ inflate) and ``failed_run`` how many of the newest samples failed in a row."""
 EMPTY = PairStats(None, 0, 0, None, None, 0)
 
 
+# No round trip this package measures lasts an hour (probes and tasks time out within
+# seconds); a larger one is a broken or forged sample, and a few such values would overflow
+# a window's running sums to infinity.
+MAX_RTT = 3600.0
+RTT_RANGE = 'a number of seconds from 0 to %g' % MAX_RTT
+
+
 def valid_rtt(rtt):
-    """Whether ``rtt`` can be a measured round trip: a finite number >= 0."""
+    """Whether ``rtt`` can be a measured round trip: a number from 0 to :data:`MAX_RTT`."""
     return isinstance(rtt, (int, float)) and not isinstance(rtt, bool) and \
-        math.isfinite(rtt) and rtt >= 0
+        math.isfinite(rtt) and 0 <= rtt <= MAX_RTT
 
 
 def trimmed_mean(values):
@@ -132,10 +139,10 @@ class LatencyWindow(object):
 
     def add(self, robot_id, server_id, now, ok, rtt):
         """Record one sample; failed samples carry no latency. A successful sample whose
-        ``rtt`` is not a finite number >= 0 raises ValueError (and is not recorded).
+        ``rtt`` is not :data:`RTT_RANGE` raises ValueError (and is not recorded).
         Returns whether the pair had a value before, and its :class:`PairStats` after."""
         if ok and not valid_rtt(rtt):
-            raise ValueError('round trip %r is not a finite number >= 0' % (rtt,))
+            raise ValueError('round trip %r is not %s' % (rtt, RTT_RANGE))
         with self._lock:
             pair = self._pairs.get((robot_id, server_id))
             if pair is None:

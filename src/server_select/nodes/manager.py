@@ -8,7 +8,7 @@ from server_select.core import names
 from server_select.core.params import ParamError
 from server_select.core.policy import Chooser, from_params
 from server_select.core.rankings import FleetRankings
-from server_select.core.window import valid_rtt
+from server_select.core.window import RTT_RANGE, valid_rtt
 from server_select.msg import LatencySample, LatencySamples
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.graph import publisher_of
@@ -166,7 +166,7 @@ class ManagerNode(object):
             if why is not None and self.group is not None:
                 continue    # another group's representative: probed for the top manager
             if why is None and ok and not valid_rtt(rtt):
-                why = 'round trip %r of server %d is not a finite number >= 0' % (rtt, server)
+                why = 'round trip %r of server %d is not %s' % (rtt, server, RTT_RANGE)
             if why:
                 self.warn(topic, batch, why)
             elif self.rankings.add(robot, server, now, ok, rtt):
@@ -183,7 +183,7 @@ class ManagerNode(object):
         if pair is not None and (msg.robot_id, msg.server_id) != pair:
             return 'it claims robot %d / server %d' % (msg.robot_id, msg.server_id)
         if pair is not None and msg.ok and not valid_rtt(msg.rtt):
-            return 'round trip %r is not a finite number >= 0' % msg.rtt
+            return 'round trip %r is not %s' % (msg.rtt, RTT_RANGE)
         if pair is None and self.rankings.admits_robot(robot):
             return self.rankings.admits_robot(robot)
         if self.robot_node is not None:
