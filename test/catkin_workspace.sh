@@ -24,11 +24,11 @@ step() {
   if run "$*" > "$ws/$name.log" 2>&1; then
     passed=$((passed + 1)); echo "=== $name: ok"
   else
-    failed=$((failed + 1)); echo "=== $name: FAILED; last lines:"; tail -40 "$ws/$name.log"
+    failed=$((failed + 1)); echo "=== $name: FAILED; last lines:"; tail -150 "$ws/$name.log"
   fi
 }
 step catkin_make "catkin_make"
-step run_tests "catkin_make run_tests -j1 && catkin_test_results build/test_results"
+step run_tests "catkin_make run_tests -j1 && catkin_test_results --verbose build/test_results"
 port=$(( 20000 + RANDOM % 20000 ))
 step demo "source devel/setup.bash && roslaunch --port $port server_select demo.launch \
   duration:=10 output:=log | tee demo.out && grep -q '| R1 | S' demo.out && grep -q '| R2 | S' demo.out"
