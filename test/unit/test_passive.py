@@ -1,8 +1,9 @@
+import math
 import random
 
 import pytest
 
-from server_select.core.passive import TaskBaseline
+from server_select.core.passive import TaskBaseline, TaskCost
 from server_select.core.window import median, trimmed_mean, LatencyWindow
 
 
@@ -53,3 +54,46 @@ def test_statistics():
     decayed = w.add(1, 1, 2.0, True, 0.010)[1].value
     assert 0.010 < decayed < 0.100 and decayed == pytest.approx(0.010 + 0.090 * 0.3679, 1e-3)
     assert w.stats(1, 1, 2.0).se > 0
+
+
+def test_a_servers_task_cost_is_added_to_its_probes_and_fades_once_its_tasks_stop():
+    cost = TaskCost(tau=5.0, keep=9, min_count=3)
+    key = (1, 2)
+    assert cost.probe(key, 0.0, 0.010) == pytest.approx(0.010)    # nothing known: as is
+    cost.task(key, 0.1, 0.035)
+    cost.task(key, 0.2, 0.035)
+    assert cost.penalty(key, 0.2) == 0.0                          # fewer than min_count
+    cost.task(key, 0.3, 0.035)
+    assert cost.penalty(key, 0.3) == pytest.approx(0.025)         # 35 ms tasks, 10 ms probes
+    assert cost.probe(key, 0.3, 0.010) == pytest.approx(0.035)
+    # no task since 0.3 s: the memory fades with tau
+    assert cost.penalty(key, 5.3) == pytest.approx(0.025 * math.exp(-1.0))
+    assert cost.penalty(key, 30.3) < 0.0001
+    assert cost.penalty((1, 3), 0.3) == 0.0                       # per pair
+    cost.forget(key)
+    assert cost.penalty(key, 0.3) == 0.0
+
+
+def test_one_slow_task_or_tasks_faster_than_probes_make_no_penalty():
+    cost = TaskCost(tau=5.0, keep=9, min_count=3)
+    cost.probe('a', 0.0, 0.020)
+    for t, sample in enumerate([0.020, 0.021, 0.240, 0.020, 0.019]):   # one retransmission
+        cost.task('a', 0.1 * t, sample)
+    assert cost.penalty('a', 0.5) == pytest.approx(0.0, abs=0.0011)
+    cost.probe('b', 0.0, 0.020)
+    for t in range(5):
+        cost.task('b', 0.1 * t, 0.015)
+    assert cost.penalty('b', 0.5) == 0.0                          # never a bonus
+    cost.task('c', 0.0, 0.5)                                      # no probe to compare with
+    assert cost.penalty('c', 0.0) == 0.0
+    with pytest.raises(ValueError):
+        TaskCost(tau=0.0)
+
+
+def test_the_probe_reference_follows_the_probes():
+    cost = TaskCost(tau=5.0, min_count=1, probe_tau=1.0)
+    cost.probe('a', 0.0, 0.010)
+    for i in range(1, 41):            # the link gets slower: 30 ms probes for 10 s
+        cost.probe('a', 0.25 * i, 0.030)
+    cost.task('a', 10.0, 0.030)       # a task as fast as the probes: no excess
+    assert cost.penalty('a', 10.0) == pytest.approx(0.0, abs=0.0001)

@@ -4,6 +4,7 @@ import random
 
 import pytest
 
+from server_select.core.policy import Chooser, Policy
 from server_select.core.ranking import NO_SERVER, rank_servers
 from server_select.core.rankings import FleetRankings
 from server_select.core.settings import PARAMS, PROFILES, default
@@ -100,3 +101,55 @@ def test_a_group_manager_ranks_only_its_members():
     assert r.rank(1, 0.1).ranking == [5, 4]
     r.set_members([2], [4, 5])                    # robot 1 moved to another group
     assert r.robots() == [2] and 'robot 1' in r.admits(1, 4)
+
+
+def _loaded_server_switches(task_memory, seconds=60.0, seed=3):
+    """A manager (the fleet's policy) ranking one robot between server 1, the nearer by
+    probes (10 ms) but loaded (its tasks take 25 ms more), and server 2 (12 ms, idle):
+    probes at 4 Hz to both, task samples at 10 Hz from the selected server. Returns the
+    selections made, one per 0.1 s."""
+    rng = random.Random(seed)
+    r = FleetRankings(1.5, robust=True, task_memory=task_memory)
+    chooser = Chooser(Policy('hysteresis', margin=0.0003, dwell=3.0, z=3.0))
+    probe = {1: 0.010, 2: 0.012}
+    task = {1: 0.035, 2: 0.012}
+    chosen = []
+    for i in range(int(seconds * 20)):
+        now = i * 0.05
+        if i % 5 == 0:
+            for server in (1, 2):
+                r.add(1, server, now, True, probe[server] + rng.uniform(0, 0.001))
+        if i % 2 == 0 and chosen:
+            r.add(1, chosen[-1], now, True, task[chosen[-1]] + rng.uniform(0, 0.001),
+                  probe=False)
+        if i % 2 == 0 and i >= 20:
+            chosen.append(chooser.choose(r.rank(1, now), now))
+    return chosen
+
+
+def test_task_memory_keeps_a_robot_off_a_loaded_server_it_has_left():
+    def switches(chosen):
+        return sum(1 for a, b in zip(chosen, chosen[1:]) if a != b)
+    forgetful, remembering = _loaded_server_switches(0.0), _loaded_server_switches(5.0)
+    print('switches in 60 s: without task memory %d, with 5 s %d; time on the loaded '
+          'server %.0f %% vs %.0f %%' % (switches(forgetful), switches(remembering),
+                                         100.0 * forgetful.count(1) / len(forgetful),
+                                         100.0 * remembering.count(1) / len(remembering)))
+    # without memory the robot goes back each time its task samples leave the window
+    assert switches(forgetful) >= 10
+    # with it, it tries the loaded server again only after the cost has faded (~20 s)
+    assert switches(remembering) <= 6
+    assert remembering.count(1) < forgetful.count(1) / 2
+
+
+def test_task_memory_of_a_server_that_left_is_dropped():
+    r = FleetRankings(1.0, task_memory=5.0)
+    for t in range(5):
+        r.add(1, 1, t * 0.1, True, 0.010)
+        r.add(1, 2, t * 0.1, True, 0.012)
+        r.add(1, 1, t * 0.1, True, 0.040, probe=False)
+    assert r.cost.penalty((1, 1), 0.5) > 0.02
+    for t in range(5, 30):
+        r.add(1, 2, t * 0.1, True, 0.012)       # server 1 is no longer probed
+    assert r.servers(1, 3.0) == [2]
+    assert r.cost.penalty((1, 1), 3.0) == 0.0

@@ -81,3 +81,46 @@ def test_fixed_mode_ignores_flags_and_waits_for_its_server_to_answer():
 def test_local_mode_is_always_ready():
     s = Selection(1, [1], 'local')
     assert s.candidates() == [LOCAL] and s.ready(set())
+
+
+def test_deciding_alone_a_robot_ranks_by_its_task_samples_and_remembers_their_cost():
+    s, clock = select(window=1.5, passive=True, task_memory=5.0)
+
+    def probes():
+        s.on_sample(1, True, 0.010)       # server 1: nearer by probes...
+        s.on_sample(2, True, 0.012)
+    for _ in range(8):
+        probes()
+        clock.now += 0.25
+    assert s.own_ranking()[0] == 1 and s.probe_latency(1) == pytest.approx(0.010)
+    for _ in range(8):                    # ...but its tasks take 25 ms more
+        probes()
+        for _ in range(3):
+            s.on_sample(1, True, 0.035, probe=False)
+        clock.now += 0.25
+    assert s.own_ranking()[0] == 2
+    for _ in range(12):                   # the robot has left it: probes only, 3 s
+        probes()
+        clock.now += 0.25
+    assert s.own_ranking()[0] == 2        # still ranked by what its tasks cost
+    assert s.probe_latency(1) == pytest.approx(0.010)     # the probes themselves: as is
+    for _ in range(100):                  # 25 s later the memory has faded: tried again
+        probes()
+        clock.now += 0.25
+    assert s.own_ranking()[0] == 1
+
+
+def test_without_task_memory_the_cost_leaves_with_the_window():
+    s, clock = select(window=1.5, passive=True)
+    for _ in range(8):
+        s.on_sample(1, True, 0.010)
+        s.on_sample(2, True, 0.012)
+        for _ in range(3):
+            s.on_sample(1, True, 0.035, probe=False)
+        clock.now += 0.25
+    assert s.own_ranking()[0] == 2
+    for _ in range(8):
+        s.on_sample(1, True, 0.010)
+        s.on_sample(2, True, 0.012)
+        clock.now += 0.25
+    assert s.own_ranking()[0] == 1

@@ -19,6 +19,7 @@ once its load started after more than half of its ``keep`` differences were take
 import collections
 import math
 import statistics
+import threading
 
 
 class TaskBaseline(object):
@@ -57,3 +58,75 @@ class TaskBaseline(object):
         differences.append(rtt - probe_latency)
         base = self.baseline(kind)
         return None if base is None else max(0.0, rtt - base)
+
+
+class TaskCost(object):
+    """What a server's tasks cost above its probes, remembered once the robot has left it
+    (``~task_memory``).
+
+    A task sample enters the window for as long as the window lasts; a robot that left a
+    loaded server sends it no more tasks, its task samples age out, its probes alone call
+    the server near again, and the robot goes back to find it still loaded (the fleet did
+    so every few seconds). Here, per (robot, server), each task sample's excess over the
+    pair's probe latency (an EWMA of its probes, time constant ``probe_tau`` s) is kept (the
+    last ``keep``); a probe sample then enters the window with the median excess added,
+    fading as ``exp(-age / tau)`` with the age of the pair's last task sample. So a server
+    whose tasks cost more stays ranked by that cost while the robot is away, and is tried
+    again once the memory has faded (after about ``tau`` x ln(excess / margin) s), in case
+    its load has gone. A median of several: one task that needed a retransmission does not
+    make a penalty; only an excess above zero counts (a probe is never made faster).
+    """
+
+    def __init__(self, tau, keep=9, min_count=3, probe_tau=1.0):
+        if not tau > 0 or keep < 1 or min_count < 1 or not probe_tau > 0:
+            raise ValueError('tau and probe_tau must be > 0, keep and min_count >= 1: '
+                             '%r %r %r %r' % (tau, keep, min_count, probe_tau))
+        self.tau, self.keep, self.min_count, self.probe_tau = tau, keep, min_count, probe_tau
+        self._lock = threading.Lock()
+        self._probe = {}        # key -> [probe EWMA, time of its last probe]
+        self._excess = {}       # key -> [deque of excesses, time of the last task sample]
+
+    def probe(self, key, now, rtt):
+        """A good probe round trip of ``key`` (e.g. (robot, server)) at ``now``: the value
+        it enters the window with (``rtt`` plus the pair's remembered task cost)."""
+        with self._lock:
+            state = self._probe.get(key)
+            if state is None:
+                self._probe[key] = [rtt, now]
+            else:
+                weight = 1.0 - math.exp(-max(0.0, now - state[1]) / self.probe_tau)
+                state[0] += weight * (rtt - state[0])
+                state[1] = now
+            return rtt + self._penalty(key, now)
+
+    def task(self, key, now, sample):
+        """A task sample of ``key`` (a round trip less the kind's baseline) at ``now``."""
+        with self._lock:
+            probe = self._probe.get(key)
+            if probe is None:
+                return              # nothing to compare with yet
+            kept = self._excess.get(key)
+            if kept is None:
+                kept = self._excess[key] = [collections.deque(maxlen=self.keep), now]
+            kept[0].append(sample - probe[0])
+            kept[1] = now
+
+    def penalty(self, key, now):
+        """What a probe of ``key`` has added to it now (s, >= 0)."""
+        with self._lock:
+            return self._penalty(key, now)
+
+    def _penalty(self, key, now):
+        kept = self._excess.get(key)
+        if kept is None or len(kept[0]) < self.min_count:
+            return 0.0
+        excess = statistics.median(kept[0])
+        if excess <= 0.0:
+            return 0.0
+        return excess * math.exp(-max(0.0, now - kept[1]) / self.tau)
+
+    def forget(self, key):
+        """Drop what is known of ``key`` (a server that left)."""
+        with self._lock:
+            self._probe.pop(key, None)
+            self._excess.pop(key, None)

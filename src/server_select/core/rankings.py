@@ -13,16 +13,19 @@ that enters or leaves the ranking, or a server whose mean falls below the select
 
 import threading
 
+from server_select.core.passive import TaskCost
 from server_select.core.ranking import NO_SERVER, latency, rank_servers
-from server_select.core.window import LatencyWindow
+from server_select.core.window import LatencyWindow, valid_rtt
 
 
 class FleetRankings(object):
     """Samples in, :class:`~server_select.core.ranking.Ranking` per robot out. Thread-safe."""
 
     def __init__(self, window, robots=(), servers=(), statistic='mean', tau=1.0,
-                 fail_fast=0, robust=False):
+                 fail_fast=0, robust=False, task_memory=0.0):
         self.window = LatencyWindow(window, statistic, tau, robust)
+        # task samples' cost above the probes, remembered (core/passive.py; 0: off)
+        self.cost = TaskCost(task_memory) if task_memory > 0 else None
         self.fail_fast = fail_fast
         self.fixed_robots = list(robots)          # empty: learned
         self.fixed_servers = list(servers)        # empty: learned
@@ -55,9 +58,15 @@ class FleetRankings(object):
             return 'server %d is not one of ~servers %s' % (server, self.fixed_servers)
         return None
 
-    def add(self, robot, server, now, ok, rtt):
-        """Record a sample (ValueError for an impossible round trip); True when ``robot``'s
-        flag may change because of it."""
+    def add(self, robot, server, now, ok, rtt, probe=True):
+        """Record a sample, a probe's or (``probe`` False) an answered task's (ValueError
+        for an impossible round trip); True when ``robot``'s flag may change because of
+        it."""
+        if self.cost is not None and ok and valid_rtt(rtt):
+            if probe:
+                rtt = self.cost.probe((robot, server), now, rtt)
+            else:
+                self.cost.task((robot, server), now, rtt)
         had_mean, stats = self.window.add(robot, server, now, ok, rtt)
         with self._lock:
             heard = self._servers.get(robot)
@@ -103,6 +112,9 @@ class FleetRankings(object):
             with self._lock:
                 self._servers[robot] = set(kept) | (self._servers.get(robot, set())
                                                     - set(heard))
+            if self.cost is not None:
+                for server in set(heard) - set(kept):
+                    self.cost.forget((robot, server))
         return kept
 
     @staticmethod

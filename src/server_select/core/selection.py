@@ -10,10 +10,11 @@ work in the robot. In ``select`` mode the robot's own evidence comes first: serv
 import threading
 import time
 
+from server_select.core.passive import TaskCost
 from server_select.core.policy import Chooser, Policy
 from server_select.core.ranking import NO_SERVER, rank_servers
 from server_select.core.task_flow import LOCAL
-from server_select.core.window import LatencyWindow
+from server_select.core.window import LatencyWindow, valid_rtt
 
 MODES = ('select', 'fixed', 'local')
 
@@ -23,7 +24,7 @@ class Selection(object):
 
     def __init__(self, robot_id, servers, mode, fixed_server=None, health=None, window=5.0,
                  policy=None, manager_timeout=3.0, clock=time.monotonic, statistic=None,
-                 tau=1.0, passive=False):
+                 tau=1.0, passive=False, task_memory=0.0):
         if mode not in MODES:
             raise ValueError('unknown mode %r' % (mode,))
         self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
@@ -36,6 +37,7 @@ class Selection(object):
         # task samples share the main one (``passive``)
         self.passive = passive
         self.probes = LatencyWindow(window) if passive else self.window
+        self.cost = TaskCost(task_memory) if passive and task_memory > 0 else None
         self._chooser = Chooser(policy)
         self._clock = clock
         self._lock = threading.Lock()
@@ -70,12 +72,20 @@ class Selection(object):
                 self.servers.remove(server)
         if self.health is not None:
             self.health.remove(server)
+        if self.cost is not None:
+            self.cost.forget(server)
 
     def on_sample(self, server, ok, rtt, probe=True):
         """One of the robot's own samples: a probe, or (``probe`` False) an answered task
         with ``~passive`` (ValueError for an impossible round trip)."""
         now = self._clock()
-        self.window.add(self.robot_id, server, now, ok, rtt)
+        value = rtt
+        if self.cost is not None and ok and valid_rtt(rtt):
+            if probe:
+                value = self.cost.probe(server, now, rtt)
+            else:
+                self.cost.task(server, now, rtt)
+        self.window.add(self.robot_id, server, now, ok, value)
         if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
 

@@ -102,6 +102,9 @@ PARAMS = {
     'ewma_tau': Param(1.0, parse_positive, 'policy peak_ewma: decay time of a spike (s)'),
     'passive': Param(False, parse_bool, "robots' answered tasks are latency samples too "
                      '(on task_samples, to the manager)'),
+    'task_memory': Param(0.0, parse_non_negative, 'with ~passive: what a server\'s tasks cost '
+                         'above its probes is added to its probes, fading with this time '
+                         'constant (s) once its tasks stop (0: not at all)'),
     'manager_timeout': Param(3.0, parse_positive, 'a flag older than this is stale: the robot '
                              'ranks its servers itself (s)'),
     'eject_time': Param(1.0, parse_positive, 'first ejection of a failing server (s); doubles '
@@ -144,7 +147,8 @@ PROFILES = {
               'robots': [], 'servers': [],
               # the scenario suite's winner (README, "The scenario suite")
               'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
-              'window': 1.5, 'probe_rate': 4.0, 'passive': True, 'fail_fast': 2, 'hedge': True},
+              'window': 1.5, 'probe_rate': 4.0, 'passive': True, 'task_memory': 5.0,
+              'fail_fast': 2, 'hedge': True},
 }
 
 

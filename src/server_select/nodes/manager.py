@@ -50,6 +50,9 @@ class ManagerNode(object):
           (``core/policy.py``; the defaults are the paper: always the lowest mean).
         - ``~passive`` (false): also take the robots' answered tasks on ``task_samples``
           as samples (what tasks really get: network, queueing and work).
+        - ``~task_memory`` (s, 0; fleet: 5): with ``~passive``, a server's task cost above
+          its probes is added to its probe samples, fading with this time constant once
+          the robot's tasks stop going there (``core/passive.py``, TaskCost).
         - ``~robot_node`` (``/robot{id}``): the node, or the namespace of the nodes, whose
           samples count for robot {id} (``*``: any publisher).
         - ``~fleet_ns`` (``/``): namespace of the fleet-level topics and services.
@@ -70,7 +73,8 @@ class ManagerNode(object):
         self.policy, statistic = from_params(param)
         self.rankings = FleetRankings(param('window'), param('robots'), param('servers'),
                                       statistic, param('ewma_tau'), param('fail_fast'),
-                                      self.policy.robust)
+                                      self.policy.robust,
+                                      param('task_memory') if param('passive') else 0.0)
         self.passive = param('passive')
         for name in ('robots', 'servers'):
             if self.stream == 'pair' and not getattr(self.rankings, 'fixed_' + name):
@@ -169,7 +173,8 @@ class ManagerNode(object):
                 why = 'round trip %r of server %d is not %s' % (rtt, server, RTT_RANGE)
             if why:
                 self.warn(topic, batch, why)
-            elif self.rankings.add(robot, server, now, ok, rtt):
+            elif self.rankings.add(robot, server, now, ok, rtt,
+                                   probe=topic != names.TASK_SAMPLES_TOPIC):
                 changed = True
         if changed:     # one ranking per batch: O(1) per sample
             self.update(robot, only_on_change=True)

@@ -95,8 +95,7 @@ class RobotNode(object):
                                            self.on_group) if top else ServerAnnouncements(
             servers, self.on_servers, self.manager_node, self.robot_id) if self.discover \
             else None
-        self._start_after = None
-        self._local_decision = False
+        self._start_after, self._local_decision = None, False
         self.timers = []
 
     def _selection(self, servers, mode):
@@ -110,7 +109,8 @@ class RobotNode(object):
         policy, statistic = from_params(param)
         return Selection(self.robot_id, servers, mode, fixed, self.health, param('window'),
                          policy, param('manager_timeout'), statistic=statistic,
-                         tau=param('ewma_tau'), passive=param('passive') and mode == 'select')
+                         tau=param('ewma_tau'), passive=param('passive') and mode == 'select',
+                         task_memory=param('task_memory'))
 
     def _kinds(self, mode):
         """(task kind, rate) of each stream the parameters ask for."""

@@ -48,8 +48,11 @@ VARIANTS = collections.OrderedDict([
     # not in the default run: ask for them with --variants
     ('fleet_trimmed', Variant('select', 'fleet', {'statistic': 'trimmed'})),
     ('fleet_median', Variant('select', 'fleet', {'statistic': 'median'})),
+    ('fleet_no_memory', Variant('select', 'fleet', {'task_memory': 0.0})),
+    ('fleet_memory10', Variant('select', 'fleet', {'task_memory': 10.0})),
 ])
-DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ('fleet_trimmed', 'fleet_median'))
+ON_REQUEST = ('fleet_trimmed', 'fleet_median', 'fleet_no_memory', 'fleet_memory10')
+DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ON_REQUEST)
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server', 'search_sweep')
 MEASURE_FROM = 35.0  # s of scenario time: nodes are up, every variant sends tasks
