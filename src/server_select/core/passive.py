@@ -21,6 +21,8 @@ import math
 import statistics
 import threading
 
+from server_select.core.window import valid_rtt
+
 
 class TaskBaseline(object):
     """Per task kind, the work a task adds to a probe round trip on the fastest server."""
@@ -85,6 +87,18 @@ class TaskCost(object):
         self._lock = threading.Lock()
         self._probe = {}        # key -> [probe EWMA, time of its last probe]
         self._excess = {}       # key -> [deque of excesses, time of the last task sample]
+
+    def enter(self, key, now, ok, rtt, probe=True):
+        """The value a sample of ``key`` enters the window with: a good probe's round trip
+        plus the pair's remembered task cost (:meth:`probe`); a task sample (``probe``
+        False, learnt by :meth:`task`), a failed or an impossible one as it is (the window
+        refuses the impossible)."""
+        if not (ok and valid_rtt(rtt)):
+            return rtt
+        if probe:
+            return self.probe(key, now, rtt)
+        self.task(key, now, rtt)
+        return rtt
 
     def probe(self, key, now, rtt):
         """A good probe round trip of ``key`` (e.g. (robot, server)) at ``now``: the value

@@ -15,7 +15,7 @@ import threading
 
 from server_select.core.passive import TaskCost
 from server_select.core.ranking import NO_SERVER, latency, rank_servers
-from server_select.core.window import LatencyWindow, valid_rtt
+from server_select.core.window import LatencyWindow
 
 
 class FleetRankings(object):
@@ -62,11 +62,8 @@ class FleetRankings(object):
         """Record a sample, a probe's or (``probe`` False) an answered task's (ValueError
         for an impossible round trip); True when ``robot``'s flag may change because of
         it."""
-        if self.cost is not None and ok and valid_rtt(rtt):
-            if probe:
-                rtt = self.cost.probe((robot, server), now, rtt)
-            else:
-                self.cost.task((robot, server), now, rtt)
+        if self.cost is not None:
+            rtt = self.cost.enter((robot, server), now, ok, rtt, probe)
         had_mean, stats = self.window.add(robot, server, now, ok, rtt)
         with self._lock:
             heard = self._servers.get(robot)

@@ -14,7 +14,7 @@ from server_select.core.passive import TaskCost
 from server_select.core.policy import Chooser, Policy
 from server_select.core.ranking import NO_SERVER, rank_servers
 from server_select.core.task_flow import LOCAL
-from server_select.core.window import LatencyWindow, valid_rtt
+from server_select.core.window import LatencyWindow
 
 MODES = ('select', 'fixed', 'local')
 
@@ -79,12 +79,7 @@ class Selection(object):
         """One of the robot's own samples: a probe, or (``probe`` False) an answered task
         with ``~passive`` (ValueError for an impossible round trip)."""
         now = self._clock()
-        value = rtt
-        if self.cost is not None and ok and valid_rtt(rtt):
-            if probe:
-                value = self.cost.probe(server, now, rtt)
-            else:
-                self.cost.task(server, now, rtt)
+        value = rtt if self.cost is None else self.cost.enter(server, now, ok, rtt, probe)
         self.window.add(self.robot_id, server, now, ok, value)
         if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
