@@ -55,6 +55,47 @@ def test_add_says_when_a_flag_may_change():
         r.add(1, 2, 0.6, True, float('nan'))
 
 
+def test_departures_name_the_robots_a_server_left_selected_or_not():
+    r = FleetRankings(5.0, robots=[1, 2], servers=[1, 2])
+    for t in range(3):
+        for robot in (1, 2):
+            r.add(robot, 1, float(t), True, 0.001)
+            r.add(robot, 2, float(t), t == 0, 0.002)      # server 2 dies after t = 0
+    r.selected(1, 1)
+    r.selected(2, 2)
+    assert r.departures(4.99) == []
+    assert r.departures(5.0) == [1, 2]    # its last good sample (t = 0) left both windows
+    assert r.departures(5.5) == []        # said once
+    assert r.rank(1, 5.0).ranking == [1] and r.rank(2, 5.0).ranking == [1]
+    assert r.departures(7.5) == [1, 2]    # server 1, never sampled after t = 2
+    r.add(1, 2, 8.0, True, 0.002)         # back: it may leave again
+    assert r.departures(12.9) == [] and r.departures(13.0) == [1]
+
+
+def test_a_lazy_manager_ranks_the_same_servers_as_ranking_on_every_sample():
+    """Random streams with servers dying and coming back: re-ranking only when add() or
+    departures() say so, the ranked servers are at every step those of ranking always."""
+    rng = random.Random(5)
+    lazy, eager = FleetRankings(2.0), FleetRankings(2.0)
+    ranked = []
+    alive = dict((s, True) for s in range(1, 6))
+    for step in range(6000):
+        t = step * 0.05
+        if step % 100 == 0:
+            alive[rng.randint(1, 5)] = rng.random() > 0.5
+        server = rng.randint(1, 5)
+        if not alive[server] and rng.random() < 0.5:
+            continue            # silent
+        ok = alive[server] and rng.random() > 0.05
+        rtt = rng.choice([0.001, 0.004]) * (1 + rng.random())
+        eager.add(1, server, t, ok, rtt)
+        if lazy.add(1, server, t, ok, rtt) | (1 in lazy.departures(t)):
+            flag = lazy.rank(1, t)
+            ranked = flag.ranking
+            lazy.selected(1, flag.selected)
+        assert sorted(ranked) == sorted(eager.rank(1, t).ranking), step
+
+
 def test_updating_only_when_add_says_so_gives_the_flags_of_updating_always():
     """Random streams: a manager that re-ranks only on add() == True publishes the same
     selection as one re-ranking on every sample (the paper's manager)."""

@@ -9,8 +9,12 @@ no probe of it, good or failed, for a whole window).
 A sample can change a robot's flag only if it concerns the selected server, a server
 that enters or leaves the ranking, or a server whose mean falls below the selected one's;
 :meth:`FleetRankings.add` says so in O(1), and only then need the robot be ranked again.
+A server also leaves a ranking without any sample, when its newest good sample leaves the
+window: :meth:`FleetRankings.departures` names the robots this happened to (one scheduled
+check per pair and window, O(log pairs) each).
 """
 
+import heapq
 import threading
 
 from server_select.core.passive import TaskCost
@@ -34,6 +38,8 @@ class FleetRankings(object):
         self._lock = threading.Lock()
         self._servers = {}                        # robot -> set of servers heard for it
         self._selected = {}                       # robot -> server its last flag selected
+        self._last_good = {}                      # (robot, server) -> its newest good sample
+        self._due = []      # heap: (when that sample leaves the window, robot, server)
 
     def set_members(self, robots, servers):
         """Fix the robots and servers (a group manager: what the top manager assigned to
@@ -66,6 +72,11 @@ class FleetRankings(object):
             rtt = self.cost.enter((robot, server), now, ok, rtt, probe)
         had_mean, stats = self.window.add(robot, server, now, ok, rtt)
         with self._lock:
+            if ok:
+                if (robot, server) not in self._last_good:
+                    heapq.heappush(self._due, (now + self.window.window, robot, server))
+                self._last_good[(robot, server)] = max(
+                    now, self._last_good.get((robot, server), now))
             heard = self._servers.get(robot)
             if heard is None:
                 heard = self._servers[robot] = set()
@@ -82,12 +93,22 @@ class FleetRankings(object):
             else None
         return best is None or latency(stats) < best
 
-    def selected_left(self, robot, now):
-        """Whether the server ``robot``'s last flag selected has no good sample left (O(1):
-        what the periodic check looks at between full re-rankings)."""
+    def departures(self, now):
+        """The robots of which a server has had its last good sample leave the window since
+        the previous call: it leaves their rankings, whether selected or not (what the
+        manager's periodic check looks at between full re-rankings)."""
+        robots = set()
         with self._lock:
-            selected = self._selected.get(robot, NO_SERVER)
-        return selected != NO_SERVER and self.window.stats(robot, selected, now).mean is None
+            while self._due and self._due[0][0] <= now:
+                _, robot, server = heapq.heappop(self._due)
+                newest = self._last_good[(robot, server)]
+                if newest + self.window.window <= now:
+                    del self._last_good[(robot, server)]    # the next good one re-enters
+                    robots.add(robot)
+                else:
+                    heapq.heappush(self._due, (newest + self.window.window, robot, server))
+            members = set(self.fixed_robots) if not self.learn_robots else None
+        return sorted(r for r in robots if members is None or r in members)
 
     def robots(self):
         """The robots that take part (those heard from, or the fixed list)."""

@@ -27,9 +27,10 @@ class ManagerNode(object):
     without a successful sample excluded) and publishes one ``server_select_flag`` per
     robot every ``1/~publish_rate`` s, and at once when a robot's selected server or the set
     of servers it ranks changes. A sample costs O(1); a robot is ranked again only when a
-    sample may change its flag (at most once per batch), when its selected server's last
-    good sample leaves the window (checked every ``1/~update_rate`` s), and with each
-    periodic flag. Window times are the manager's receive
+    sample may change its flag (at most once per batch), when the last good sample of any
+    of its servers leaves the window (checked every ``1/~update_rate`` s: a dead server
+    leaves every ranking, not only those that select it, within ``~window`` and one
+    check of its last answer), and with each periodic flag. Window times are the manager's receive
     times: robot and manager clocks are not shared. A robot gets no flag before its first
     sample (a restarted manager does not publish an empty ranking over a robot's working
     choice). Samples claiming another pair, with an impossible round trip, or not
@@ -214,12 +215,9 @@ class ManagerNode(object):
                 self.update(robot, only_on_change=False)
 
     def on_check(self, _event):
-        """Between flags: re-rank the robots whose selected server has no good sample left
-        (O(1) per robot; a non-selected server leaving shows in the next periodic flag)."""
-        now = rospy.get_time()
-        for robot in self.rankings.robots():
-            if self.rankings.selected_left(robot, now):
-                self.update(robot, only_on_change=True)
+        """Between flags: re-rank the robots of which a server has no good sample left."""
+        for robot in self.rankings.departures(rospy.get_time()):
+            self.update(robot, only_on_change=True)
 
     def update(self, robot, only_on_change):
         """Rank ``robot``'s servers now; publish unless unchanged and ``only_on_change``.
