@@ -30,8 +30,8 @@ class ManagerNode(object):
     sample may change its flag (at most once per batch), when the last good sample of any
     of its servers leaves the window (checked every ``1/~update_rate`` s: a dead server
     leaves every ranking, not only those that select it, within ``~window`` and one
-    check of its last answer), and with each periodic flag. Window times are the manager's receive
-    times: robot and manager clocks are not shared. A robot gets no flag before its first
+    check of its last answer), and with each periodic flag. Window times are the manager's
+    receive times: robot and manager clocks are not shared. A robot gets no flag before its first
     sample (a restarted manager does not publish an empty ranking over a robot's working
     choice). Samples claiming another pair, with an impossible round trip, or not
     published by ``~robot_node`` are ignored with a throttled warning naming the publisher.
