@@ -1,7 +1,7 @@
 """Scale of the real manager node: how many robots x servers before it falls behind.
 
 For each size R x S and sample layout, a roscore of its own, ``--sims`` processes of
-simulated robots (:mod:`server_select.bench.scale_sim`: one probe round per robot per
+simulated robots (:mod:`server_select.bench.scale_sim`: ``--rate`` probe rounds per robot per
 second, flags watched) and the real manager node (``--layout robot``: the fleet
 profile's ``latency_samples`` batches; ``pair``: the paper's ``latency_R<r>S<s>``
 topics). Printed per run: time from the manager's start until every robot has a flag
@@ -9,7 +9,11 @@ ranking all S servers, sample-to-flag delay p50 / p99 (a 10 s round trip for a r
 selected server, to the flag that moves it), the manager's CPU % of one core, threads,
 file descriptors and RSS, and rosmaster's CPU %, measured over ``--measure`` s once every
 robot is ranked. A size that is not ranked within ``--limit`` s is reported as such with
-what the manager used meanwhile. Nothing is asserted.
+what the manager used meanwhile. ``--profile fleet`` runs the manager(s) with the fleet
+profile's defaults (window 1.5 s, the hysteresis policy and its robust errors, passive
+samples and task memory; the robot and server lists stay fixed) and ``--rate`` sets the
+simulated probe rounds per robot and second (the fleet probes at 4 Hz). Nothing is
+asserted.
 """
 
 import argparse
@@ -39,10 +43,10 @@ def _node(module, args, log):
                                 start_new_session=True)
 
 
-def _managers(layout, robots, servers, groups, log):
+def _managers(layout, robots, servers, groups, log, profile='paper'):
     """The nodes under test: {node name: process}."""
     ids = ','.join(map(str, range(1, servers + 1)))
-    common = ["_robot_node:='*'", '_discover:=false']
+    common = ["_robot_node:='*'", '_discover:=false', '_profile:=%s' % profile]
     if layout != 'grouped':
         return {'/manager': _node('manager', common + [
             '_robots:=%s' % ','.join(map(str, range(1, robots + 1))), '_servers:=%s' % ids,
@@ -58,7 +62,7 @@ def _managers(layout, robots, servers, groups, log):
     return nodes
 
 
-def _sims(tmp, robots, servers, sims, layout, until, log, groups=1):
+def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0):
     per = -(-robots // sims)
     procs, outs = [], []
     for first in range(1, robots + 1, per):
@@ -66,7 +70,7 @@ def _sims(tmp, robots, servers, sims, layout, until, log, groups=1):
         cmd = PY + ['server_select.bench.scale_sim', '--first', str(first), '--count',
                     str(min(per, robots - first + 1)), '--servers', str(servers),
                     '--layout', layout, '--until', repr(until), '--out', out,
-                    '--groups', str(groups)]
+                    '--groups', str(groups), '--rate', repr(rate)]
         with open(log, 'a') as stream:
             procs.append(subprocess.Popen(cmd, stdout=stream, stderr=subprocess.STDOUT,
                                           start_new_session=True))
@@ -93,14 +97,16 @@ def _ranked_in(outs):
     return (max(ranked) if len(ranked) == robots and ranked else None), delays
 
 
-def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1):
+def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, profile='paper',
+            rate=1.0):
     log = os.path.join(tmp, 'scale.log')
     until = time.time() + 8.0 + limit + measure_s
-    sim_procs, outs = _sims(tmp, robots, servers, sims, layout, until, log, groups)
+    sim_procs, outs = _sims(tmp, robots, servers, sims, layout, until, log, groups, rate)
     time.sleep(5.0)                    # the simulated robots registered and publishing
     started = time.time()
-    managers = _managers(layout, robots, servers, groups, log)
-    row = {'robots': robots, 'servers': servers, 'layout': layout, 'groups': groups}
+    managers = _managers(layout, robots, servers, groups, log, profile)
+    row = {'robots': robots, 'servers': servers, 'layout': layout, 'groups': groups,
+           'profile': profile, 'rate': rate}
     try:
         if not wait_until(lambda: all(_pid(n) for n in managers), 60.0, period=0.5):
             with open(log) as stream:
@@ -151,8 +157,13 @@ def fmt(value, spec='%.0f'):
 
 def _layout(row):
     if row['layout'] == 'grouped':
-        return 'grouped: %d x %d servers' % (row['groups'], row['servers'] // row['groups'])
-    return 'per pair' if row['layout'] == 'pair' else 'per robot'
+        text = 'grouped: %d x %d servers' % (row['groups'], row['servers'] // row['groups'])
+    else:
+        text = 'per pair' if row['layout'] == 'pair' else 'per robot'
+    profile, rate = row.get('profile', 'paper'), row.get('rate', 1.0)
+    if (profile, rate) != ('paper', 1.0):
+        text += ' (%s profile, %g Hz)' % (profile, rate)
+    return text
 
 
 def table(rows):
@@ -181,6 +192,10 @@ def main(argv=None):
     parser.add_argument('--limit', type=float, default=30.0,
                         help='seconds for every robot to be ranked')
     parser.add_argument('--measure', type=float, default=15.0)
+    parser.add_argument('--profile', choices=('paper', 'fleet'), default='paper',
+                        help="the manager's profile (default %(default)s)")
+    parser.add_argument('--rate', type=float, default=1.0,
+                        help='probe rounds per simulated robot and second (default 1)')
     parser.add_argument('--out', default='results/bench')
     args = parser.parse_args(argv)
     runs = []
@@ -197,7 +212,7 @@ def main(argv=None):
         with tempfile.TemporaryDirectory(prefix='bench_scale') as tmp, Roscore(tmp):
             print('scale: %d x %d %s' % (robots, servers, layout), file=sys.stderr, flush=True)
             row = run_one(robots, servers, layout, min(args.sims, robots), args.limit,
-                          args.measure, tmp, groups)
+                          args.measure, tmp, groups, args.profile, args.rate)
             row['limit'] = args.limit
             rows.append(row)
             print(table([row]).splitlines()[-1], file=sys.stderr, flush=True)

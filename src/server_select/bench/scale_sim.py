@@ -1,6 +1,6 @@
 """Simulated robots for the scale benchmark: samples in bulk, flags watched (one process).
 
-Robots ``first .. first+count-1`` each send one probe round a second for servers
+Robots ``first .. first+count-1`` each send ``--rate`` probe rounds a second (1) for servers
 ``1..servers`` (``--layout robot``: one ``latency_samples`` batch; ``pair``: one
 ``latency_R<r>S<s>`` sample per server), with round trips that give every robot a
 different, well separated nearest server. Once every robot of this process has a flag
@@ -28,7 +28,10 @@ from server_select.core.groups import probe_set
 from server_select.msg import GroupAssignments, LatencySample, LatencySamples, SelectionFlag
 
 SLOW = 10.0
-QUIET = 7.0       # s between two triggers of one robot (window 5 s + margin)
+QUIET = 7.0       # s between two triggers of one robot: its slow sample leaves the window
+#                   after 5 s (the paper; the fleet's 1.5 s) and moves the flag back
+SETTLED = 4.0     # s since a robot's flag last changed before it is triggered: a policy with
+#                   a dwell (the fleet's 3 s) holds a move that soon after the last, by design
 
 
 def base_rtt(robot, server, servers, groups=1):
@@ -59,8 +62,8 @@ class SimulatedRobots(object):
         self.ranked = {}             # robot -> time its first full ranking arrived
         self.flagged = {}            # robot -> server its last flag selected
         self.triggers = {}           # robot -> (publication time, server made slow)
-        self.last_trigger = {}       # robot -> when: its slow sample leaves the window after
-        #                              5 s and moves the flag back; no trigger meanwhile
+        self.last_trigger = {}       # robot -> when it was last triggered (QUIET)
+        self.changed = {}            # robot -> when its flag last changed (SETTLED)
         self.delays = []
         self.flags = 0
         self.rng = random.Random(robots[0])
@@ -103,6 +106,8 @@ class SimulatedRobots(object):
             if trigger is not None and flag.server_id != trigger[1]:
                 self.delays.append(now - trigger[0])
                 del self.triggers[robot]
+            if flag.server_id != self.flagged.get(robot):
+                self.changed[robot] = now
             self.flagged[robot] = flag.server_id
 
     def send(self, robot, slow=None, sending=lambda: None):
@@ -136,7 +141,9 @@ class SimulatedRobots(object):
     def trigger(self, robot):
         with self.lock:
             slow = self.flagged.get(robot)
-            quiet = time.time() - self.last_trigger.get(robot, 0.0) > QUIET
+            now = time.time()
+            quiet = now - self.last_trigger.get(robot, 0.0) > QUIET and \
+                now - self.changed.get(robot, 0.0) > SETTLED
             if slow is None or slow < 1 or robot in self.triggers or not quiet:
                 return
             self.last_trigger[robot] = time.time()
@@ -146,8 +153,8 @@ class SimulatedRobots(object):
                 self.triggers[robot] = (time.time(), slow)
         self.send(robot, slow, sending)
 
-    def run(self, until):
-        period = 1.0 / len(self.robots)
+    def run(self, until, rate=1.0):
+        period = 1.0 / (rate * len(self.robots))
         next_change = None
         index = 0
         while time.time() < until and not rospy.is_shutdown():
@@ -176,12 +183,13 @@ def main(argv=None):
     parser.add_argument('--groups', type=int, default=1)
     parser.add_argument('--until', type=float, required=True, help='epoch s to stop at')
     parser.add_argument('--change-every', type=float, default=0.5)
+    parser.add_argument('--rate', type=float, default=1.0, help='probe rounds per robot and s')
     parser.add_argument('--out', required=True)
     args = parser.parse_args(argv)
     rospy.init_node('scale_sim_%d' % args.first, disable_signals=True)
     sim = SimulatedRobots(list(range(args.first, args.first + args.count)), args.servers,
                           args.layout, args.change_every, args.groups)
-    sim.run(args.until)
+    sim.run(args.until, args.rate)
     with open(args.out, 'w') as stream:
         json.dump(sim.result(), stream)
     rospy.signal_shutdown('done')

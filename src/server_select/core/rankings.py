@@ -89,8 +89,8 @@ class FleetRankings(object):
             return True
         if stats.mean is None:
             return False
-        best = latency(self.window.stats(robot, selected, now)) if selected != NO_SERVER \
-            else None
+        best = latency(self.window.stats(robot, selected, now, errors=False)) \
+            if selected != NO_SERVER else None
         return best is None or latency(stats) < best
 
     def departures(self, now):

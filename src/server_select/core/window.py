@@ -140,7 +140,9 @@ class LatencyWindow(object):
     def add(self, robot_id, server_id, now, ok, rtt):
         """Record one sample; failed samples carry no latency. A successful sample whose
         ``rtt`` is not :data:`RTT_RANGE` raises ValueError (and is not recorded).
-        Returns whether the pair had a value before, and its :class:`PairStats` after."""
+        Returns whether the pair had a value before, and its :class:`PairStats` after
+        (with plain standard errors, which cost nothing: :meth:`stats` gives the robust
+        ones)."""
         if ok and not valid_rtt(rtt):
             raise ValueError('round trip %r is not %s' % (rtt, RTT_RANGE))
         with self._lock:
@@ -150,10 +152,11 @@ class LatencyWindow(object):
             pair.prune(now - self.window)
             had_value = pair.ok_count > 0
             pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')), self.tau)
-            return had_value, pair.stats(self.statistic, self.robust)
+            return had_value, pair.stats(self.statistic)
 
-    def stats(self, robot_id, server_id, now):
-        """The pair's :class:`PairStats` over the window now."""
+    def stats(self, robot_id, server_id, now, errors=True):
+        """The pair's :class:`PairStats` over the window now (``errors`` False: plain
+        standard errors even if the window's are robust, at no cost)."""
         with self._lock:
             pair = self._pairs.get((robot_id, server_id))
             if pair is None:
@@ -161,7 +164,7 @@ class LatencyWindow(object):
             pair.prune(now - self.window)
             if not pair.samples:       # nothing left: forget the pair
                 del self._pairs[(robot_id, server_id)]
-            return pair.stats(self.statistic, self.robust)
+            return pair.stats(self.statistic, self.robust and errors)
 
     def robot_stats(self, robot_id, servers, now):
         """``{server_id: PairStats}`` for each of ``servers``."""
