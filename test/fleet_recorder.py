@@ -9,23 +9,25 @@ from rospy.numpy_msg import numpy_msg
 
 from server_select.core import names
 from server_select.core.procs import wait_until
-from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
+from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask, TaskReport
 
 Received = collections.namedtuple('Received', 'time msg')
 
 
 class FleetRecorder(object):
-    """Every flag, task, result and task report, with its (monotonic) receive time.
+    """Every flag, task, result and task report (and the probe samples of ``probe_pairs``),
+    with its (monotonic) receive time.
 
     With direct routing (``robots`` and ``servers`` given), tasks are recorded from every
     server's own topic and results from every robot's own topic; what still arrives on
     the broadcast topics is kept apart, in ``broadcast``.
     """
 
-    def __init__(self, robots=(), servers=()):
+    def __init__(self, robots=(), servers=(), probe_pairs=()):
         self.lock = threading.Lock()
         self.flags, self.tasks, self.results, self.reports = [], [], [], []
         self.broadcast = []
+        self.samples = []       # probe samples of ``probe_pairs`` ((robot, server) each)
         direct = bool(robots and servers)
         self.subs = [
             rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self._add, 'flags',
@@ -39,6 +41,9 @@ class FleetRecorder(object):
             rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, self._add, 'reports',
                              tcp_nodelay=True, queue_size=1000),
         ]
+        self.subs += [rospy.Subscriber(names.sample_topic(r, s), LatencySample, self._add,
+                                       'samples', tcp_nodelay=True, queue_size=1000)
+                      for r, s in probe_pairs]
         if direct:
             self.subs += [rospy.Subscriber(names.server_topic(s, names.SORT_TASK_TOPIC),
                                            numpy_msg(SortTask), self._add, 'tasks',

@@ -16,9 +16,7 @@ import unittest
 import rospy
 import rostest
 
-from server_select.core import names
 from server_select.core.params import parse_id_list
-from server_select.msg import LatencySample
 from server_select.ros.graph import node_pid
 
 from fleet_recorder import FleetRecorder
@@ -31,12 +29,8 @@ class ServerFailureTest(unittest.TestCase):
         robots = parse_id_list('robots', rospy.get_param('~robots'))
         servers = parse_id_list('servers', rospy.get_param('~servers'))
         bound = float(rospy.get_param('~window')) + float(rospy.get_param('~probe_timeout'))
-        rec = FleetRecorder()
-        samples = []        # (receive time, sample) of every probe, to explain a late flag
-        subs = [rospy.Subscriber(names.sample_topic(r, s), LatencySample,  # noqa: F841
-                                 lambda m: samples.append((time.monotonic(), m)),
-                                 tcp_nodelay=True, queue_size=100)
-                for r in robots for s in servers]
+        # every probe sample too, to explain a late flag
+        rec = FleetRecorder(probe_pairs=[(r, s) for r in robots for s in servers])
 
         def all_ranked():
             flags = rec.latest_flags()
@@ -66,15 +60,15 @@ class ServerFailureTest(unittest.TestCase):
             # by the manager's publish stamp: when this test process takes the flag in
             # (it also records every task and report) is not the manager's reaction
             after = first.msg.header.stamp.to_sec() - killed_stamp
-            good = [(t, m) for t, m in samples if m.robot_id == robot and
-                    m.server_id == victim and m.ok]
+            good = [r for r in rec.snapshot(rec.samples) if r.msg.robot_id == robot and
+                    r.msg.server_id == victim and r.msg.ok]
             last = good[-1] if good else None
             why = ('robot %d: server %d excluded after %.2f s (received after %.2f s); its '
                    'last good probe sent %.2f s and received here %.2f s from the kill; '
                    'the flag before: %s' % (
                        robot, victim, after, first.time - killed_at,
-                       last[1].header.stamp.to_sec() - killed_stamp if last else float('nan'),
-                       last[0] - killed_at if last else float('nan'),
+                       last.msg.header.stamp.to_sec() - killed_stamp if last else float('nan'),
+                       last.time - killed_at if last else float('nan'),
                        self._before(rec, robot, first)))
             rospy.loginfo(why)
             self.assertLessEqual(after, bound, why)
