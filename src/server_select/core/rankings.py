@@ -72,11 +72,11 @@ class FleetRankings(object):
             rtt = self.cost.enter((robot, server), now, ok, rtt, probe)
         had_mean, stats = self.window.add(robot, server, now, ok, rtt)
         with self._lock:
-            if ok:
-                if (robot, server) not in self._last_good:
-                    heapq.heappush(self._due, (now + self.window.window, robot, server))
-                self._last_good[(robot, server)] = max(
-                    now, self._last_good.get((robot, server), now))
+            newest = self._last_good.get((robot, server)) if ok else None
+            if ok and newest is None:       # (again) in the window: due when this leaves
+                heapq.heappush(self._due, (now + self.window.window, robot, server))
+            if ok and (newest is None or now > newest):
+                self._last_good[(robot, server)] = now
             heard = self._servers.get(robot)
             if heard is None:
                 heard = self._servers[robot] = set()
