@@ -17,6 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 
+from server_select.core.procs import wait_until
 from server_select.msg import (Detection, Detections, FoundTarget, ImageResult, ImageTask,
                                LatencySample, LatencySamples, OrbTask, SelectionFlag,
                                SortResult, SortTask)
@@ -26,6 +27,7 @@ from server_select.nodes.server import ServerNode
 from server_select.ros.camera import TopicSource
 from server_select.ros.plugins import PluginHandler
 from server_select.ros.routing import ResultRoutes
+from server_select.ros.server_work import ServerWork
 from server_select.tasks.orb import Orb
 from server_select.vision.image_codec import encode, from_array
 from server_select.vision.search import sample_image
@@ -222,15 +224,19 @@ def test_camera_frames(kind, buff):
     data=st.one_of(st.binary(max_size=300), st.just(CAMERA_JPEG_DATA)),
     features=st.integers(0, 2 ** 32 - 1))
 def test_plugin_tasks(nodes, robot, server, fmt, data, features):
-    if not hasattr(test_plugin_tasks, 'handler'):    # one handler, its endpoint started
-        test_plugin_tasks.handler = PluginHandler(1, Orb(None, {}))
+    if not hasattr(test_plugin_tasks, 'handler'):    # one handler, its endpoint and workers
+        work = ServerWork(1, 2, 100)
+        work.start()
+        test_plugin_tasks.handler = PluginHandler(1, Orb(None, {}), work.submit)
         test_plugin_tasks.handler.start()
     handler = test_plugin_tasks.handler
     before = handler.done + handler.rejected
     handler.endpoint.on_task(OrbTask(robot_id=robot, task_id=1, server_id=server,
                                      frame=CompressedImage(format=fmt, data=data),
                                      max_features=min(features, 2000)), False)
-    assert handler.done + handler.rejected == before + (1 if server == 1 else 0)
+    expected = before + (1 if server == 1 else 0)
+    assert wait_until(lambda: handler.done + handler.rejected >= expected, 10.0, period=0.001)
+    assert handler.done + handler.rejected == expected
 
 
 def test_direct_results_go_to_a_bounded_number_of_robots(ros):

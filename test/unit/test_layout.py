@@ -8,7 +8,9 @@ import sys
 import pytest
 
 SRC = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'src', 'server_select')
-MAX_MODULE_LINES = 250
+# Statements, not lines: a module cannot be kept under the limit by packing statements,
+# nor pushed over it by documentation.
+MAX_MODULE_STATEMENTS = 180
 MAX_FUNCTION_LINES = 50
 
 
@@ -40,9 +42,22 @@ def test_ros_free_layers_import_no_rospy(layer):
     assert out.stdout.strip() == '[]', '%s imports rospy: %s' % (layer, out.stdout)
 
 
+def statements(path):
+    with open(path) as stream:
+        tree = ast.parse(stream.read(), path)
+    return sum(1 for node in ast.walk(tree) if isinstance(node, ast.stmt))
+
+
+def test_statements_are_counted():
+    """Two statements on a line are two; a docstring is one, however long."""
+    assert statements(__file__) > 20
+    code = 'def f():\n    """A\n\n    long doc."""\n    a = 1; b = 2\n    return a + b\n'
+    assert sum(1 for n in ast.walk(ast.parse(code)) if isinstance(n, ast.stmt)) == 5
+
+
 def test_modules_are_short():
     long = dict((module_name(p), n) for p in modules()
-                for n in [sum(1 for _ in open(p))] if n > MAX_MODULE_LINES)
+                for n in [statements(p)] if n > MAX_MODULE_STATEMENTS)
     assert long == {}
 
 

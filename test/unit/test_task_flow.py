@@ -20,15 +20,18 @@ class World(object):
         self.clock = Clock()
         self.candidates = list(candidates)
         self.published, self.reports, self.local_runs = [], [], []
-        self.failures, self.successes = [], []
+        self.failures, self.successes, self.budgets = [], [], []
         self.flow = TaskFlow(
-            'sort', timeout, lambda: list(self.candidates), self.make,
-            lambda request, server: self.published.append((request, server)), self.check,
+            'sort', timeout, lambda: list(self.candidates), self.make, self.publish, self.check,
             self.reports.append, run_local=self.run_local,
             on_failure=lambda server, why: self.failures.append(server),
             on_success=self.successes.append,
             deadlines=AttemptClock(timeout, first=first, floor=0.1, min_samples=1),
             ids=ids, clock=self.clock, **kwargs)
+
+    def publish(self, request, server, budget):
+        self.published.append((request, server))
+        self.budgets.append(budget)
 
     def make(self, task_id, stamp):
         return ('request', task_id, stamp), 'context %d' % task_id

@@ -18,9 +18,21 @@ window's statistic) and the current choice, and returns the server to select:
   window's ``peak_ewma`` statistic): a spike or a slowdown shows at the next sample.
 
 A server that leaves the ranking (no good sample in the window) is always left at once.
+
+``spread`` (load-aware fleets): robots that see the same servers decide alike, and a
+server that looks best draws all of them at once, gets loaded, and is left by all of them
+at once (a herd). With ``spread``, a move the policy warrants away from a server that is
+still ranked is taken with probability ``(1 - best / current) / 2`` (the statistics of the
+two), drawn at most once per ``dwell`` s per robot (at least 1 s). Each robot that moves
+both relieves its old server and loads the new one, so that half the relative gap is about
+the share of robots whose moving evens two servers out: of the robots on a server that
+takes twice as long as the best, a quarter move per draw (selfish load balancing,
+Berenbrink et al. 2007, where a random choice of target does the halving). :class:`Chooser`
+keeps the draws.
 """
 
 import math
+import random
 
 from server_select.core.ranking import NO_SERVER
 
@@ -31,7 +43,7 @@ class Policy(object):
     """One policy's rule and parameters (stateless: the caller keeps the current choice
     and when it was made)."""
 
-    def __init__(self, kind='mean', margin=0.0, dwell=0.0, z=0.0, bound=0.05):
+    def __init__(self, kind='mean', margin=0.0, dwell=0.0, z=0.0, bound=0.05, spread=False):
         if kind not in POLICIES:
             raise ValueError('unknown policy %r (expected one of %s)'
                              % (kind, ', '.join(POLICIES)))
@@ -39,6 +51,7 @@ class Policy(object):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ValueError('%s must be a finite number >= 0, got %r' % (name, value))
         self.kind, self.margin, self.dwell, self.z, self.bound = kind, margin, dwell, z, bound
+        self.spread = bool(spread)
 
     def statistic(self, requested='mean'):
         """The window statistic this policy ranks by (``requested`` unless peak_ewma)."""
@@ -74,18 +87,23 @@ class Policy(object):
 
     def describe(self):
         if self.kind == 'hysteresis':
-            return 'hysteresis (margin %.3g ms + %g se, dwell %.3g s)' % (
+            text = 'hysteresis (margin %.3g ms + %g se, dwell %.3g s)' % (
                 self.margin * 1e3, self.z, self.dwell)
-        if self.kind == 'bound':
-            return 'bound (keep while under %.3g ms)' % (self.bound * 1e3)
-        return self.kind + (' (margin %.3g ms)' % (self.margin * 1e3) if self.margin else '')
+        elif self.kind == 'bound':
+            text = 'bound (keep while under %.3g ms)' % (self.bound * 1e3)
+        else:
+            text = self.kind + (' (margin %.3g ms)' % (self.margin * 1e3) if self.margin else '')
+        return text + (', spread' if self.spread else '')
 
 
 class Chooser(object):
-    """A :class:`Policy` with the current choice of one robot and when it was made."""
+    """A :class:`Policy` with the current choice of one robot, when it was made, and (with
+    ``spread``) when the last draw was and the random numbers drawn (``rng``)."""
 
-    def __init__(self, policy):
+    def __init__(self, policy, rng=None):
         self.policy, self.current, self.since = policy, None, None
+        self.drawn = None
+        self.rng = rng or random.Random()
 
     def choose(self, ranking, now, current=None):
         """The server to select now (``current``: what was last published, if the caller
@@ -93,15 +111,27 @@ class Chooser(object):
         if current is not None and current != self.current:
             self.current, self.since = current, None
         selected = self.policy.choose(ranking, self.current, self.since, now)
+        if selected != self.current and self.policy.spread and not self._draw(ranking, now):
+            selected = self.current
         if selected != self.current:
             self.current, self.since = selected, now
         return selected
+
+    def _draw(self, ranking, now):
+        """Whether a warranted move away from a still-ranked server is taken now."""
+        if self.current is None or self.current not in ranking.ranking:
+            return True                     # nothing to keep: no draw
+        if self.drawn is not None and now - self.drawn < max(1.0, self.policy.dwell):
+            return False
+        self.drawn = now
+        here = ranking.means[ranking.ranking.index(self.current)]
+        return here > 0 and self.rng.random() < (1.0 - ranking.means[0] / here) / 2.0
 
 
 def from_params(get):
     """The :class:`Policy` and the window statistic that parameters ask for (``get(name)``
     reads one: ``policy``, ``statistic``, ``hysteresis``, ``dwell``, ``margin_z``,
-    ``latency_bound``)."""
+    ``latency_bound``, ``spread``)."""
     policy = Policy(get('policy'), get('hysteresis'), get('dwell'), get('margin_z'),
-                    get('latency_bound'))
+                    get('latency_bound'), get('spread'))
     return policy, policy.statistic(get('statistic'))

@@ -1,4 +1,5 @@
-"""Processes: waiting for a condition, stopping a process group, CPU and memory use."""
+"""Processes: waiting for a condition, stopping a process group or a set of processes, CPU
+and memory use."""
 
 import os
 import signal
@@ -32,6 +33,36 @@ def stop_group(proc, sig=signal.SIGINT, timeout=15.0):
         return proc.wait()
     except ProcessLookupError:
         return proc.wait()
+
+
+def kill_all(pids, grace=5.0):
+    """SIGTERM, then SIGKILL what is left after ``grace`` seconds."""
+    for pid in pids:
+        try:
+            os.kill(pid, signal.SIGTERM)
+        except ProcessLookupError:
+            pass
+    wait_until(lambda: not any(alive(p) for p in pids), grace)
+    for pid in pids:
+        if alive(pid):
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+
+def alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:  # a zombie child counts as gone
+        with open('/proc/%d/stat' % pid) as stream:
+            return stream.read().split(')')[-1].split()[0] != 'Z'
+    except OSError:
+        return False
 
 
 def measure(pids, duration, clock=time.monotonic, sleep=time.sleep):

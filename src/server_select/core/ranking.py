@@ -2,9 +2,7 @@
 
 import collections
 
-from server_select.msg import SelectionFlag
-
-NO_SERVER = SelectionFlag.NO_SERVER
+from server_select.core.outcome import NO_SERVER  # noqa: F401 (re-exported)
 
 Ranking = collections.namedtuple('Ranking', 'selected ranking means counts excluded errors')
 Ranking.__new__.__defaults__ = (None,)

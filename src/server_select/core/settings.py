@@ -77,6 +77,19 @@ PARAMS = {
     'work_delay': Param(0.0, parse_non_negative, 'each task takes this much longer (s): a '
                         'slower or busier machine; rosparam set changes it at run time'),
     'queue_size': Param(100, parse_positive_int, 'task subscriber queue length'),
+    'workers': Param(0, parse_count, "tasks a server works on at once (0: the host's cores)"),
+    'max_queue': Param(100, parse_positive_int, 'tasks waiting for a worker; more are answered '
+                       'busy'),
+    'load_aware': Param(False, parse_bool, "rank servers by round trip + the server's backlog "
+                        '+ work per task (from its probe answers), give each task its '
+                        'deadline, and let attempt deadlines follow the load'),
+    'max_in_flight': Param(0, parse_count, 'tasks of a stream out at once; a send finding '
+                           'them all out waits for one to end, the newest frame winning '
+                           '(0: no limit)'),
+    'retry_budget': Param(0.1, parse_non_negative, 're-sends and hedges: at most this share '
+                          'of the tasks sent in the last 10 s, plus 5 (0: no limit)'),
+    'spread': Param(False, parse_bool, 'a warranted move away from a ranked server is taken '
+                    'with probability 1 - best/current, drawn once per dwell (no herds)'),
     'max_image_pixels': Param(1 << 24, parse_positive_int, 'larger frames get an error result'),
     'image_topic': Param('', parse_text, 'camera frames from this sensor_msgs/Image or '
                          'CompressedImage topic (newest frame wins)'),
@@ -148,7 +161,9 @@ PROFILES = {
               # the scenario suite's winner (README, "The scenario suite")
               'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
               'window': 1.5, 'probe_rate': 4.0, 'passive': True, 'task_memory': 5.0,
-              'fail_fast': 2, 'hedge': True},
+              'fail_fast': 2, 'hedge': True,
+              # capacity: README, "Capacity and overload"
+              'load_aware': True, 'max_in_flight': 2, 'spread': True},
 }
 
 

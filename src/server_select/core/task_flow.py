@@ -4,7 +4,7 @@ A :class:`TaskFlow` is handed callables for everything outside it (where to send
 make and publish a request, how to check a result, where evidence and reports go, the
 clock), so it is tested without a master. It goes forward only::
 
-    send_next(stamp) -> candidates() -> make(task_id, stamp) -> publish(request, server)
+    send_next(stamp) -> candidates() -> make(task_id, stamp) -> publish(request, server, budget)
     tick()           -> an attempt's deadline passed: on_failure(server), publish to the next
                         candidate; the task's timeout passed: report(Outcome)
     resolve(result)  -> check(result, context) -> on_success(server) -> report(Outcome)
@@ -16,6 +16,10 @@ counted as duplicates. With ``hedge`` (a quantile, e.g. 0.95), a task still unan
 after that quantile of its server's recent round trips is also sent to the next candidate
 without blaming the first ("The Tail at Scale"'s hedged request). Every task yields
 exactly one :class:`Outcome`.
+
+Under overload (README, "Capacity and overload") a *busy* answer blames nobody; extra
+sends are paid from a ``budget``; at most ``max_in_flight`` tasks are out at once, and with
+``newest_wins`` a late task gives way to a newer one that is held back.
 """
 
 import collections
@@ -24,32 +28,8 @@ import threading
 import time
 
 from server_select.core.attempts import AttemptClock
-from server_select.msg import TaskReport
-
-NO_SERVER = TaskReport.NO_SERVER
-LOCAL = TaskReport.LOCAL
-
-Outcome = collections.namedtuple(
-    'Outcome', 'task_id kind stamp server_id answered_by ok error rtt attempts')
-Outcome.__doc__ = """How one task ended, as published on ``task_report``: ``server_id`` is
-the first server it was sent to, ``rtt`` None when no answer arrived."""
-
-# What became of a result that resolves nothing.
-DUPLICATE, LATE, UNKNOWN, FOREIGN, RETRIED = 'duplicate', 'late', 'unknown', 'foreign', 'retried'
-
-
-class _Pending(object):
-    """A task in flight: its request, check context, and the attempts made so far."""
-    __slots__ = ('task_id', 'stamp', 'request', 'context', 'started', 'attempts', 'deadline',
-                 'hedged')
-
-    def __init__(self, task_id, stamp, request, context, started):
-        self.task_id, self.stamp, self.request, self.context = task_id, stamp, request, context
-        self.started, self.attempts, self.deadline = started, [], started
-        self.hedged = False
-
-    def sent_at(self, server):
-        return next((t for s, t in reversed(self.attempts) if s == server), None)
+from server_select.core.outcome import (DUPLICATE, FOREIGN, LATE, LOCAL,  # noqa: F401
+                                        NO_SERVER, RETRIED, UNKNOWN, Outcome, Pending)
 
 
 class TaskFlow(object):
@@ -59,7 +39,8 @@ class TaskFlow(object):
         in the robot, ``[]`` when there is none.
     :param make: ``(task_id, stamp) -> (request, context)``; a ValueError it raises fails
         the task (reported, not sent).
-    :param publish: ``(request, server_id) -> None``.
+    :param publish: ``(request, server_id, budget) -> None``; ``budget``: seconds left of
+        the task's timeout (what the server is told it has).
     :param check: ``(result, context) -> error string or None`` for a result reported ok.
     :param report: ``(Outcome) -> None``, called once per task.
     :param run_local: ``(task_id, stamp) -> error or None``: the work done in the robot.
@@ -71,12 +52,17 @@ class TaskFlow(object):
     :param ids: iterator of task ids (shared by the robot's streams: ids are per robot).
     :param hedge: None, or the quantile of a server's round trips after which an
         unanswered task is also sent to the next candidate.
+    :param budget: a :class:`~server_select.core.budget.RetryBudget` (None: no limit).
+    :param max_in_flight: at most this many tasks out at once (0: no limit); a send that
+        finds them all out is held back (no task is made) until one ends (:meth:`due`).
+    :param newest_wins: a task whose attempt deadline passes, or that is refused as busy,
+        while a newer one is held back ends there instead of going elsewhere.
     """
 
     def __init__(self, kind, timeout, candidates, make, publish, check, report, run_local=None,
                  on_failure=None, on_success=None, deadlines=None, ids=None,
                  clock=time.monotonic, remember=2000, keep_rtts=2000, hedge=None,
-                 on_answer=None):
+                 on_answer=None, budget=None, max_in_flight=0, newest_wins=False):
         if not timeout > 0:
             raise ValueError('timeout must be positive, got %r' % (timeout,))
         self.kind, self.timeout = kind, float(timeout)
@@ -93,7 +79,10 @@ class TaskFlow(object):
         self._ended = collections.OrderedDict()       # task id -> answered (bool)
         self._remember = remember
         self.hedge = hedge
+        self.budget, self.max_in_flight, self.newest_wins = budget, max_in_flight, newest_wins
+        self._held = False            # a send was held back by max_in_flight
         self.sent = self.ok = self.failed = self.resent = self.switches = self.hedged = 0
+        self.busy = self.skipped = self.superseded = self.unfunded = 0
         self._last_first = None
         self.ignored = collections.Counter()          # DUPLICATE / LATE / UNKNOWN / FOREIGN
         self.rtts = collections.deque(maxlen=keep_rtts)   # recent answered round trips
@@ -106,12 +95,25 @@ class TaskFlow(object):
         with self._lock:
             return len(self._pending)
 
+    def due(self):
+        """Whether a send was held back and may go now (a task has ended since)."""
+        with self._lock:
+            return self._held and len(self._pending) < self.max_in_flight
+
     def send_next(self, stamp):
-        """Make one task now and send it to the first candidate; returns its id."""
+        """Make one task now and send it to the first candidate; returns its id, or None
+        when ``max_in_flight`` tasks are out (the send is held back until one ends)."""
+        with self._lock:
+            if self.max_in_flight and len(self._pending) >= self.max_in_flight:
+                if not self._held:
+                    self._held = True
+                else:
+                    self.skipped += 1     # a newer send replaces the one held back
+                return None
+            self._held = False
+            self.sent += 1
         task_id = next(self._ids)
         candidates = self._candidates()
-        with self._lock:
-            self.sent += 1
         if not candidates:
             return self._end(Outcome(task_id, self.kind, stamp, NO_SERVER, NO_SERVER, False,
                                      'no server selected', None, 0)).task_id
@@ -126,12 +128,14 @@ class TaskFlow(object):
             return self._end(Outcome(task_id, self.kind, stamp, NO_SERVER, NO_SERVER, False,
                                      'cannot make the task: %s' % error, None, 0)).task_id
         with self._lock:
-            pending = self._pending[task_id] = _Pending(task_id, stamp, request, context,
-                                                        self._clock())
+            pending = self._pending[task_id] = Pending(task_id, stamp, request, context,
+                                                       self._clock())
             if candidates[0] != self._last_first and self._last_first is not None:
                 self.switches += 1
             self._last_first = candidates[0]
             self._attempt(pending, candidates[0])
+        if self.budget is not None:
+            self.budget.sent()
         return task_id
 
     def _attempt(self, pending, server):
@@ -139,7 +143,7 @@ class TaskFlow(object):
         pending.attempts.append((server, now))
         pending.deadline = min(pending.started + self.timeout,
                                now + self.deadlines.seconds(server))
-        self._publish(pending.request, server)
+        self._publish(pending.request, server, pending.started + self.timeout - now)
 
     def _next(self, pending, hedge=False):
         """Send ``pending`` to the next candidate it has not tried (a re-send, or a
@@ -148,6 +152,9 @@ class TaskFlow(object):
         untried = [s for s in self._candidates() if s not in tried and s != LOCAL]
         if not untried:
             return False
+        if self.budget is not None and not self.budget.spend():
+            self.unfunded += 1
+            return False
         if hedge:
             self.hedged += 1
         else:
@@ -155,10 +162,11 @@ class TaskFlow(object):
         self._attempt(pending, untried[0])
         return True
 
-    def resolve(self, task_id, answered_by, ok, error='', result=None):
+    def resolve(self, task_id, answered_by, ok, error='', result=None, busy=False):
         """An answer for ``task_id`` from ``answered_by``: its Outcome, RETRIED (an error
-        answer, the task went to the next candidate), or DUPLICATE / LATE / UNKNOWN /
-        FOREIGN (ignored: not from a server the task was sent to)."""
+        or ``busy`` answer, the task went to the next candidate), or DUPLICATE / LATE /
+        UNKNOWN / FOREIGN (ignored: not from a server the task was sent to). A ``busy``
+        answer blames nobody."""
         now = self._clock()
         with self._lock:
             pending = self._pending.get(task_id)
@@ -179,17 +187,22 @@ class TaskFlow(object):
                 self.deadlines.add(answered_by, now - sent_at)
                 answer_rtt = now - sent_at
             else:
-                self._on_failure(answered_by, error)
-                if self._next(pending):
+                self.busy += busy
+                if busy:
+                    error = 'server %d busy (%s)' % (answered_by, error)
+                else:
+                    self._on_failure(answered_by, error)
+                if busy and self._gives_way():
+                    error += '; a newer task waits'
+                elif self._next(pending):
                     return RETRIED
                 del self._pending[task_id]
         if ok:
             self._on_success(answered_by)
             if len(pending.attempts) == 1:    # the winner of a race is no fair sample
                 self._on_answer(answered_by, answer_rtt)
-        return self._end(Outcome(task_id, self.kind, pending.stamp, pending.attempts[0][0],
-                                 answered_by, ok, error, now - pending.started,
-                                 len(pending.attempts)))
+        return self._end(pending.outcome(self.kind, answered_by, ok, error,
+                                         now - pending.started))
 
     def tick(self):
         """Act on passed deadlines: re-send, or report tasks out of time. Returns the
@@ -200,20 +213,28 @@ class TaskFlow(object):
             for pending in list(self._pending.values()):
                 if now - pending.started >= self.timeout:
                     del self._pending[pending.task_id]
-                    ended.append(pending)
+                    ended.append((pending, 'no result within task_timeout %.3g s'
+                                  % self.timeout))
                 elif now >= pending.deadline:
                     server = pending.attempts[-1][0]
                     self._on_failure(server, 'no answer within %.3g s'
                                      % (now - pending.attempts[-1][1]))
-                    if not self._next(pending):   # nobody left: wait for any late answer
+                    if self._gives_way():     # not worth sending again
+                        del self._pending[pending.task_id]
+                        ended.append((pending, 'no result within its attempt deadline and '
+                                      'a newer task waits'))
+                    elif not self._next(pending):   # nobody left: wait for any late answer
                         pending.deadline = pending.started + self.timeout
                 elif self.hedge is not None and not pending.hedged:
                     self._hedge(pending, now)
-        return [self._end(Outcome(
-            p.task_id, self.kind, p.stamp, p.attempts[0][0], NO_SERVER, False,
-            'no result within task_timeout %.3g s (%d attempts: servers %s)'
-            % (self.timeout, len(p.attempts), ', '.join(str(s) for s, _ in p.attempts)),
-            None, len(p.attempts))) for p in ended]
+        return [self._end(p.outcome(self.kind, NO_SERVER, False, '%s (%d attempts: servers %s)'
+                                    % (why, len(p.attempts), p.servers()), None))
+                for p, why in ended]
+
+    def _gives_way(self):
+        """Whether a newer task, held back, takes a late one's place (counted)."""
+        self.superseded += self.newest_wins and self._held
+        return self.newest_wins and self._held
 
     def _hedge(self, pending, now):
         """A copy to the next candidate once the first attempt is past its server's

@@ -159,19 +159,23 @@ class ManagerNode(object):
             return      # a robot of another group: not ours to rank
         count = len(batch.server_id)
         why = self.refuse(batch, robot)
-        if why is None and not len(batch.ok) == len(batch.rtt) == count:
-            why = 'arrays of %d servers, %d ok, %d rtt' % (count, len(batch.ok), len(batch.rtt))
+        waits = batch.wait or [0.0] * count     # load-aware robots: rank by rtt + wait
+        if why is None and not len(batch.ok) == len(batch.rtt) == len(waits) == count:
+            why = 'arrays of %d servers, %d ok, %d rtt, %d wait' % (
+                count, len(batch.ok), len(batch.rtt), len(batch.wait))
         if why:
             self.warn(topic, batch, why)
             return
         now = rospy.get_time()
         changed = False
-        for server, ok, rtt in zip(batch.server_id, batch.ok, batch.rtt):
+        for server, ok, rtt, wait in zip(batch.server_id, batch.ok, batch.rtt, waits):
             why = self.rankings.admits(robot, server)
             if why is not None and self.group is not None:
                 continue    # another group's representative: probed for the top manager
-            if why is None and ok and not valid_rtt(rtt):
-                why = 'round trip %r of server %d is not %s' % (rtt, server, RTT_RANGE)
+            if why is None and ok and not (valid_rtt(rtt) and valid_rtt(wait)):
+                why = 'round trip %r + wait %r of server %d is not %s' % (
+                    rtt, wait, server, RTT_RANGE)
+            rtt += wait
             if why:
                 self.warn(topic, batch, why)
             elif self.rankings.add(robot, server, now, ok, rtt,

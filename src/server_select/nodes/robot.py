@@ -8,6 +8,7 @@ import rospy
 
 from server_select.core import names
 from server_select.core.attempts import AttemptClock
+from server_select.core.budget import RetryBudget
 from server_select.core.health import ServerHealth
 from server_select.core.params import ParamError, parse_fixed_server
 from server_select.core.policy import from_params
@@ -16,13 +17,13 @@ from server_select.core.task_flow import LOCAL, NO_SERVER
 from server_select.msg import SelectionFlag
 from server_select.ros.camera import TopicSource
 from server_select.ros.graph import ServiceProviders, publisher_of
+from server_select.ros.load import RobotLoad
 from server_select.ros.node import fleet, param, run
-from server_select.ros.plugins import load as load_plugin
 from server_select.ros.passive import TaskSamples
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
 from server_select.ros.prober import Prober
 from server_select.ros.routing import ROUTES
-from server_select.ros.task_kinds import SortKind, image_kind
+from server_select.ros.task_kinds import ImageKind, stream_kinds
 from server_select.ros.task_stream import TaskStream
 
 
@@ -44,7 +45,8 @@ class RobotNode(object):
           streams' (``~sort_tasks``, ``~task_rate``, ``~image_source`` or
           ``~image_topic``, ``~frame_rate``, ``~task_plugins``, ...), failover and health
           (``~retry_factor``, ...), policy (``~policy``, ...), ``~passive``,
-          ``~manager_node`` or, grouped, ``~group_manager_node``; ``~start_delay``
+          ``~manager_node`` or, grouped, ``~group_manager_node``; ``~start_delay``;
+          capacity (``~load_aware``, ``~max_in_flight``, ``~retry_budget``, ``~spread``)
     :ROS Publishers:
         - ``latency_R<robot_id>S<s>`` or ``latency_samples`` (fleet); ``task_samples``
         - ``data``, ``task_image``, or per server ``server_<s>/data``, ... (fleet)
@@ -66,30 +68,23 @@ class RobotNode(object):
             raise ParamError('~servers: expected a non-empty list of ids (an empty one needs '
                              '~discover, and a mode other than fixed)')
         self.selection = self._selection(servers, mode)
-        self.passive = TaskSamples(self.robot_id, self.selection) \
+        kinds = stream_kinds(self.robot_id, mode, param)
+        image = next((k for k, _ in kinds if isinstance(k, ImageKind)), None)
+        self.search = image.search if image else None
+        self.camera = image.source if image and isinstance(image.source, TopicSource) else None
+        self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds)) \
+            if param('load_aware') and mode == 'select' else None
+        self.passive = TaskSamples(self.robot_id, self.selection, self.load is None) \
             if self.selection.passive else None
         self.prober = Prober(self.robot_id, servers, param('probe_rate'), param('probe_timeout'),
-                             on_sample=self.on_sample, stream=param('sample_stream'))
+                             on_sample=self.on_sample, stream=param('sample_stream'),
+                             load_of=self.load.on_answer if self.load else None)
         self.start_delay = param('start_delay')
         self.summary_period = param('summary_period')
         manager = param('manager_node')   # None: flags from any node
         self.manager_node = rospy.resolve_name(manager) if manager else None
         self.providers = ServiceProviders(rospy.get_name())
-        self.search = self.camera = None
-        kinds = self._kinds(mode)
-        flow_args = dict(timeout=param('task_timeout'), candidates=self.selection.candidates,
-                         on_failure=self.on_failure, on_success=self.health.task_ok,
-                         ids=itertools.count(1),    # task ids are per robot, across streams
-                         hedge=param('hedge_quantile') if param('hedge') else None)
-        retry = dict(factor=param('retry_factor'), floor=param('retry_floor'))
-        self.streams = [
-            TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready,
-                       dict(flow_args, deadlines=AttemptClock(flow_args['timeout'], **retry),
-                            on_answer=functools.partial(self.passive.on_answer, kind.kind)
-                            if self.passive else None),
-                       local=mode == 'local', expected_publisher=self.server_node,
-                       route=ROUTES[param('routing')])
-            for kind, rate in kinds]
+        self.streams = [self._stream(kind, rate, mode) for kind, rate in kinds]
         top = param('top_manager_node')     # grouped: servers and manager from its table
         self.announcements = GroupFollower(self.robot_id, servers, top, self.on_servers,
                                            self.on_group) if top else ServerAnnouncements(
@@ -107,28 +102,26 @@ class RobotNode(object):
                              % (eject_time, eject_max))
         self.health = ServerHealth(servers, eject_time, eject_max, param('probation_probes'))
         policy, statistic = from_params(param)
+        self.budget, self._task_ids = RetryBudget(param('retry_budget')), itertools.count(1)
         return Selection(self.robot_id, servers, mode, fixed, self.health, param('window'),
                          policy, param('manager_timeout'), statistic=statistic,
                          tau=param('ewma_tau'), passive=param('passive') and mode == 'select',
                          task_memory=param('task_memory'))
 
-    def _kinds(self, mode):
-        """(task kind, rate) of each stream the parameters ask for."""
-        kinds = []
-        if param('sort_tasks'):
-            kinds.append((SortKind(self.robot_id, param('task_size'),
-                                   param('seed', default=self.robot_id)), param('task_rate')))
-        if param('image_source') or param('image_topic'):
-            kind = image_kind(self.robot_id, mode, param)
-            self.search = kind.search
-            self.camera = kind.source if isinstance(kind.source, TopicSource) else None
-            kinds.append((kind, param('frame_rate')))
-        kinds += [(plugin, plugin.rate) for plugin in
-                  (load_plugin(spec, self.robot_id) for spec in param('task_plugins'))]
-        if not kinds:
-            raise ParamError('~sort_tasks is false, and neither ~image_source, ~image_topic '
-                             'nor ~task_plugins is set: no tasks to send')
-        return kinds
+    def _stream(self, kind, rate, mode):
+        timeout = param('task_timeout')
+        return TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready, dict(
+            timeout=timeout, candidates=self.selection.candidates, on_failure=self.on_failure,
+            on_success=self.health.task_ok, ids=self._task_ids,  # per robot, across streams
+            hedge=param('hedge_quantile') if param('hedge') else None, budget=self.budget,
+            max_in_flight=param('max_in_flight'),
+            newest_wins=getattr(kind, 'newest_wins', False),
+            deadlines=AttemptClock(timeout, factor=param('retry_factor'),
+                                   floor=param('retry_floor'), expected=self.load.expected(
+                                       kind.kind) if self.load else None),
+            on_answer=functools.partial(self.passive.on_answer, kind.kind)
+            if self.passive else None), local=mode == 'local',
+            expected_publisher=self.server_node, route=ROUTES[param('routing')], load=self.load)
 
     def start(self):
         self._start_after = time.monotonic() + self.start_delay
@@ -167,9 +160,9 @@ class RobotNode(object):
 
     # -- evidence ----------------------------------------------------------------------------
 
-    def on_sample(self, server, ok, rtt, error):
-        try:
-            self.selection.on_sample(server, ok, rtt)
+    def on_sample(self, server, ok, rtt, error, wait=None):
+        try:   # load-aware: the expected completion, round trip + wait
+            self.selection.on_sample(server, ok, rtt + wait if ok and wait else rtt)
         except ValueError as err:
             rospy.logwarn_throttle(5.0, 'robot %d: own probe of server %d: %s'
                                    % (self.robot_id, server, err))
@@ -186,6 +179,8 @@ class RobotNode(object):
         for server in removed:
             self.prober.remove(server)
             self.selection.remove_server(server)
+            if self.load is not None:
+                self.load.forget(server)
         for stream in self.streams:
             for server in added:
                 stream.add_server(server)

@@ -1,6 +1,8 @@
 """Compute server: answers latency probes, and the sort and image tasks addressed to it."""
 
 import concurrent.futures
+import os
+import queue
 import threading
 import time
 
@@ -15,6 +17,7 @@ from server_select.msg import Detection, Detections, ImageResult, SortResult
 from server_select.ros.node import fleet, param, run
 from server_select.ros.plugins import PluginHandler, load as load_plugin
 from server_select.ros.routing import ServerEndpoint
+from server_select.ros.server_work import ServerWork
 from server_select.ros.task_kinds import ImageKind, SortKind
 from server_select.srv import LatencyProbe, LatencyProbeResponse
 from server_select.vision import image_codec
@@ -40,11 +43,20 @@ class ServerNode(object):
     (JPEG, PNG) are accepted, anything else gets an error result; a compressed task gets
     its annotated frame back as JPEG.
 
+    Every task addressed here, of every kind, waits in one bounded queue for one of
+    ``~workers`` workers. A task whose robot gave it a deadline (``budget``) that the
+    queue's backlog says cannot be met is answered *busy* at once; one whose deadline
+    passes while it waits is answered busy when a worker takes it (stale work is shed, not
+    done). Every probe answer carries the load: tasks queued and in service, the backlog
+    in seconds, and the recent work per task of each kind.
+
     :ROS Parameters:
         - ``~server_id`` (int, required): this server's id.
         - ``~profile`` (``paper``), ``~routing`` (``broadcast``; fleet: ``direct``)
         - ``~max_task_len`` (int, 1000000): larger sort tasks get an error result.
         - ``~queue_size`` (int, 100): task subscriber queues.
+        - ``~workers`` (int, 0: the host's cores): tasks worked on at once.
+        - ``~max_queue`` (int, 100): tasks waiting for a worker; more are answered busy.
         - ``~detector`` (str, ``haar``): ``haar`` or ``hog``.
         - ``~cascade`` (str, ``haarcascade_frontalface_default.xml``)
         - ``~scale_factor`` (1.2), ``~min_neighbors`` (5), ``~min_size`` (24 px): cascade settings.
@@ -70,16 +82,24 @@ class ServerNode(object):
         self.max_image_pixels = param('max_image_pixels')
         self.jpeg_quality = param('jpeg_quality')
         self.work_delay = param('work_delay')
+        workers = param('workers') or len(os.sched_getaffinity(0))
+        self.work = ServerWork(self.server_id, workers, param('max_queue'))
+        # one detector a worker: a detector searches one frame at a time
+        self.detectors = queue.Queue()
         try:
-            self.detector = make_detector(param)
+            for _ in range(workers):
+                self.detectors.put(make_detector(param))
         except DetectorError as error:
             raise ParamError('~detector/~cascade: %s' % error)
         self.direct = direct = param('routing') == 'direct'
         self._known_robots = set()
         self._pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='routes')
-        self.plugins = [PluginHandler(self.server_id, load_plugin(spec, None), self.queue_size,
-                                      direct) for spec in param('task_plugins')]
-        self.endpoints = [ServerEndpoint(self.server_id, kind, handle, direct, self.queue_size)
+        submit = self.work.submit
+        self.plugins = [PluginHandler(self.server_id, load_plugin(spec, None), submit,
+                                      self.queue_size, direct)
+                        for spec in param('task_plugins')]
+        self.endpoints = [ServerEndpoint(self.server_id, kind, handle, direct, submit,
+                                         self.queue_size)
                           for kind, handle in ((SortKind, self.on_sort_task),
                                                (ImageKind, self.on_image_task))]
         self._lock = threading.Lock()
@@ -93,6 +113,7 @@ class ServerNode(object):
             endpoint.start()
         for plugin in self.plugins:
             plugin.start()
+        self.work.start()
         # Advertised last: a robot that can probe us finds our task topics wired already.
         self.probe_srv = rospy.Service(
             fleet(names.probe_service(self.server_id)), LatencyProbe, self.on_probe)
@@ -122,17 +143,19 @@ class ServerNode(object):
         if self.direct and req.robot_id not in self._known_robots:
             self._known_robots.add(req.robot_id)   # its result publishers, off this path
             self._pool.submit(self._prepare, req.robot_id)
+        load = self.work.load()
         return LatencyProbeResponse(
-            server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now())
+            server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),
+            queued=load.queued, in_service=load.in_service, workers=load.workers,
+            backlog=load.backlog, kinds=list(load.service),
+            service_time=list(load.service.values()))
 
     def _prepare(self, robot):
         for endpoint in self.endpoints + [p.endpoint for p in self.plugins]:
             endpoint.prepare(robot)
 
     def on_sort_task(self, task):
-        """The result of a sort task addressed here (None: addressed elsewhere)."""
-        if task.server_id != self.server_id:
-            return None
+        """The result of a sort task."""
         result = SortResult(header=task.header, robot_id=task.robot_id, task_id=task.task_id,
                             server_id=self.server_id, data=EMPTY)
         start = time.perf_counter()
@@ -147,17 +170,13 @@ class ServerNode(object):
         return result
 
     def on_image_task(self, task):
-        """The result of a frame addressed here (None: addressed elsewhere)."""
-        if task.server_id != self.server_id:
-            return None
+        """The result of a frame."""
         result = ImageResult(header=task.header, robot_id=task.robot_id, task_id=task.task_id,
                              server_id=self.server_id)
         start = time.perf_counter()
         img, packed = task.image, task.compressed
         try:
-            boxes, annotated = search_frame(
-                self.detector, (img.encoding, img.height, img.width, img.step, img.data),
-                (packed.format, packed.data), self.max_image_pixels)
+            boxes, annotated = self._search(img, packed)
         except image_codec.ImageError as error:
             self._reject(result, 'frame', task, error)
         else:
@@ -175,6 +194,17 @@ class ServerNode(object):
         result.process_time = time.perf_counter() - start
         self._count(result.ok)
         return result
+
+    def _search(self, img, packed):
+        """Boxes and annotated frame of a task's raw (``img``) or ``packed`` frame, with a
+        detector of this worker's own."""
+        detector = self.detectors.get()
+        try:
+            return search_frame(detector, (img.encoding, img.height, img.width, img.step,
+                                           img.data), (packed.format, packed.data),
+                                self.max_image_pixels)
+        finally:
+            self.detectors.put(detector)
 
     def _annotated(self, result, frame, raw_header, compressed_header):
         """The annotated frame into ``result``: raw for a raw task (``raw_header``), JPEG
@@ -203,8 +233,9 @@ class ServerNode(object):
     def on_shutdown(self):
         self.work_timer.shutdown()
         self._pool.shutdown(wait=False)
-        rospy.loginfo('server %d: %d tasks done, %d rejected%s', self.server_id,
-                      self.tasks_done, self.tasks_failed,
+        self.work.shutdown()
+        rospy.loginfo('server %d: %d tasks done, %d rejected; %s%s', self.server_id,
+                      self.tasks_done, self.tasks_failed, self.work.summary(),
                       ''.join('; %s: %d done, %d rejected' % (p.plugin.kind, p.done, p.rejected)
                               for p in self.plugins))
 

@@ -14,11 +14,15 @@ from server_select.ros.node import fleet
 class TaskSamples(object):
     """Turns answered tasks into samples (:mod:`server_select.core.passive`) for a
     :class:`~server_select.core.selection.Selection` and publishes each on
-    ``task_samples`` (one LatencySamples per answered task)."""
+    ``task_samples`` (one LatencySamples per answered task).
 
-    def __init__(self, robot_id, selection):
+    With ``baseline`` a task's round trip enters less its kind's baseline (probes then
+    measure the network only); without (a load-aware robot, whose probe samples are round
+    trip + the server's wait), as it is: both then estimate a task's completion."""
+
+    def __init__(self, robot_id, selection, baseline=True):
         self.robot_id, self.selection = robot_id, selection
-        self.baseline, self._lock = TaskBaseline(), threading.Lock()
+        self.baseline, self._lock = TaskBaseline() if baseline else None, threading.Lock()
         self.pub = rospy.Publisher(fleet(names.TASK_SAMPLES_TOPIC), LatencySamples,
                                    queue_size=100, tcp_nodelay=True)
         self.count = 0
@@ -26,8 +30,8 @@ class TaskSamples(object):
     def on_answer(self, kind, server, rtt):
         """A task of ``kind`` answered by ``server`` after ``rtt`` s (a TaskFlow hook)."""
         with self._lock:
-            sample = self.baseline.sample(kind, server, rtt,
-                                          self.selection.probe_latency(server))
+            sample = rtt if self.baseline is None else self.baseline.sample(
+                kind, server, rtt, self.selection.probe_latency(server))
             if sample is not None:
                 self.count += 1
         if sample is None:

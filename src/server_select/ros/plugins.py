@@ -20,8 +20,9 @@ from server_select.ros.routing import ServerEndpoint
 
 class TaskPlugin(object):
     """What a task type provides. The request message has ``header``, ``robot_id``,
-    ``task_id`` and ``server_id``; the result message copies them and adds ``ok``,
-    ``error`` and ``process_time``; the rest is the plug-in's.
+    ``task_id`` and ``server_id`` (and ``float64 budget``, for servers to refuse what
+    they cannot do in time); the result message copies them and adds ``ok``, ``error``
+    and ``process_time`` (and ``bool busy``); the rest is the plug-in's.
 
     Robot side (``robot_id`` is an int): ``make``, ``check``, ``run_local``, ``rate``, and
     optionally ``ready()`` (False: no input for a task yet; none is made). Server side
@@ -29,6 +30,9 @@ class TaskPlugin(object):
     """
 
     kind = None                          # the name in task reports and of the settings
+    # True: only the newest task is worth anything (a camera frame): a late one is not
+    # sent again while a newer one waits
+    newest_wins = False
     task_type = result_type = None       # the message classes
     task_topic = result_topic = None     # fleet-level topic names
 
@@ -76,12 +80,14 @@ def load(spec, robot_id, name='~task_plugins'):
 
 
 class PluginHandler(object):
-    """A server's side of one plug-in task type: the tasks addressed to this server, each
-    answered once (an error result when the plug-in rejects it)."""
+    """A server's side of one plug-in task type: ``on_task`` makes the result of a task
+    addressed here (an error result when the plug-in rejects it); the endpoint hands its
+    tasks to ``submit`` (the server's workers)."""
 
-    def __init__(self, server_id, plugin, queue_size=100, direct=False):
+    def __init__(self, server_id, plugin, submit, queue_size=100, direct=False):
         self.server_id, self.plugin = server_id, plugin
-        self.endpoint = ServerEndpoint(server_id, plugin, self.on_task, direct, queue_size)
+        self.endpoint = ServerEndpoint(server_id, plugin, self.on_task, direct, submit,
+                                       queue_size)
         self._lock = threading.Lock()
         self.done = self.rejected = 0
 
@@ -89,9 +95,7 @@ class PluginHandler(object):
         self.endpoint.start()
 
     def on_task(self, task):
-        """The result of a task addressed here (None: addressed elsewhere)."""
-        if task.server_id != self.server_id:
-            return None
+        """The result of ``task``."""
         result = self.plugin.result_type(header=task.header, robot_id=task.robot_id,
                                          task_id=task.task_id, server_id=self.server_id)
         start = time.perf_counter()

@@ -22,10 +22,10 @@ class _Round(object):
         self.samples = []
         self.lock = threading.Lock()
 
-    def record(self, server, ok, rtt):
+    def record(self, server, ok, rtt, wait):
         """Add a sample; True when it completes the round."""
         with self.lock:
-            self.samples.append((server, ok, rtt if ok else 0.0))
+            self.samples.append((server, ok, rtt if ok else 0.0, wait or 0.0))
             self.waiting.discard(server)
             return not self.waiting
 
@@ -39,16 +39,21 @@ class Prober(object):
     ``latency_R<r>S<s>`` (the paper); ``robot`` publishes one ``latency_samples`` batch per
     round, when its last probe has ended. Servers can be added and removed at run time.
     ``answered`` is the set of servers that have answered at least once;
-    ``on_sample(server, ok, rtt, error)`` hears every sample.
+    ``on_sample(server, ok, rtt, error, wait)`` hears every sample. With ``load_of``, each
+    answer's load goes to ``load_of(server, response)``, which returns the *wait* at that
+    server (s, what a task of this robot would wait for there; None: unknown), carried in
+    the sample and in the batch's ``wait`` (a load-aware robot ranks by rtt + wait).
     """
 
-    def __init__(self, robot_id, servers, rate, timeout, on_sample=None, stream='pair'):
+    def __init__(self, robot_id, servers, rate, timeout, on_sample=None, stream='pair',
+                 load_of=None):
         self.robot_id = robot_id
         self.rate = rate
         self.timeout = timeout
         self.stream = stream
         self.answered = set()
-        self.on_sample = on_sample or (lambda server, ok, rtt, error: None)
+        self.on_sample = on_sample or (lambda server, ok, rtt, error, wait: None)
+        self.load_of = load_of
         self._seq = itertools.count(1)
         self._rounds = itertools.count(1)
         self._lock = threading.Lock()
@@ -126,9 +131,10 @@ class Prober(object):
                           % (response.server_id, response.seq), batch)
             return
         self.answered.add(server)
-        self._publish(server, seq, stamp, rtt, '', batch)
+        wait = self.load_of(server, response) if self.load_of is not None else None
+        self._publish(server, seq, stamp, rtt, '', batch, wait)
 
-    def _publish(self, server, seq, stamp, rtt, error, batch):
+    def _publish(self, server, seq, stamp, rtt, error, batch, wait=None):
         if error:
             rospy.logdebug('robot %d: probe of server %d failed: %s', self.robot_id, server, error)
         pub = self._pubs.get(server)
@@ -137,14 +143,15 @@ class Prober(object):
                                    ok=rtt is not None, rtt=rtt or 0.0, error=error)
             sample.header.stamp = stamp
             pub.publish(sample)
-        self.on_sample(server, not error, rtt, error)
-        if batch is not None and batch.record(server, not error, rtt):
+        self.on_sample(server, not error, rtt, error, wait)
+        if batch is not None and batch.record(server, not error, rtt, wait):
             self._publish_round(batch)
 
     def _publish_round(self, batch):
-        servers, oks, rtts = zip(*sorted(batch.samples)) if batch.samples else ((), (), ())
+        servers, oks, rtts, waits = zip(*sorted(batch.samples)) if batch.samples \
+            else ((), (), (), ())
         msg = LatencySamples(robot_id=self.robot_id, round=batch.number, server_id=servers,
-                             ok=oks, rtt=rtts)
+                             ok=oks, rtt=rtts, wait=waits if self.load_of is not None else ())
         msg.header.stamp = batch.stamp
         self._batch_pub.publish(msg)
 

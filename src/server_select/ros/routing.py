@@ -152,14 +152,19 @@ class ResultRoutes(object):
 
 class ServerEndpoint(object):
     """Server side of one task kind: tasks from the broadcast topic and, with ``direct``,
-    from this server's own topic too; each result goes back the way its task came.
-    ``handle(task)`` returns the result, or None for a task addressed to another server."""
+    from this server's own topic too. A task addressed to this server goes to
+    ``submit(endpoint, task, direct)`` (the server's workers), which calls ``handle(task)``
+    for its result and :meth:`reply` with it; each result goes back the way its task came.
+    Tasks addressed to another server are dropped here."""
 
-    def __init__(self, server_id, kind, handle, direct, queue_size=100):
+    def __init__(self, server_id, kind, handle, direct, submit, queue_size=100):
         self.server_id, self.kind, self.handle = server_id, kind, handle
+        self.kind_name = kind_name(kind)
+        self.submit = submit
         self.direct = ResultRoutes(kind.result_topic, kind.result_type) if direct else None
         self.queue_size = queue_size
         self.pub, self.subs = None, []
+        self._busy_field = 'busy' in getattr(kind.result_type, '__slots__', ())
 
     def start(self):
         kind, queue = self.kind, self.queue_size
@@ -177,14 +182,26 @@ class ServerEndpoint(object):
             self.direct.prepare(robot)
 
     def on_task(self, task, direct):
-        result = self.handle(task)
-        if result is None:
-            return
+        if task.server_id == self.server_id:
+            self.submit(self, task, direct)
+
+    def error_result(self, task, why, busy=False):
+        """A not-ok result for ``task`` saying ``why`` (``busy``: could not be done in time;
+        a result type without the field says so in ``why`` alone)."""
+        result = self.kind.result_type(header=task.header, robot_id=task.robot_id,
+                                       task_id=task.task_id, server_id=self.server_id,
+                                       ok=False, error=why)
+        if busy and self._busy_field:
+            result.busy = True
+        return result
+
+    def reply(self, task, direct, result):
+        """Send ``result`` back the way ``task`` came."""
         if direct:
             if not self.direct.publish(task.robot_id, result):
                 rospy.logwarn_throttle(5.0, 'server %d: no answer to %s task %d of robot %d '
                                        '(published by %s): already %d robots have result '
-                                       'topics here' % (self.server_id, kind_name(self.kind),
+                                       'topics here' % (self.server_id, self.kind_name,
                                                         task.task_id, task.robot_id,
                                                         publisher_of(task), self.direct.most))
         else:

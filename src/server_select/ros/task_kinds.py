@@ -17,6 +17,7 @@ from server_select.core.params import ParamError
 from server_select.core.sort_task import check_sorted, fingerprint, make_values, sort_values
 from server_select.msg import ImageResult, ImageTask, SortResult, SortTask
 from server_select.ros.camera import TopicSource
+from server_select.ros.plugins import load as load_plugin
 from server_select.ros.search import SearchParticipant
 from server_select.vision import image_codec
 from server_select.vision.detection import DetectorError, make_detector, search_frame
@@ -54,6 +55,7 @@ class ImageKind(object):
     """Camera frames from a source; where each was taken goes to the search (if any)."""
 
     kind = 'image'
+    newest_wins = True        # a frame nobody waits for any more is worth nothing
     task_topic, task_type = names.IMAGE_TASK_TOPIC, ImageTask
     result_topic, result_type = names.IMAGE_RESULT_TOPIC, ImageResult
 
@@ -133,3 +135,20 @@ def image_kind(robot_id, mode, param):
     return ImageKind(robot_id, source, param('image_encoding'), search, detector,
                      param('max_image_pixels'), param('image_transport'), param('jpeg_quality'),
                      param('sweep_start'))
+
+
+def stream_kinds(robot_id, mode, param):
+    """``[(task kind, rate)]`` of each stream the parameters ask for (``param(name)`` reads
+    one); ParamError when they ask for none or are wrong."""
+    kinds = []
+    if param('sort_tasks'):
+        kinds.append((SortKind(robot_id, param('task_size'), param('seed', default=robot_id)),
+                      param('task_rate')))
+    if param('image_source') or param('image_topic'):
+        kinds.append((image_kind(robot_id, mode, param), param('frame_rate')))
+    kinds += [(plugin, plugin.rate) for plugin in
+              (load_plugin(spec, robot_id) for spec in param('task_plugins'))]
+    if not kinds:
+        raise ParamError('~sort_tasks is false, and neither ~image_source, ~image_topic '
+                         'nor ~task_plugins is set: no tasks to send')
+    return kinds

@@ -25,12 +25,16 @@ class TaskStream(object):
     task and result topics are connected; then it sends a task every ``1/rate`` s (at most
     ``limit``, 0: no limit) and publishes one ``task_report`` per task. A result counts
     only if the node ``expected_publisher(server, refresh=False)`` names published it.
+    With ``load`` (a :class:`~server_select.ros.load.RobotLoad`: load-aware), each attempt
+    tells its server the seconds its robot still waits (``budget``), and the load board
+    hears where tasks went. A send that ``max_in_flight`` held back goes at the next tick
+    (every 20 ms) after a task ended.
     """
 
     def __init__(self, robot_id, kind, rate, limit, ready, flow_args, local=False,
-                 expected_publisher=None, route=BroadcastRoute):
+                 expected_publisher=None, route=BroadcastRoute, load=None):
         self.robot_id, self.kind, self.rate, self.limit = robot_id, kind, rate, limit
-        self.ready, self.local = ready, local
+        self.ready, self.local, self.load = ready, local, load
         self.expected_publisher = expected_publisher
         self.started = False
         self.flow = TaskFlow(kind.kind, make=kind.make, publish=self._publish_task,
@@ -46,7 +50,12 @@ class TaskStream(object):
         if self.route is not None:
             self.route.start()
         self.timers = [rospy.Timer(rospy.Duration(1.0 / self.rate), self.on_timer),
-                       rospy.Timer(rospy.Duration(0.02), lambda _e: self.flow.tick())]
+                       rospy.Timer(rospy.Duration(0.02), self.on_tick)]
+
+    def on_tick(self, _event):
+        self.flow.tick()
+        if self.flow.due() and not rospy.is_shutdown():
+            self.flow.send_next(rospy.Time.now())
 
     def wired(self):
         """Whether the first candidate's task topic and our result topic are connected."""
@@ -72,8 +81,12 @@ class TaskStream(object):
             rospy.loginfo('robot %d: sending %s tasks', self.robot_id, self.flow.kind)
         self.flow.send_next(rospy.Time.now())
 
-    def _publish_task(self, request, server):
+    def _publish_task(self, request, server, budget):
         request.server_id = server
+        if self.load is not None:
+            if hasattr(request, 'budget'):
+                request.budget = budget
+            self.load.sent(server, self.flow.kind)
         self.route.publish(request, server)
 
     def on_result(self, result):
@@ -87,9 +100,15 @@ class TaskStream(object):
                 'by %s (server %d is %s)' % (self.robot_id, self.flow.kind, result.task_id,
                                              result.server_id, sender, result.server_id, expected))
             return
+        busy = bool(getattr(result, 'busy', False))
         outcome = self.flow.resolve(result.task_id, result.server_id, result.ok, result.error,
-                                    result)
-        if outcome == RETRIED:
+                                    result, busy=busy)
+        if outcome == RETRIED and busy:
+            rospy.logwarn_throttle(5.0, 'robot %d: server %d refused %s task %d as busy (%s): '
+                                   'sent to the next server (%d busy answers so far)'
+                                   % (self.robot_id, result.server_id, self.flow.kind,
+                                      result.task_id, result.error, self.flow.busy))
+        elif outcome == RETRIED:
             rospy.logwarn('robot %d: %s task %d failed on server %d (%s): sent to the next '
                           'server', self.robot_id, self.flow.kind, result.task_id,
                           result.server_id, result.error)
@@ -116,17 +135,24 @@ class TaskStream(object):
                          rtt=outcome.rtt if outcome.rtt is not None else math.nan)
         msg.header.stamp = outcome.stamp
         if not outcome.ok:
-            rospy.logerr('robot %d: %s task %d (server %d) failed: %s', self.robot_id,
-                         outcome.kind, outcome.task_id, outcome.server_id, outcome.error)
+            rospy.logerr_throttle(1.0, 'robot %d: %s task %d (server %d) failed: %s (%d failed '
+                                  'so far)' % (self.robot_id, outcome.kind, outcome.task_id,
+                                               outcome.server_id, outcome.error,
+                                               self.flow.failed))
         self.report_pub.publish(msg)
 
     def summary(self):
         flow = self.flow
         ignored = sum(flow.ignored.values())
-        return '%s: %d sent, %d ok, %d failed, %d pending, %d re-sent%s%s, round trip %s' % (
+        overload = ', '.join('%d %s' % (n, what) for n, what in (
+            (flow.busy, 'busy answers'), (flow.skipped, 'skipped for a newer task'),
+            (flow.superseded, 'dropped for a newer task'),
+            (flow.unfunded, 'extra sends over the retry budget')) if n)
+        return '%s: %d sent, %d ok, %d failed, %d pending, %d re-sent%s%s%s, round trip %s' % (
             flow.kind, flow.sent, flow.ok, flow.failed, len(flow), flow.resent,
             ', %d hedged' % flow.hedged if flow.hedge is not None else '',
             ', %d results ignored' % ignored if ignored else '',
+            ', ' + overload if overload else '',
             format_ms(summarize(list(flow.rtts)), ('median', 'p99', 'max')))
 
     def add_server(self, server):

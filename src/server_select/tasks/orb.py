@@ -20,6 +20,7 @@ class Orb(TaskPlugin):
     """Keypoints and binary descriptors of a frame, found by the server."""
 
     kind = 'orb'
+    newest_wins = True        # camera frames: only the newest is worth anything
     task_type, result_type = OrbTask, OrbResult
     task_topic, result_topic = 'task_orb', 'processed_orb'
 

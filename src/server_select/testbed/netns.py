@@ -17,7 +17,8 @@ import subprocess
 import sys
 import time
 
-from server_select.core.procs import stop_group, wait_until
+from server_select.core.procs import alive, kill_all, stop_group
+from server_select.testbed import cpu
 from server_select.testbed.linkemu import EmulatorError
 
 STATE_DIR = '/run/server_select-testbed'
@@ -55,36 +56,6 @@ def netns_pids(netns):
     return [int(p) for p in out.split()]
 
 
-def _kill_all(pids, grace=5.0):
-    """SIGTERM, then SIGKILL what is left after ``grace`` seconds."""
-    for pid in pids:
-        try:
-            os.kill(pid, signal.SIGTERM)
-        except ProcessLookupError:
-            pass
-    wait_until(lambda: not any(_alive(p) for p in pids), grace)
-    for pid in pids:
-        if _alive(pid):
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-
-
-def _alive(pid):
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    try:  # a zombie child counts as gone
-        with open('/proc/%d/stat' % pid) as stream:
-            return stream.read().split(')')[-1].split()[0] != 'Z'
-    except OSError:
-        return False
-
-
 def cleanup(prefix):
     """Remove the namespaces, processes and emulator a run with ``prefix`` left behind."""
     removed = []
@@ -93,18 +64,18 @@ def cleanup(prefix):
         try:
             with open(state) as stream:
                 pid = json.load(stream).get('emulator_pid')
-            if pid and _alive(pid):
-                _kill_all([pid])
+            if pid and alive(pid):
+                kill_all([pid])
                 removed.append('emulator %d' % pid)
         except (OSError, ValueError):
             pass
         os.unlink(state)
     for netns in _netns_list():
         if netns.startswith(prefix + '-'):
-            _kill_all(netns_pids(netns))
+            kill_all(netns_pids(netns))
             subprocess.run(['ip', 'netns', 'del', netns], check=False)
             removed.append(netns)
-    return removed
+    return removed + cpu.cleanup(prefix)
 
 
 def cleanup_abandoned():
@@ -120,7 +91,7 @@ def cleanup_abandoned():
                 owner = json.load(stream).get('owner_pid')
         except (OSError, ValueError):
             continue
-        if owner and owner != os.getpid() and not _alive(owner):
+        if owner and owner != os.getpid() and not alive(owner):
             removed += cleanup(name[:-len('.json')])
     return removed
 
@@ -131,7 +102,7 @@ def leftovers(prefix):
     links = subprocess.run(['ip', '-o', 'link'], stdout=subprocess.PIPE,
                            universal_newlines=True, check=False).stdout
     found += [x.split(':')[1].strip() for x in links.splitlines()
-              if x.split(':')[1].strip().startswith(prefix)]
+              if x.split(':')[1].strip().startswith(prefix)] + cpu.leftovers(prefix)
     if os.path.exists(os.path.join(STATE_DIR, prefix + '.json')):
         found.append('state file')
     return found
@@ -153,6 +124,7 @@ class Testbed(object):
             self.hosts[name] = {'netns': '%s-%s' % (prefix, name),
                                 'address': '%s.%d' % (subnet, index),
                                 'device': '%s%d' % (prefix, index)}
+        self.limits = cpu.limits(scenario.hosts.values(), prefix)   # CPU shares
         self.emulator = None
         self.t0 = None
         self.processes = []
@@ -183,6 +155,8 @@ class Testbed(object):
                 subprocess.run(['ip', '-n', netns, 'link', 'set', 'lo', 'up'], check=True)
                 subprocess.run(['ip', 'netns', 'exec', netns, 'sysctl', '-q', '-w',
                                 'net.ipv6.conf.all.disable_ipv6=1'], check=True)
+            for limit in self.limits.values():
+                limit.create()
             hosts_file = os.path.join(self.run_dir, 'hosts.json')
             with open(hosts_file, 'w') as stream:
                 json.dump(self.hosts, stream, indent=1)
@@ -223,7 +197,8 @@ class Testbed(object):
         stream = open(log, 'w') if log else subprocess.DEVNULL
         proc = subprocess.Popen(['ip', 'netns', 'exec', self.hosts[host]['netns']] + list(argv),
                                 env=env, stdout=stream, stderr=subprocess.STDOUT,
-                                start_new_session=True, **kwargs)
+                                start_new_session=True, preexec_fn=self._joiner(host),
+                                **kwargs)
         self.processes.append(proc)
         return proc
 
@@ -231,7 +206,14 @@ class Testbed(object):
         """Run ``argv`` inside ``host`` to completion; return the CompletedProcess."""
         return subprocess.run(['ip', 'netns', 'exec', self.hosts[host]['netns']] + list(argv),
                               env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              universal_newlines=True, timeout=timeout, **kwargs)
+                              universal_newlines=True, timeout=timeout,
+                              preexec_fn=self._joiner(host), **kwargs)
+
+    def _joiner(self, host):
+        """What a process started in ``host`` runs before its command: joining the host's
+        CPU limit, if it has one (its children inherit it)."""
+        limit = self.limits.get(host)
+        return limit.join if limit is not None else None
 
     def down(self):
         """Stop all that was started and delete the namespaces (signals wait till done)."""

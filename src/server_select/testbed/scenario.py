@@ -19,6 +19,9 @@ A scenario is a YAML mapping::
     # a server host may also hang (every process in it stopped with SIGSTOP, then
     # SIGCONT) and get slower (each task takes this many ms more, at run time):
     #   server2: {role: server, id: 2, hang: [[40, 55]], work: [{at: 40, delay: 25}]}
+    # and a server or robot host may have a CPU share of one core (a cgroup quota on
+    # every process of the host: real, finite capacity):
+    #   server3: {role: server, id: 3, cpu: 0.25}
 
 Each event may set ``delay`` (ms, a step), ``ramp`` + ``over`` (ms, s: linear change),
 ``jitter`` (ms: a packet's delay is uniform in delay +- jitter), ``loss`` (0..1),
@@ -40,8 +43,9 @@ ROLES = ('manager', 'server', 'robot')
 
 LinkState = collections.namedtuple('LinkState', 'delay jitter loss down rate')
 LinkState.__new__.__defaults__ = (0.0,)   # rate: MB/s each way, 0 = unlimited
-Host = collections.namedtuple('Host', 'name role id start stop hang work')
-Host.__new__.__defaults__ = ((), ())   # hang: [(from, to)] s; work: [(at s, delay s)]
+Host = collections.namedtuple('Host', 'name role id start stop hang work cpu')
+# hang: [(from, to)] s; work: [(at s, delay s)]; cpu: share of one core, None: no limit
+Host.__new__.__defaults__ = ((), (), None)
 
 
 def pair_key(a, b):
@@ -178,7 +182,12 @@ class Scenario(object):
             hang, work = hang_times(spec.get('hang'), name), work_times(spec.get('work'), name)
             if role != 'server' and (hang or work):
                 raise ScenarioError('hosts: only a server may hang or get work (%s)' % name)
-            result[name] = Host(name, role, ident, start, stop, hang, work)
+            cpu = spec.get('cpu')
+            if cpu is not None:
+                cpu = _number(cpu, 'hosts: %s cpu (share of one core)' % name, 0.01, 64.0)
+                if role == 'manager':
+                    raise ScenarioError('hosts: the manager host has no CPU limit')
+            result[name] = Host(name, role, ident, start, stop, hang, work, cpu)
         if sum(1 for h in result.values() if h.role == 'manager') != 1:
             raise ScenarioError('hosts: exactly one host must have role manager')
         return result

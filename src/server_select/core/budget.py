@@ -1,0 +1,57 @@
+"""How many extra sends (re-sends, hedges) a robot may make: a budget (no rospy).
+
+Under overload a re-send or a hedge is one more task for servers that have no time to
+spare. As Finagle's ``RetryBudget`` and gRPC's retry throttling do, extra sends are paid
+from a budget: at most ``ratio`` of the tasks first sent in the last ``window`` s, plus a
+``reserve`` so that the few tasks in flight when a server dies can always go elsewhere.
+"""
+
+import collections
+import threading
+import time
+
+
+class RetryBudget(object):
+    """Thread-safe; ``ratio`` 0 means no limit."""
+
+    def __init__(self, ratio=0.1, window=10.0, reserve=5, clock=time.monotonic):
+        if ratio < 0 or not window > 0 or reserve < 0:
+            raise ValueError('need ratio >= 0, window > 0, reserve >= 0: %r %r %r'
+                             % (ratio, window, reserve))
+        self.ratio, self.window, self.reserve = float(ratio), float(window), reserve
+        self._clock = clock
+        self._lock = threading.Lock()
+        self._sent, self._spent = collections.deque(), collections.deque()
+        self.refused = 0
+
+    def _prune(self, now):
+        for times in (self._sent, self._spent):
+            while times and times[0] <= now - self.window:
+                times.popleft()
+
+    def sent(self):
+        """A task was sent for the first time."""
+        if not self.ratio:
+            return
+        with self._lock:
+            now = self._clock()
+            self._prune(now)
+            self._sent.append(now)
+
+    def spend(self):
+        """Whether one extra send may go now (and it is counted when it may)."""
+        if not self.ratio:
+            return True
+        with self._lock:
+            now = self._clock()
+            self._prune(now)
+            if len(self._spent) >= self.reserve + self.ratio * len(self._sent):
+                self.refused += 1
+                return False
+            self._spent.append(now)
+            return True
+
+    def describe(self):
+        if not self.ratio:
+            return 'no limit'
+        return '%g %% of tasks + %d per %g s' % (100 * self.ratio, self.reserve, self.window)

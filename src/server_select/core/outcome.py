@@ -1,0 +1,39 @@
+"""A task's life at the robot: in flight (:class:`Pending`) and how it ended
+(:class:`Outcome`), with the constants a ``task_report`` uses (no rospy, no messages: the
+unit tests pin the constants equal to ``TaskReport``'s)."""
+
+import collections
+
+NO_SERVER = -1      # TaskReport.NO_SERVER, SelectionFlag.NO_SERVER: no server
+LOCAL = -2          # TaskReport.LOCAL: the robot did the work itself
+
+Outcome = collections.namedtuple(
+    'Outcome', 'task_id kind stamp server_id answered_by ok error rtt attempts')
+Outcome.__doc__ = """How one task ended, as published on ``task_report``: ``server_id`` is
+the first server it was sent to, ``rtt`` None when no answer arrived."""
+
+# What became of a result that resolves nothing.
+DUPLICATE, LATE, UNKNOWN, FOREIGN, RETRIED = 'duplicate', 'late', 'unknown', 'foreign', 'retried'
+
+
+class Pending(object):
+    """A task in flight: its request, check context, and the attempts made so far."""
+    __slots__ = ('task_id', 'stamp', 'request', 'context', 'started', 'attempts', 'deadline',
+                 'hedged')
+
+    def __init__(self, task_id, stamp, request, context, started):
+        self.task_id, self.stamp, self.request, self.context = task_id, stamp, request, context
+        self.started, self.attempts, self.deadline = started, [], started
+        self.hedged = False
+
+    def sent_at(self, server):
+        return next((t for s, t in reversed(self.attempts) if s == server), None)
+
+    def servers(self):
+        """The servers it was sent to, as text."""
+        return ', '.join(str(s) for s, _ in self.attempts)
+
+    def outcome(self, kind, answered_by, ok, error, rtt):
+        """How it ended (``rtt`` None: no answer)."""
+        return Outcome(self.task_id, kind, self.stamp, self.attempts[0][0], answered_by, ok,
+                       error, rtt, len(self.attempts))

@@ -1,0 +1,83 @@
+"""A server's workers: the tasks of every kind through one bounded queue
+(:class:`~server_select.core.load.WorkQueue`), answered by ``workers`` threads."""
+
+import threading
+import time
+
+import rospy
+
+from server_select.core.load import WorkQueue
+
+
+class ServerWork(object):
+    """Takes the tasks addressed to this server from its endpoints
+    (:class:`~server_select.ros.routing.ServerEndpoint`), and answers each exactly once: a
+    result from a worker, or at once a *busy* result when the task cannot be finished by
+    the deadline its robot gave (``budget``), or the queue is full; a task whose deadline
+    passed while it waited is answered busy too, without doing the work."""
+
+    def __init__(self, server_id, workers, max_queue):
+        self.server_id = server_id
+        self.queue = WorkQueue(workers, max_queue)
+        self._threads = []
+        self._lock = threading.Lock()
+        self.busy = 0
+
+    def start(self):
+        for index in range(self.queue.workers):
+            thread = threading.Thread(target=self._run, name='worker%d' % index, daemon=True)
+            thread.start()
+            self._threads.append(thread)
+
+    def submit(self, endpoint, task, direct):
+        """A task addressed here (from a subscriber's thread: never blocks)."""
+        budget = getattr(task, 'budget', 0.0)
+        deadline = time.monotonic() + budget if budget > 0 else None
+        why = self.queue.offer(endpoint.kind_name, (endpoint, task, direct), deadline)
+        if why is not None:
+            self._busy(endpoint, task, direct, why)
+
+    def _run(self):
+        while True:
+            job = self.queue.take()
+            if job is None:
+                return
+            endpoint, task, direct = job.item
+            why = self.queue.stale(job)
+            if why is not None:
+                self._busy(endpoint, task, direct, why)
+                continue
+            start = time.perf_counter()
+            try:
+                result = endpoint.handle(task)
+            except Exception as error:    # a defect in one handler must not stop a worker
+                self.queue.done(job)
+                rospy.logerr('server %d: %s task %d of robot %d: %s: %s', self.server_id,
+                             endpoint.kind_name, task.task_id, task.robot_id,
+                             type(error).__name__, error)
+                endpoint.reply(task, direct, endpoint.error_result(task, 'server error: %s'
+                                                                   % error))
+                continue
+            self.queue.done(job, time.perf_counter() - start if result.ok else None)
+            endpoint.reply(task, direct, result)
+
+    def _busy(self, endpoint, task, direct, why):
+        with self._lock:
+            self.busy += 1
+            count = self.busy
+        rospy.logwarn_throttle(
+            5.0, 'server %d: answered %s task %d of robot %d busy: %s (%d busy answers so far)'
+            % (self.server_id, endpoint.kind_name, task.task_id, task.robot_id, why, count))
+        endpoint.reply(task, direct, endpoint.error_result(task, why, busy=True))
+
+    def load(self):
+        return self.queue.load()
+
+    def summary(self):
+        queue = self.queue
+        return '%d workers, %d tasks worked on, %d answered busy (%d of them shed from the ' \
+            'queue)' % (queue.workers, queue.finished, self.busy, queue.shed)
+
+    def shutdown(self):
+        """Stop the workers; tasks still queued get no answer (their robots re-send)."""
+        return self.queue.close()

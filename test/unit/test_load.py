@@ -1,0 +1,129 @@
+"""A server's work queue (admission by deadline, shedding, backlog), the robot's load board
+and the retry budget, without a master."""
+
+import threading
+
+import pytest
+
+from server_select.core.budget import RetryBudget
+from server_select.core.load import Load, LoadBoard, ServiceTimes, WorkQueue
+
+from fake_clock import Clock
+
+
+def queue_with(work, workers=1, max_queue=10, kind='image'):
+    """A queue whose ``kind`` tasks are known to take ``work`` s."""
+    clock = Clock()
+    times = ServiceTimes()
+    times.add(kind, work)
+    return WorkQueue(workers, max_queue, times, clock), clock
+
+
+def test_service_times_are_the_median_of_the_recent_ones():
+    times = ServiceTimes(keep=3)
+    assert times.get('sort') == 0.0           # none yet: optimistic
+    for seconds in (0.1, 0.9, 0.2, 0.3):      # the first one is forgotten
+        times.add('sort', seconds)
+    assert times.get('sort') == pytest.approx(0.3)
+    assert times.snapshot() == {'sort': pytest.approx(0.3)}
+
+
+def test_an_idle_server_takes_what_it_can_finish_in_time_and_refuses_the_rest():
+    q, clock = queue_with(0.5)
+    assert q.offer('image', 'a', deadline=clock.now + 0.6) is None
+    assert q.load().backlog == pytest.approx(0.5)          # one worker, one task of 0.5 s
+    why = q.offer('image', 'b', deadline=clock.now + 0.9)  # would finish at 1.0 s
+    assert why.startswith('busy: would finish in 1 s') and q.refused == 1
+    assert q.offer('image', 'c', deadline=None) is None    # no deadline: queued
+    assert (q.load().queued, q.load().in_service) == (2, 0)
+
+
+def test_the_backlog_counts_the_work_left_of_tasks_in_service_over_the_workers():
+    q, clock = queue_with(1.0, workers=2)
+    for item in 'abc':
+        assert q.offer('image', item) is None
+    assert q.load().backlog == pytest.approx(1.5)   # 3 s of work, 2 workers
+    first, second = q.take(), q.take()
+    clock.now += 0.4                                 # both 0.4 s into their 1 s of work
+    assert q.load() == Load(1, 2, 2, pytest.approx((1.0 + 0.6 + 0.6) / 2), {'image': 1.0})
+    q.done(first, 1.0)
+    q.done(second, 1.0)
+    assert q.load().backlog == 0.0                   # one queued, a worker free: no wait
+
+
+def test_a_full_queue_answers_busy_at_once():
+    q, _ = queue_with(0.0, max_queue=2)
+    assert q.offer('sort', 1) is None and q.offer('sort', 2) is None
+    assert q.offer('sort', 3) == 'busy: 2 tasks queued already'
+
+
+def test_a_task_whose_deadline_passed_in_the_queue_is_shed_not_done():
+    q, clock = queue_with(0.5)
+    q.offer('image', 'old', deadline=clock.now + 0.6)
+    clock.now += 0.2                     # its work no longer fits: 0.2 + 0.5 > 0.6
+    job = q.take()
+    assert q.stale(job).startswith('busy: waited 0.2 s') and q.shed == 1
+    assert q.load().in_service == 0
+    q.offer('image', 'fresh', deadline=clock.now + 5.0)
+    job = q.take()
+    assert q.stale(job) is None and job.item == 'fresh'
+
+
+def test_close_wakes_the_workers_and_returns_what_was_queued():
+    q, _ = queue_with(0.1)
+    taken = []
+    worker = threading.Thread(target=lambda: taken.append(q.take()))
+    worker.start()
+    q.close()
+    worker.join(5.0)
+    assert taken == [None] and not worker.is_alive()
+    assert q.offer('image', 'late') == 'the server is shutting down'
+
+
+def test_the_wait_is_the_backlog_plus_the_robots_mix_of_work():
+    clock = Clock()
+    board = LoadBoard({'image': 1.0, 'sort': 3.0}, max_age=2.0, clock=clock)
+    assert board.wait(1) is None
+    board.update(1, Load(2, 1, 1, 0.8, {'image': 0.4, 'sort': 0.02}))
+    assert board.wait(1) == pytest.approx(0.8 + 0.25 * 0.4 + 0.75 * 0.02)
+    clock.now += 2.5                                  # the report is stale
+    assert board.wait(1) is None and board.expected(1, 'image') is None
+
+
+def test_a_server_new_to_a_kind_is_taken_to_need_what_the_others_need():
+    clock = Clock()
+    board = LoadBoard({'image': 1.0}, clock=clock)
+    board.update(1, Load(0, 1, 1, 0.0, {'image': 0.3}))
+    board.update(2, Load(0, 1, 1, 0.0, {'image': 0.5}))
+    board.update(3, Load(0, 0, 1, 0.0, {}))           # just came up: nothing done yet
+    assert board.wait(3) == pytest.approx(0.4)       # not 0: no rush of every robot to it
+
+
+def test_expected_completion_counts_the_robots_own_tasks_sent_since_the_report():
+    clock = Clock()
+    board = LoadBoard({'image': 1.0}, clock=clock)
+    board.update(1, Load(0, 0, 2, 0.0, {'image': 0.4}))
+    assert board.expected(1, 'image') == pytest.approx(0.4)
+    board.sent(1, 'image')
+    board.sent(1, 'image')
+    assert board.expected(1, 'image') == pytest.approx(0.4 + 2 * 0.4 / 2)
+    board.update(1, Load(2, 0, 2, 0.4, {'image': 0.4}))   # the report now has them
+    assert board.expected(1, 'image') == pytest.approx(0.8)
+    board.forget(1)
+    assert board.expected(1, 'image') is None
+
+
+def test_the_retry_budget_is_a_share_of_recent_tasks_plus_a_reserve():
+    clock = Clock()
+    budget = RetryBudget(ratio=0.1, window=10.0, reserve=2, clock=clock)
+    for _ in range(30):
+        budget.sent()
+    spent = sum(budget.spend() for _ in range(10))
+    assert spent == 5 and budget.refused == 5         # 2 + 10 % of 30
+    clock.now += 10.5                                 # all of it out of the window
+    assert [budget.spend() for _ in range(3)] == [True, True, False]
+
+
+def test_a_zero_retry_budget_means_no_limit():
+    budget = RetryBudget(ratio=0.0, reserve=0)
+    assert all(budget.spend() for _ in range(100)) and budget.describe() == 'no limit'

@@ -1,0 +1,162 @@
+"""The robot's task path under overload: busy answers, the retry budget, the in-flight limit
+with the newest frame winning, attempt deadlines that follow the load, and the spread that
+keeps robots from moving as a herd."""
+
+import random
+
+import pytest
+
+from server_select.core.attempts import AttemptClock
+from server_select.core.budget import RetryBudget
+from server_select.core.policy import Chooser, Policy
+from server_select.core.ranking import Ranking
+from server_select.core.task_flow import RETRIED
+
+from fake_clock import Clock
+from test_task_flow import World
+
+
+def busy(w, task_id, server):
+    return w.flow.resolve(task_id, server, False, 'busy: would finish in 3 s', busy=True)
+
+
+def test_each_attempt_tells_the_server_how_long_its_robot_still_waits():
+    w = World(candidates=(3, 1), timeout=2.0, first=0.5)
+    w.flow.send_next('s1')
+    w.clock.now += 0.6                 # past the attempt deadline: re-sent to server 1
+    w.flow.tick()
+    assert [s for _, s in w.published] == [3, 1]
+    assert w.budgets == [pytest.approx(2.0), pytest.approx(1.4)]
+
+
+def test_a_busy_answer_sends_the_task_on_and_blames_nobody():
+    w = World(candidates=(3, 1))
+    w.flow.send_next('s1')
+    assert busy(w, 1, 3) == RETRIED
+    assert w.failures == [] and w.flow.busy == 1
+    outcome = w.answer(1, 1)
+    assert (outcome.ok, outcome.answered_by, outcome.attempts) == (True, 1, 2)
+
+
+def test_busy_everywhere_fails_the_task_at_once_with_the_reason():
+    w = World(candidates=(3,))
+    w.flow.send_next('s1')
+    outcome = busy(w, 1, 3)
+    assert not outcome.ok and outcome.error.startswith('server 3 busy (busy: would finish')
+    assert w.failures == [] and len(w.flow) == 0
+
+
+def test_without_budget_a_task_keeps_its_one_attempt():
+    budget = RetryBudget(ratio=0.1, reserve=1, clock=Clock())
+    w = World(candidates=(3, 1), budget=budget)
+    for stamp in ('s1', 's2', 's3'):
+        w.flow.send_next(stamp)
+    assert busy(w, 1, 3) == RETRIED == busy(w, 2, 3)    # 1 + 10 % of 3 tasks: 1.3
+    outcome = busy(w, 3, 3)
+    assert not outcome.ok and w.flow.unfunded == 1 and budget.refused == 1
+    assert [s for _, s in w.published] == [3, 3, 3, 1, 1]
+
+
+def test_no_hedge_without_budget():
+    budget = RetryBudget(ratio=0.1, reserve=0, clock=Clock())
+    w = World(candidates=(3, 1), timeout=5.0, hedge=0.5, budget=budget)
+    for task in range(1, 6):                         # 5 answers: the hedge delay is known
+        w.flow.send_next('s%d' % task)
+        w.clock.now += 0.1
+        w.answer(task, 3)
+    w.flow.send_next('s6')
+    assert budget.spend() and not budget.spend()     # 10 % of 6 tasks: one extra send
+    w.clock.now += 0.3                   # past the p50 round trip, before the deadline
+    w.flow.tick()
+    assert w.flow.hedged == 0 and w.flow.unfunded == 1
+    assert [s for _, s in w.published][-1] == 3
+
+
+def test_at_most_max_in_flight_tasks_are_out_and_a_held_send_goes_when_one_ends():
+    w = World(candidates=(3,), max_in_flight=2)
+    assert w.flow.send_next('s1') == 1 and w.flow.send_next('s2') == 2
+    assert w.flow.send_next('s3') is None and not w.flow.due()
+    assert w.flow.send_next('s4') is None            # replaces the held one
+    assert (w.flow.sent, w.flow.skipped, len(w.published)) == (2, 1, 2)
+    w.answer(1, 3)
+    assert w.flow.due()
+    assert w.flow.send_next('s5') == 3 and not w.flow.due()
+
+
+def test_a_late_frame_gives_way_to_a_newer_one_instead_of_being_sent_again():
+    w = World(candidates=(3, 1), first=0.5, max_in_flight=1, newest_wins=True)
+    w.flow.send_next('s1')
+    w.clock.now += 0.6
+    w.flow.tick()                                    # no newer frame: sent again
+    assert [s for _, s in w.published] == [3, 1]
+    w.flow.send_next('s2')                           # held back: task 1 is out
+    w.clock.now += 0.6
+    (outcome,) = w.flow.tick()
+    assert not outcome.ok and 'a newer task waits' in outcome.error
+    assert w.flow.superseded == 1 and w.flow.due() and len(w.flow) == 0
+
+
+def test_a_busy_frame_gives_way_to_a_newer_one():
+    w = World(candidates=(3, 1), max_in_flight=1, newest_wins=True)
+    w.flow.send_next('s1')
+    w.flow.send_next('s2')                           # held back
+    outcome = busy(w, 1, 3)
+    assert not outcome.ok and outcome.error.endswith('a newer task waits')
+    assert [s for _, s in w.published] == [3] and w.flow.due()
+
+
+def test_an_attempt_deadline_follows_what_the_server_says_it_takes():
+    expected = {3: 1.5}
+    clock = AttemptClock(5.0, first=1.0, floor=0.25, expected=expected.get)
+    assert clock.seconds(3) == pytest.approx(3.0)    # 2 x (backlog + work), not 1 s
+    assert clock.seconds(1) == pytest.approx(1.0)    # no load known: as before
+    expected[3] = 4.0
+    assert clock.seconds(3) == 5.0                   # never past the task timeout
+
+
+def ranking(means):
+    order = sorted(means, key=means.get)
+    return Ranking(order[0], order, [means[s] for s in order], [10] * len(order), [])
+
+
+def test_spread_takes_a_warranted_move_with_probability_half_the_relative_gap():
+    policy = Policy('mean', dwell=0.0, spread=True)
+    moved = 0
+    for seed in range(2000):
+        chooser = Chooser(policy, random.Random(seed))
+        chooser.choose(ranking({1: 0.10, 2: 0.20}), 0.0)        # starts on 1
+        moved += chooser.choose(ranking({1: 0.25, 2: 0.20}), 5.0) == 2
+    assert moved / 2000.0 == pytest.approx((1 - 0.20 / 0.25) / 2, abs=0.03)
+
+
+def test_spread_draws_once_per_dwell_and_leaves_an_unranked_server_at_once():
+    chooser = Chooser(Policy('mean', dwell=3.0, spread=True), random.Random(1))
+    chooser.choose(ranking({1: 0.1, 2: 0.2}), 0.0)
+    draws = [chooser.choose(ranking({1: 0.4, 2: 0.2}), t) for t in (1.0, 1.5, 2.0, 3.9)]
+    assert len(set(draws)) == 1                  # one draw at 1.0, then none until 4.0
+    chooser = Chooser(Policy('mean', spread=True), random.Random(1))
+    chooser.choose(ranking({1: 0.1, 2: 0.2}), 0.0)
+    assert chooser.choose(ranking({2: 0.2}), 0.1) == 2
+
+
+def test_a_herd_is_spread_over_equal_servers():
+    """20 robots on server 1, whose completion time grows with its robots; server 2 comes
+    up idle. Without spread all 20 move at once and back; with it the load evens out."""
+    def run(spread):
+        choosers = [Chooser(Policy('mean', dwell=3.0, spread=spread), random.Random(r))
+                    for r in range(20)]
+        for chooser in choosers:                 # all on server 1 before server 2 came
+            chooser.choose(ranking({1: 0.05}), -10.0)
+        on = dict((r, 1) for r in range(20))
+        history = []
+        for step in range(40):                   # decisions every 0.5 s for 20 s
+            load = dict((s, 0.05 * (1 + sum(1 for v in on.values() if v == s)))
+                        for s in (1, 2))
+            for r, chooser in enumerate(choosers):
+                on[r] = chooser.choose(ranking(load), step * 0.5)
+            history.append(sum(1 for v in on.values() if v == 2))
+        return history
+    herd, spread = run(False), run(True)
+    assert max(herd) == 20                           # everyone moved together
+    assert all(9 <= n <= 11 for n in spread[-10:]), spread   # settled near 10 / 10
+    assert max(spread) <= 13, spread                          # never a herd
