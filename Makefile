@@ -21,7 +21,7 @@ DEMO_DURATION ?= 30
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
-  bench-scale bench-routing bench-hedging \
+  bench-scale bench-routing bench-hedging bench-capacity \
   test unit-test testbed-test fault-test catkin-test rostest lint clean
 all: build
 
@@ -110,6 +110,12 @@ bench-routing: build
 # Hedged tasks on lossy links, off vs on: tail round trip and extra requests (root, ~6 min).
 bench-hedging: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.hedging --out results/bench
+
+# Goodput and round trip against offered load on servers of finite CPU (cgroup quotas):
+# paper, fleet and the static assignment, camera frames and sort tasks (root, ~50 min).
+bench-capacity: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.capacity --kinds image,sort \
+	  --loads 0.5,1,1.5,2 --repeats 2 --out results/bench
 
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build

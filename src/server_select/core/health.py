@@ -6,6 +6,10 @@ ejection in a row (``base`` s, at most ``longest`` s; as Envoy's outlier detecti
 the time is over the server is on probation: it becomes a candidate again after
 ``probation_probes`` good probes, and its first good task makes it healthy (the ejection
 time starts from ``base`` again); a failure on probation ejects it for twice as long.
+
+A server that answers *busy* is working, not failing: it is not ejected, but goes behind
+every server that is not busy for ``seconds`` (what its load says it needs to catch up),
+and stays a candidate for when all of them are busy.
 """
 
 import collections
@@ -18,10 +22,11 @@ Ejection = collections.namedtuple('Ejection', 'server seconds why')
 
 
 class _Server(object):
-    __slots__ = ('state', 'until', 'ejections', 'good_probes')
+    __slots__ = ('state', 'until', 'ejections', 'good_probes', 'busy_until')
 
     def __init__(self):
         self.state, self.until, self.ejections, self.good_probes = HEALTHY, 0.0, 0, 0
+        self.busy_until = 0.0
 
 
 class ServerHealth(object):
@@ -65,6 +70,13 @@ class ServerHealth(object):
             entry.state, entry.until, entry.good_probes = EJECTED, self._clock() + seconds, 0
             return Ejection(server, seconds, why)
 
+    def busy(self, server, seconds):
+        """``server`` answered busy: behind the servers that are not, for ``seconds``."""
+        with self._lock:
+            entry = self._servers.get(server)
+            if entry is not None:
+                entry.busy_until = max(entry.busy_until, self._clock() + seconds)
+
     def probe_ok(self, server):
         with self._lock:
             entry = self._get(server, self._clock())
@@ -93,5 +105,10 @@ class ServerHealth(object):
                 entry.state == PROBATION and entry.good_probes >= self.probation_probes))
 
     def order(self, ranking):
-        """``ranking`` without the servers tasks may not go to now (order kept)."""
-        return [s for s in ranking if self.usable(s)]
+        """``ranking`` without the servers tasks may not go to now, those that answered
+        busy lately last (order kept otherwise)."""
+        usable = [s for s in ranking if self.usable(s)]
+        now = self._clock()
+        with self._lock:
+            busy = set(s for s in usable if self._servers[s].busy_until > now)
+        return [s for s in usable if s not in busy] + [s for s in usable if s in busy]

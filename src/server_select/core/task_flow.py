@@ -44,7 +44,8 @@ class TaskFlow(object):
     :param check: ``(result, context) -> error string or None`` for a result reported ok.
     :param report: ``(Outcome) -> None``, called once per task.
     :param run_local: ``(task_id, stamp) -> error or None``: the work done in the robot.
-    :param on_failure, on_success: ``(server, why)`` / ``(server)``: evidence about servers.
+    :param on_failure, on_success: ``(server, why)`` / ``(server)``: evidence about servers;
+        ``on_busy(server)``: it answered busy (no failure).
     :param on_answer: ``(server, rtt)``: an accepted answer of a task sent once, and its
         round trip (a latency sample of what tasks get; the answer of a hedged or re-sent
         task is not one: only the faster of two servers answers it).
@@ -62,7 +63,8 @@ class TaskFlow(object):
     def __init__(self, kind, timeout, candidates, make, publish, check, report, run_local=None,
                  on_failure=None, on_success=None, deadlines=None, ids=None,
                  clock=time.monotonic, remember=2000, keep_rtts=2000, hedge=None,
-                 on_answer=None, budget=None, max_in_flight=0, newest_wins=False):
+                 on_answer=None, budget=None, max_in_flight=0, newest_wins=False,
+                 on_busy=None):
         if not timeout > 0:
             raise ValueError('timeout must be positive, got %r' % (timeout,))
         self.kind, self.timeout = kind, float(timeout)
@@ -71,6 +73,7 @@ class TaskFlow(object):
         self._on_failure = on_failure or (lambda server, why: None)
         self._on_success = on_success or (lambda server: None)
         self._on_answer = on_answer or (lambda server, rtt: None)
+        self._on_busy = on_busy or (lambda server: None)
         self.deadlines = deadlines or AttemptClock(self.timeout)
         self._ids = ids if ids is not None else itertools.count(1)
         self._clock = clock
@@ -190,6 +193,7 @@ class TaskFlow(object):
                 self.busy += busy
                 if busy:
                     error = 'server %d busy (%s)' % (answered_by, error)
+                    self._on_busy(answered_by)
                 else:
                     self._on_failure(answered_by, error)
                 if busy and self._gives_way():

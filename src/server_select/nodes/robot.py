@@ -113,6 +113,7 @@ class RobotNode(object):
         return TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready, dict(
             timeout=timeout, candidates=self.selection.candidates, on_failure=self.on_failure,
             on_success=self.health.task_ok, ids=self._task_ids,  # per robot, across streams
+            on_busy=functools.partial(self.on_busy, kind.kind),
             hedge=param('hedge_quantile') if param('hedge') else None, budget=self.budget,
             max_in_flight=param('max_in_flight'),
             newest_wins=getattr(kind, 'newest_wins', False),
@@ -196,6 +197,12 @@ class RobotNode(object):
         if ejection is not None:
             rospy.logwarn('robot %d: server %d ejected for %.3g s: %s', self.robot_id,
                           server, ejection.seconds, why)
+
+    def on_busy(self, kind, server):
+        """``server`` refused a ``kind`` task as busy: last of the candidates for as long as
+        its load says a task there would take (at least 1 s)."""
+        expected = self.load.expected(kind)(server) if self.load is not None else None
+        self.health.busy(server, max(1.0, expected or 0.0))
 
     def on_flag(self, flag):
         if flag.robot_id != self.robot_id:

@@ -165,6 +165,11 @@ class ServerEndpoint(object):
         self.queue_size = queue_size
         self.pub, self.subs = None, []
         self._busy_field = 'busy' in getattr(kind.result_type, '__slots__', ())
+        # an error result is made as the plain message (a numpy_msg view of it, as sort
+        # results are, cannot serialize its empty arrays, which are lists)
+        base = kind.result_type.__bases__[0]
+        self._error_type = base if getattr(base, '_type', None) == kind.result_type._type \
+            else kind.result_type
 
     def start(self):
         kind, queue = self.kind, self.queue_size
@@ -188,9 +193,9 @@ class ServerEndpoint(object):
     def error_result(self, task, why, busy=False):
         """A not-ok result for ``task`` saying ``why`` (``busy``: could not be done in time;
         a result type without the field says so in ``why`` alone)."""
-        result = self.kind.result_type(header=task.header, robot_id=task.robot_id,
-                                       task_id=task.task_id, server_id=self.server_id,
-                                       ok=False, error=why)
+        result = self._error_type(header=task.header, robot_id=task.robot_id,
+                                  task_id=task.task_id, server_id=self.server_id, ok=False,
+                                  error=why)
         if busy and self._busy_field:
             result.busy = True
         return result

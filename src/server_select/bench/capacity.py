@@ -1,0 +1,189 @@
+"""Capacity: goodput and round trip against offered load, on servers of finite CPU (testbed,
+root, cgroup cpu controller).
+
+Robots send camera frames (a 640x480 photograph with a face, JPEG, Haar detection at the
+server) or sort tasks to servers whose hosts have a CPU share (a cgroup quota: real work,
+really slower). Offered load steps through multiples of the servers' capacity, and each
+step is run for each variant in turn (a server's load is part of what is measured, so
+variants cannot share servers as the scenario suite's do):
+
+- ``paper``: the paper's profile (the manager ranks by the probes' mean; every frame sent);
+- ``fleet``: the fleet profile (load-aware ranking, busy answers, in-flight limit, retry
+  budget, spread);
+- ``static``: every robot fixed to one server, robots given to servers in proportion to
+  their CPU shares (D'Hondt): the best static assignment when links are equal.
+
+Capacity (tasks/s) is the servers' shares over the CPU seconds one task takes on one core
+of this machine, measured here before the runs. Per variant and load the benchmark prints
+what was offered and sent, the goodput (tasks answered within the task timeout, per s),
+failed tasks, the round trip (mean, p50, p99; a failed task counts at the timeout), the
+oldest answer, extra sends per task, and for frames how many detections the servers did
+and how many of those a robot still wanted.
+"""
+
+import argparse
+import collections
+import json
+import os
+import sys
+import tempfile
+import time
+
+import cv2
+import numpy as np
+
+from server_select.bench import capacity_report
+from server_select.bench.harness import scenario_run
+from server_select.testbed import bag_analysis
+from server_select.vision import image_codec
+from server_select.vision.detection import Detector, search_frame
+from server_select.vision.search import sample_image
+
+VARIANTS = ('paper', 'fleet', 'static')
+TIMEOUT = 5.0        # the task timeout: an answer later than this is not wanted
+WARMUP = 15.0        # s of scenario time before the measured part (nodes up, first tasks)
+SORT_SIZE = 200000
+
+
+def frame():
+    """The camera frame: a photograph with one face, 640x480."""
+    return cv2.resize(sample_image('astronaut.png'), (640, 480))
+
+
+def cpu_per_task(kind, repeats=10):
+    """CPU seconds one task takes a server on one core (measured here)."""
+    if kind == 'image':
+        fmt, data = image_codec.encode(frame(), 80)
+        detector = Detector()
+        work = lambda: search_frame(detector, ('', 0, 0, 0, b''), (fmt, data))  # noqa: E731
+    else:
+        values = np.random.default_rng(1).integers(-2 ** 31, 2 ** 31 - 1, SORT_SIZE,
+                                                   dtype=np.int32)
+        work = lambda: np.sort(values)       # noqa: E731
+    work()
+    start = time.process_time()
+    for _ in range(repeats):
+        work()
+    return (time.process_time() - start) / repeats
+
+
+def static_assignment(shares, robots):
+    """``{robot: server}``: robots to servers in proportion to their shares (D'Hondt)."""
+    count = collections.Counter()
+    assigned = {}
+    for robot in range(1, robots + 1):
+        server = min(range(1, len(shares) + 1),
+                     key=lambda s: ((count[s] + 1) / shares[s - 1], s))
+        count[server] += 1
+        assigned[robot] = server
+    return assigned
+
+
+def scenario(shares, robots, seconds, delay):
+    hosts = {'manager': {'role': 'manager'}}
+    for index, share in enumerate(shares, start=1):
+        hosts['server%d' % index] = {'role': 'server', 'id': index, 'cpu': share}
+    for robot in range(1, robots + 1):
+        hosts['robot%d' % robot] = {'role': 'robot', 'id': robot}
+    return {'name': 'capacity', 'duration': WARMUP + seconds, 'hosts': hosts,
+            'default': {'delay': delay, 'jitter': delay / 10.0}}
+
+
+def robot_args(kind, rate, folder):
+    if kind == 'image':
+        return ['sort_tasks:=false', 'image_source:=%s' % folder, 'frame_rate:=%g' % rate,
+                'image_transport:=compressed']
+    return ['task_rate:=%g' % rate, 'task_size:=%d' % SORT_SIZE]
+
+
+def run_once(variant, kind, rate, args, work, name):
+    """One run: the figures of :func:`capacity_report.figures` for it."""
+    shares = args.shares
+    servers = ','.join(str(s) for s in range(1, len(shares) + 1))
+    data = scenario(shares, args.robots, args.seconds, args.delay)
+    profile = 'fleet' if variant == 'fleet' else 'paper'
+    fixed = static_assignment(shares, args.robots)
+    with scenario_run(data, work, name, 'sscap', record=(
+            '/task_report', '/detections')) as (run, bag):
+        t0 = run.tb.t0
+        if variant != 'static':
+            run.launch('manager', 'manager.launch', 'profile:=%s' % profile,
+                       'robots:=%s' % ','.join(str(r) for r in range(1, args.robots + 1)),
+                       'servers:=%s' % servers)
+        for server in range(1, len(shares) + 1):
+            run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server,
+                       'routing:=direct')
+        for robot in range(1, args.robots + 1):
+            run.launch('robot%d' % robot, 'robot.launch', 'robot_id:=%d' % robot,
+                       'profile:=%s' % profile, 'servers:=%s' % servers,
+                       'mode:=%s' % ('fixed' if variant == 'static' else 'select'),
+                       'fixed_server:=%d' % fixed[robot], 'task_timeout:=%g' % TIMEOUT,
+                       'start_delay:=5', *robot_args(kind, rate, args.frames))
+    with open(bag + '.json', 'w') as stream:     # times since the scenario's t0
+        json.dump({'t0': t0}, stream)
+    done = capacity_report.detections(bag, t0) if kind == 'image' else None
+    return capacity_report.figures(bag_analysis.load(bag), done, rate * args.robots, WARMUP,
+                                   WARMUP + args.seconds, TIMEOUT)
+
+
+def parse(argv):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--shares', default='0.25,0.25,0.25',
+                        help="the servers' CPU shares of one core (default %(default)s)")
+    parser.add_argument('--robots', type=int, default=6)
+    parser.add_argument('--loads', default='0.5,1,2',
+                        help='offered load as multiples of the capacity (%(default)s)')
+    parser.add_argument('--kinds', default='image', help='image and/or sort (%(default)s)')
+    parser.add_argument('--variants', default=','.join(VARIANTS))
+    parser.add_argument('--seconds', type=float, default=40.0, help='measured s per run')
+    parser.add_argument('--delay', type=float, default=0.5, help='one-way link delay, ms')
+    parser.add_argument('--repeats', type=int, default=1)
+    parser.add_argument('--out', default='results/bench')
+    args = parser.parse_args(argv)
+    args.shares = [float(s) for s in args.shares.split(',')]
+    args.loads = [float(x) for x in args.loads.split(',')]
+    args.kinds = [k for k in args.kinds.split(',') if k]
+    args.variants = [v for v in args.variants.split(',') if v]
+    bad = [k for k in args.kinds if k not in ('image', 'sort')] + \
+        [v for v in args.variants if v not in VARIANTS]
+    if bad or args.robots < 1 or not args.shares:
+        parser.error('unknown kinds or variants %s, or no robots or servers' % bad)
+    return args
+
+
+def main(argv=None):
+    args = parse(sys.argv[1:] if argv is None else argv)
+    results = {'shares': args.shares, 'robots': args.robots, 'timeout': TIMEOUT,
+               'seconds': args.seconds, 'kinds': {}}
+    with tempfile.TemporaryDirectory(prefix='bench_capacity') as work:
+        args.frames = os.path.join(work, 'frames')
+        os.makedirs(args.frames)
+        cv2.imwrite(os.path.join(args.frames, 'face.png'), frame())
+        for kind in args.kinds:
+            cpu = cpu_per_task(kind)
+            capacity = sum(args.shares) / cpu
+            runs = results['kinds'][kind] = {'cpu_per_task': cpu, 'capacity': capacity,
+                                             'runs': []}
+            print('%s: %.1f ms of CPU per task: capacity %.2f tasks/s' % (
+                kind, 1e3 * cpu, capacity), file=sys.stderr, flush=True)
+            for repeat in range(args.repeats):
+                for load in args.loads:
+                    for variant in args.variants:
+                        name = '%s-%s-%g-%d' % (kind, variant, load, repeat)
+                        row = run_once(variant, kind, load * capacity / args.robots, args,
+                                       work, name)
+                        row.update(variant=variant, load=load, repeat=repeat)
+                        runs['runs'].append(row)
+                        print(capacity_report.line(row), file=sys.stderr, flush=True)
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, 'capacity.json'), 'w') as stream:
+        json.dump(results, stream, indent=1)
+    text = capacity_report.report(results, os.path.join(args.out, 'capacity.png'))
+    with open(os.path.join(args.out, 'capacity.md'), 'w') as stream:
+        stream.write(text)
+    print(text)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,117 @@
+"""The capacity benchmark's figures, table and plot, from its bags (see bench/capacity.py)."""
+
+import collections
+import statistics
+
+import numpy as np
+
+from server_select.core.tables import markdown_table, median_range
+
+COLUMNS = (('offered', 'offered /s', '%.2f', 1.0), ('sent', 'sent /s', '%.2f', 1.0),
+           ('goodput', 'goodput /s', '%.2f', 1.0),
+           ('goodput_share', 'goodput / capacity %', '%.0f', 100.0),
+           ('failed', 'failed', '%d', 1.0), ('mean', 'mean ms', '%.0f', 1e3),
+           ('p50', 'p50 ms', '%.0f', 1e3), ('p99', 'p99 ms', '%.0f', 1e3),
+           ('oldest', 'oldest answer ms', '%.0f', 1e3), ('extra', 'extra sends %', '%.1f', 100.0),
+           ('work', 'server work /s', '%.2f', 1.0), ('wanted', 'work wanted %', '%.0f', 100.0))
+
+
+def detections(bag_path, t0):
+    """``[(t, robot, task, server)]`` of the servers' ``detections`` (one per frame done)."""
+    import rosbag
+    with rosbag.Bag(bag_path) as bag:
+        return [(stamp.to_sec() - t0, m.robot_id, m.task_id, m.server_id)
+                for _, m, stamp in bag.read_messages(topics=['/detections'])]
+
+
+def figures(run, done, offered, start, end, timeout):
+    """The figures of one run: ``run`` a bag_analysis Run, ``done`` its detections (None:
+    not frames), ``offered`` tasks/s the robots were asked to send."""
+    seconds = end - start
+    reports = [r for r in run.reports if start <= r.t < end]
+    rtts = np.array([r.rtt if r.ok else timeout for r in reports]) if reports \
+        else np.array([timeout])
+    ok = [r for r in reports if r.ok]
+    attempts = [max(1, r.attempts) for r in reports]
+    row = {'offered': offered, 'sent': len(reports) / seconds,
+           'goodput': len(ok) / seconds, 'failed': len(reports) - len(ok),
+           'tasks': len(reports), 'mean': float(rtts.mean()),
+           'p50': float(np.percentile(rtts, 50)), 'p99': float(np.percentile(rtts, 99)),
+           'oldest': max([r.rtt for r in ok] or [0.0]),
+           'extra': (sum(attempts) - len(attempts)) / max(1, len(reports))}
+    if done is not None:
+        answered = set((r.robot, r.task, r.answered_by) for r in run.reports if r.ok)
+        mine = [d for d in done if start <= d[0] < end]
+        row['work'] = len(mine) / seconds
+        row['wanted'] = sum(1 for _, robot, task, server in mine
+                            if (robot, task, server) in answered) / max(1, len(mine))
+    return row
+
+
+def line(row):
+    """One run as a line of text (printed while the benchmark runs)."""
+    return '%s x%g: ' % (row['variant'], row['load']) + ', '.join(
+        '%s %s' % (title, spec % (scale * row[key])) for key, title, spec, scale in COLUMNS
+        if key in row)
+
+
+def table(kind, runs, capacity):
+    groups = collections.OrderedDict()
+    for row in sorted(runs, key=lambda r: (r['load'], r['variant'])):
+        row = dict(row, goodput_share=row['goodput'] / capacity)
+        groups.setdefault((row['load'], row['variant']), []).append(row)
+    keys = [c for c in COLUMNS if all(c[0] in r for g in groups.values() for r in g)]
+    return markdown_table(
+        ['load x capacity', 'variant'] + [title for _, title, _, _ in keys],
+        [['%g' % load, variant] + [median_range([scale * r[key] for r in group], spec)
+                                   for key, _, spec, scale in keys]
+         for (load, variant), group in groups.items()])
+
+
+def plot(results, path):
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    kinds = list(results['kinds'])
+    fig, axes = plt.subplots(2, len(kinds), figsize=(6 * len(kinds), 7), squeeze=False)
+    for column, kind in enumerate(kinds):
+        info = results['kinds'][kind]
+        by_variant = collections.defaultdict(lambda: collections.defaultdict(list))
+        for row in info['runs']:
+            by_variant[row['variant']][row['load']].append(row)
+        for variant, loads in sorted(by_variant.items()):
+            xs = sorted(loads)
+            for axis, key, scale in ((axes[0][column], 'goodput', 1.0),
+                                     (axes[1][column], 'mean', 1e3)):
+                ys = [statistics.median(scale * r[key] for r in loads[x]) for x in xs]
+                axis.plot([x * info['capacity'] for x in xs], ys, marker='o', label=variant)
+        top, bottom = axes[0][column], axes[1][column]
+        top.axhline(info['capacity'], color='grey', linestyle=':', label='capacity')
+        top.set_title('%s tasks: goodput (answered within %g s)' % (kind, results['timeout']))
+        top.set_ylabel('answers wanted per s')
+        bottom.set_title('%s tasks: mean round trip (failed at %g s)' % (kind, results['timeout']))
+        bottom.set_ylabel('ms')
+        bottom.set_yscale('log')
+        for axis in (top, bottom):
+            axis.set_xlabel('offered tasks per s (all robots)')
+            axis.grid(True, alpha=0.3)
+            axis.legend(fontsize='small')
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def report(results, png):
+    """The Markdown report (tables per task kind and the plot's link); writes the plot."""
+    plot(results, png)
+    text = ['# Capacity', '', '%d robots, servers of %s of a core (cgroup quota), %g s '
+            'measured per run, task timeout %g s (a failed task counts at it); median '
+            '(min-max) of the runs.' % (results['robots'], ', '.join(
+                '%g' % s for s in results['shares']), results['seconds'], results['timeout']),
+            '']
+    for kind, info in results['kinds'].items():
+        text += ['## %s tasks: %.1f ms of CPU each, capacity %.2f tasks/s' % (
+            kind, 1e3 * info['cpu_per_task'], info['capacity']), '',
+            table(kind, info['runs'], info['capacity']), '']
+    text.append('![goodput and round trip against offered load](capacity.png)')
+    return '\n'.join(text) + '\n'

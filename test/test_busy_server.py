@@ -1,0 +1,107 @@
+#!/usr/bin/env python3
+"""A busy server answers busy at once and the robot's task goes elsewhere (busy_server.test).
+
+This node plays the manager (its flags send robot 1 to server 1 first, server 2 second) and
+keeps server 1's one worker busy with sort tasks of its own, which have no deadline and
+take 0.6 s each (``~work_delay``). Robot 1 (load-aware, task timeout 1 s) gives each task
+the second it has: server 1, whose backlog is more than that, must answer it busy at once,
+without doing it, and the robot must send it to server 2, which answers it; no task fails,
+server 1 is not ejected for being busy, and it still does the work that has time.
+"""
+
+import sys
+import threading
+import time
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+
+from server_select.core.procs import wait_until
+from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
+
+OWN = 99           # the robot id of this node's own tasks
+
+
+class BusyServerTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('test_busy_server')
+        cls.lock = threading.Lock()
+        cls.results, cls.reports, cls.sent = [], [], {}
+        rospy.Subscriber('/processed_data', SortResult, cls.keep, 'results', queue_size=1000,
+                         tcp_nodelay=True)
+        rospy.Subscriber('/task_report', TaskReport, cls.keep, 'reports', queue_size=1000)
+        rospy.Subscriber('/data', SortTask, cls.on_task, queue_size=1000, tcp_nodelay=True)
+        cls.flags = rospy.Publisher('/server_select_flag', SelectionFlag, queue_size=10)
+        cls.tasks = rospy.Publisher('/data', SortTask, queue_size=10)
+
+    @classmethod
+    def keep(cls, msg, key):
+        with cls.lock:
+            getattr(cls, key).append((time.monotonic(), msg))
+
+    @classmethod
+    def on_task(cls, task):
+        if task.robot_id == 1:
+            with cls.lock:
+                cls.sent.setdefault((task.task_id, task.server_id), time.monotonic())
+
+    def of(self, key, test):
+        with self.lock:
+            return [(t, m) for t, m in getattr(self, key) if test(m)]
+
+    def occupy(self, task_id):
+        """One task of this node's own for server 1: 0.6 s of work, no deadline."""
+        self.tasks.publish(SortTask(robot_id=OWN, task_id=task_id, server_id=1,
+                                    data=np.arange(10, dtype=np.int32)))
+
+    def test_a_busy_server_refuses_at_once_and_the_task_goes_elsewhere(self):
+        self.assertTrue(wait_until(lambda: self.tasks.get_num_connections() >= 2 and
+                                   self.flags.get_num_connections() >= 1, 30.0))
+        self.occupy(1)              # server 1 learns what a sort task takes (0.6 s)
+        self.assertTrue(wait_until(lambda: self.of('results', lambda m: m.robot_id == OWN),
+                                   10.0), 'server 1 did not answer this node')
+        own, stop, next_occupy = 2, time.monotonic() + 12.0, 0.0
+        while time.monotonic() < stop and not rospy.is_shutdown():
+            self.flags.publish(SelectionFlag(robot_id=1, server_id=1, ranking=[1, 2]))
+            if time.monotonic() >= next_occupy:     # two queued behind the one in service
+                for _ in range(2):
+                    self.occupy(own)
+                    own += 1
+                next_occupy = time.monotonic() + 1.2
+            time.sleep(0.1)
+        time.sleep(1.5)             # the robot's last tasks end (timeout 1 s)
+        reports = [m for _, m in self.of('reports', lambda m: m.robot_id == 1)]
+        moved = [r for r in reports if r.server_id == 1 and r.answered_by == 2]
+        answers = self.of('results', lambda m: m.robot_id == 1 and m.server_id == 1)
+        busy = [(t - self.sent[(m.task_id, 1)], m) for t, m in answers if m.busy]
+        done = [m for _, m in answers if m.ok]
+        after = sorted(dt for dt, _ in busy)
+        print('\nrobot 1: %d tasks reported, %d failed; %d sent to server 1 first and '
+              'answered by server 2; server 1 answered %d of them busy, after %s ms (median, '
+              'max), and did %d that had time; it did %d of this node\'s tasks' % (
+                  len(reports), sum(not r.ok for r in reports), len(moved), len(busy),
+                  ', '.join('%.1f' % (1e3 * x) for x in (after[len(after) // 2], after[-1]))
+                  if after else '-', len(done),
+                  len(self.of('results', lambda m: m.robot_id == OWN and m.ok))))
+        for dt, m in busy:
+            print('  busy answer to task %d after %.1f ms: %s' % (m.task_id, 1e3 * dt, m.error))
+        self.assertEqual([r for r in reports if not r.ok], [])
+        self.assertGreaterEqual(len(moved), 4, reports)
+        self.assertTrue(all(r.ok and r.attempts == 2 for r in moved), moved)
+        self.assertEqual(len(answers), len(busy) + len(done), answers)   # nothing else
+        self.assertGreaterEqual(len(busy), len(moved))
+        self.assertLess(after[-1], 0.2, 'a busy answer must come at once')
+        # not ejected: the robot keeps coming back to server 1 (probes and flags say it
+        # is up), each time its load says a task could be done again
+        times = sorted(r.header.stamp.to_sec() for r in moved)
+        self.assertGreater(times[-1] - times[0], 6.0, times)
+        self.assertGreaterEqual(len(self.of('results', lambda m: m.robot_id == OWN and m.ok)),
+                                5, 'server 1 must keep doing the work that has time')
+
+
+if __name__ == '__main__':
+    rostest.rosrun('server_select', 'busy_server', BusyServerTest, sys.argv)
