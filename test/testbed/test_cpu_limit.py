@@ -3,12 +3,13 @@ fifth of a core, side by side with one in a host without a limit, and the groups
 after the run. Needs root and the cgroup cpu controller (skipped elsewhere, with why)."""
 
 import os
+import subprocess
 import sys
 
 import pytest
 
 from server_select.core.procs import measure, wait_until
-from server_select.testbed.cpu import controller
+from server_select.testbed.cpu import CpuLimit, controller
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed import netns
 from server_select.testbed.scenario import Scenario
@@ -56,3 +57,23 @@ def test_a_cpu_share_is_checked_where_the_scenario_is_read():
                                 's': {'role': 'server', 'id': 1, 'cpu': bad}}})
     with pytest.raises(ScenarioError, match='manager host has no CPU limit'):
         Scenario({'hosts': {'manager': {'role': 'manager', 'cpu': 0.5}}})
+
+
+def test_a_process_in_a_cpu_limited_group_sees_the_cores_it_may_use():
+    """What a server's ``~workers`` defaults to: its cgroup's quota rounded up. (In a
+    testbed host the quota holds but cannot be read: ``ip netns exec`` mounts a /sys of
+    its own, without the cgroup files; the testbed tells its servers ``workers``.)"""
+    cores = len(os.sched_getaffinity(0))
+    code = 'from server_select.core.procs import usable_cpus; print(usable_cpus())'
+    seen = {}
+    for share in (0.25, max(0.5, cores - 0.5)):
+        limit = CpuLimit('sscpus-%g' % share, share).create()
+        try:
+            seen[share] = subprocess.run([sys.executable, '-c', code], preexec_fn=limit.join,
+                                         stdout=subprocess.PIPE, universal_newlines=True,
+                                         check=True).stdout.strip()
+        finally:
+            limit.remove()
+    seen[None] = subprocess.run([sys.executable, '-c', code], stdout=subprocess.PIPE,
+                                universal_newlines=True, check=True).stdout.strip()
+    assert seen == {0.25: '1', max(0.5, cores - 0.5): str(cores), None: str(cores)}, seen

@@ -114,6 +114,15 @@ def test_an_attempt_deadline_follows_what_the_server_says_it_takes():
     assert clock.seconds(3) == 5.0                   # never past the task timeout
 
 
+def test_no_hedge_for_a_delay_the_servers_load_explains():
+    expected = {3: 0.5}
+    clock = AttemptClock(5.0, min_samples=1, expected=expected.get)
+    clock.add(3, 0.2)
+    assert clock.hedge_seconds(3, 0.95) == pytest.approx(1.0)   # 2 x what the load says
+    expected[3] = None
+    assert clock.hedge_seconds(3, 0.95) == pytest.approx(0.2)   # else the quantile
+
+
 def ranking(means):
     order = sorted(means, key=means.get)
     return Ranking(order[0], order, [means[s] for s in order], [10] * len(order), [])

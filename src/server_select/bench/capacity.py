@@ -24,6 +24,7 @@ and how many of those a robot still wanted.
 import argparse
 import collections
 import json
+import math
 import os
 import sys
 import tempfile
@@ -110,15 +111,16 @@ def run_once(variant, kind, rate, args, work, name):
             run.launch('manager', 'manager.launch', 'profile:=%s' % profile,
                        'robots:=%s' % ','.join(str(r) for r in range(1, args.robots + 1)),
                        'servers:=%s' % servers)
-        for server in range(1, len(shares) + 1):
+        for server in range(1, len(shares) + 1):   # a host's /sys hides its cgroup quota
             run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server,
-                       'routing:=direct')
+                       'routing:=direct', 'workers:=%d' % math.ceil(shares[server - 1]))
         for robot in range(1, args.robots + 1):
             run.launch('robot%d' % robot, 'robot.launch', 'robot_id:=%d' % robot,
                        'profile:=%s' % profile, 'servers:=%s' % servers,
                        'mode:=%s' % ('fixed' if variant == 'static' else 'select'),
                        'fixed_server:=%d' % fixed[robot], 'task_timeout:=%g' % TIMEOUT,
-                       'start_delay:=5', *robot_args(kind, rate, args.frames))
+                       'start_delay:=5', *(robot_args(kind, rate, args.frames) +
+                                           args.robot_args.split()))
     with open(bag + '.json', 'w') as stream:     # times since the scenario's t0
         json.dump({'t0': t0}, stream)
     done = capacity_report.detections(bag, t0) if kind == 'image' else None
@@ -139,6 +141,9 @@ def parse(argv):
     parser.add_argument('--delay', type=float, default=0.5, help='one-way link delay, ms')
     parser.add_argument('--repeats', type=int, default=1)
     parser.add_argument('--out', default='results/bench')
+    parser.add_argument('--work', help='keep the runs (bags, node logs) in this folder')
+    parser.add_argument('--robot-args', default='', help='more robot.launch arguments for '
+                        'every robot, e.g. "max_in_flight:=1 hedge:=false"')
     args = parser.parse_args(argv)
     args.shares = [float(s) for s in args.shares.split(',')]
     args.loads = [float(x) for x in args.loads.split(',')]
@@ -155,9 +160,10 @@ def main(argv=None):
     args = parse(sys.argv[1:] if argv is None else argv)
     results = {'shares': args.shares, 'robots': args.robots, 'timeout': TIMEOUT,
                'seconds': args.seconds, 'kinds': {}}
-    with tempfile.TemporaryDirectory(prefix='bench_capacity') as work:
+    with tempfile.TemporaryDirectory(prefix='bench_capacity') as scratch:
+        work = args.work or scratch
         args.frames = os.path.join(work, 'frames')
-        os.makedirs(args.frames)
+        os.makedirs(args.frames, exist_ok=True)
         cv2.imwrite(os.path.join(args.frames, 'face.png'), frame())
         for kind in args.kinds:
             cpu = cpu_per_task(kind)

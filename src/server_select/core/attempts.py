@@ -41,9 +41,13 @@ class AttemptClock(object):
 
     def hedge_seconds(self, server, quantile):
         """The ``quantile`` of the server's recent round trips (None while it has fewer than
-        ``min_samples``): how long to wait before a hedged copy goes elsewhere."""
+        ``min_samples``), and at least what its load says a task takes (a delay the load
+        explains is no tail to hedge against, and a copy is twice the work): how long to
+        wait before a hedged copy goes elsewhere."""
         with self._lock:
             rtts = sorted(self._rtts.get(server, ()))
         if len(rtts) < self.min_samples:
             return None
-        return rtts[min(len(rtts) - 1, int(quantile * len(rtts)))]
+        seconds = rtts[min(len(rtts) - 1, int(quantile * len(rtts)))]
+        expected = self.expected(server) if self.expected is not None else None
+        return seconds if expected is None else max(seconds, self.load_factor * expected)

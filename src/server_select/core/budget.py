@@ -14,7 +14,7 @@ import time
 class RetryBudget(object):
     """Thread-safe; ``ratio`` 0 means no limit."""
 
-    def __init__(self, ratio=0.1, window=10.0, reserve=5, clock=time.monotonic):
+    def __init__(self, ratio=0.1, window=10.0, reserve=2, clock=time.monotonic):
         if ratio < 0 or not window > 0 or reserve < 0:
             raise ValueError('need ratio >= 0, window > 0, reserve >= 0: %r %r %r'
                              % (ratio, window, reserve))

@@ -1,6 +1,7 @@
 """Processes: waiting for a condition, stopping a process group or a set of processes, CPU
 and memory use."""
 
+import math
 import os
 import signal
 import subprocess
@@ -33,6 +34,44 @@ def stop_group(proc, sig=signal.SIGINT, timeout=15.0):
         return proc.wait()
     except ProcessLookupError:
         return proc.wait()
+
+
+def usable_cpus(pid='self', root='/sys/fs/cgroup'):
+    """The cores process ``pid`` may use: its CPU affinity, capped by its cgroup's CPU quota
+    (v1 ``cpu.cfs_quota_us`` / ``cpu.cfs_period_us``, v2 ``cpu.max``), rounded up (a
+    quarter of a core is one)."""
+    cores = len(os.sched_getaffinity(0 if pid == 'self' else int(pid)))
+    try:
+        with open('/proc/%s/cgroup' % pid) as stream:
+            lines = [line.rstrip('\n').split(':', 2) for line in stream]
+    except OSError:
+        return cores
+    for _, controllers, path in lines:
+        quota = None
+        if 'cpu' in controllers.split(','):
+            quota = _read(os.path.join(root, 'cpu', path.lstrip('/'), 'cpu.cfs_quota_us'),
+                          os.path.join(root, 'cpu', path.lstrip('/'), 'cpu.cfs_period_us'))
+        elif controllers == '':
+            quota = _read(os.path.join(root, path.lstrip('/'), 'cpu.max'))
+        if quota:
+            cores = min(cores, max(1, int(math.ceil(quota - 1e-9))))
+    return cores
+
+
+def _read(path, period_path=None):
+    """A quota in cores from ``cpu.max`` (``quota period``) or from a v1 quota file and its
+    period's; None: no limit, or no such file."""
+    try:
+        with open(path) as stream:
+            words = stream.read().split()
+        if period_path is not None:
+            with open(period_path) as stream:
+                words.append(stream.read().strip())
+    except OSError:
+        return None
+    if len(words) != 2 or words[0] in ('max', '-1'):
+        return None
+    return int(words[0]) / float(words[1])
 
 
 def kill_all(pids, grace=5.0):

@@ -77,7 +77,8 @@ PARAMS = {
     'work_delay': Param(0.0, parse_non_negative, 'each task takes this much longer (s): a '
                         'slower or busier machine; rosparam set changes it at run time'),
     'queue_size': Param(100, parse_positive_int, 'task subscriber queue length'),
-    'workers': Param(0, parse_count, "tasks a server works on at once (0: the host's cores)"),
+    'workers': Param(0, parse_count, 'tasks a server works on at once (0: the cores it may '
+                     "use, its cgroup's CPU quota rounded up)"),
     'max_queue': Param(100, parse_positive_int, 'tasks waiting for a worker; more are answered '
                        'busy'),
     'load_aware': Param(False, parse_bool, "rank servers by round trip + the server's backlog "
@@ -87,7 +88,7 @@ PARAMS = {
                            'them all out waits for one to end, the newest frame winning '
                            '(0: no limit)'),
     'retry_budget': Param(0.1, parse_non_negative, 're-sends and hedges: at most this share '
-                          'of the tasks sent in the last 10 s, plus 5 (0: no limit)'),
+                          'of the tasks sent in the last 10 s, plus 2 (0: no limit)'),
     'spread': Param(False, parse_bool, 'a warranted move away from a ranked server is taken '
                     'with probability 1 - best/current, drawn once per dwell (no herds)'),
     'max_image_pixels': Param(1 << 24, parse_positive_int, 'larger frames get an error result'),
@@ -163,7 +164,7 @@ PROFILES = {
               'window': 1.5, 'probe_rate': 4.0, 'passive': True, 'task_memory': 5.0,
               'fail_fast': 2, 'hedge': True,
               # capacity: README, "Capacity and overload"
-              'load_aware': True, 'max_in_flight': 2, 'spread': True},
+              'load_aware': True, 'max_in_flight': 1, 'spread': True},
 }
 
 

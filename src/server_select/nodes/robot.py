@@ -117,9 +117,13 @@ class RobotNode(object):
             hedge=param('hedge_quantile') if param('hedge') else None, budget=self.budget,
             max_in_flight=param('max_in_flight'),
             newest_wins=getattr(kind, 'newest_wins', False),
+            # load-aware: a server's first answers may take half the timeout (its work is
+            # not known yet; its probes say whether it is up)
             deadlines=AttemptClock(timeout, factor=param('retry_factor'),
-                                   floor=param('retry_floor'), expected=self.load.expected(
-                                       kind.kind) if self.load else None),
+                                   floor=param('retry_floor'),
+                                   first=timeout / 2.0 if self.load else 1.0,
+                                   expected=self.load.expected(kind.kind) if self.load
+                                   else None),
             on_answer=functools.partial(self.passive.on_answer, kind.kind)
             if self.passive else None), local=mode == 'local',
             expected_publisher=self.server_node, route=ROUTES[param('routing')], load=self.load)

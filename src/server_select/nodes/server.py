@@ -1,7 +1,6 @@
 """Compute server: answers latency probes, and the sort and image tasks addressed to it."""
 
 import concurrent.futures
-import os
 import queue
 import threading
 import time
@@ -12,6 +11,7 @@ from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 
 from server_select.core import names
 from server_select.core.params import ParamError
+from server_select.core.procs import usable_cpus
 from server_select.core.sort_task import TaskError, sort_values
 from server_select.msg import Detection, Detections, ImageResult, SortResult
 from server_select.ros.node import fleet, param, run
@@ -55,7 +55,8 @@ class ServerNode(object):
         - ``~profile`` (``paper``), ``~routing`` (``broadcast``; fleet: ``direct``)
         - ``~max_task_len`` (int, 1000000): larger sort tasks get an error result.
         - ``~queue_size`` (int, 100): task subscriber queues.
-        - ``~workers`` (int, 0: the host's cores): tasks worked on at once.
+        - ``~workers`` (int, 0: the cores this process may use, its cgroup's CPU quota
+          rounded up): tasks worked on at once.
         - ``~max_queue`` (int, 100): tasks waiting for a worker; more are answered busy.
         - ``~detector`` (str, ``haar``): ``haar`` or ``hog``.
         - ``~cascade`` (str, ``haarcascade_frontalface_default.xml``)
@@ -82,7 +83,7 @@ class ServerNode(object):
         self.max_image_pixels = param('max_image_pixels')
         self.jpeg_quality = param('jpeg_quality')
         self.work_delay = param('work_delay')
-        workers = param('workers') or len(os.sched_getaffinity(0))
+        workers = param('workers') or usable_cpus()
         self.work = ServerWork(self.server_id, workers, param('max_queue'))
         # one detector a worker: a detector searches one frame at a time
         self.detectors = queue.Queue()
