@@ -23,17 +23,23 @@ and how many of those a robot still wanted.
 
 import argparse
 import collections
+import io
 import json
 import math
 import os
 import sys
 import tempfile
+import threading
 import time
 
 import cv2
 import numpy as np
 
+from rospy.numpy_msg import numpy_msg
+
 from server_select.bench import capacity_report
+from server_select.core.sort_task import sort_values
+from server_select.msg import SortResult, SortTask
 from server_select.bench.harness import scenario_run
 from server_select.testbed import bag_analysis
 from server_select.vision import image_codec
@@ -43,7 +49,7 @@ from server_select.vision.search import sample_image
 VARIANTS = ('paper', 'fleet', 'static')
 TIMEOUT = 5.0        # the task timeout: an answer later than this is not wanted
 WARMUP = 15.0        # s of scenario time before the measured part (nodes up, first tasks)
-SORT_SIZE = 200000
+SORT_SIZE = 20000    # 80 kB a task: on this testbed bytes, not CPU, limit larger ones
 
 
 def frame():
@@ -57,15 +63,23 @@ def cpu_per_task(kind, repeats=10):
         fmt, data = image_codec.encode(frame(), 80)
         detector = Detector()
         work = lambda: search_frame(detector, ('', 0, 0, 0, b''), (fmt, data))  # noqa: E731
-    else:
+    else:       # what a server does with a sort task: the message in, sorted, out
         values = np.random.default_rng(1).integers(-2 ** 31, 2 ** 31 - 1, SORT_SIZE,
                                                    dtype=np.int32)
-        work = lambda: np.sort(values)       # noqa: E731
+        buff = io.BytesIO()
+        numpy_msg(SortTask)(data=values).serialize(buff)
+        work = lambda: sort_message(buff.getvalue())     # noqa: E731
     work()
     start = time.process_time()
     for _ in range(repeats):
         work()
     return (time.process_time() - start) / repeats
+
+
+def sort_message(raw):
+    task = numpy_msg(SortTask)()
+    task.deserialize(raw)
+    numpy_msg(SortResult)(data=sort_values(task.data, len(task.data))).serialize(io.BytesIO())
 
 
 def static_assignment(shares, robots):
@@ -80,10 +94,13 @@ def static_assignment(shares, robots):
     return assigned
 
 
-def scenario(shares, robots, seconds, delay):
+def scenario(shares, robots, seconds, delay, late=None):
+    """The testbed scenario; ``late``: the last server starts then (scenario time)."""
     hosts = {'manager': {'role': 'manager'}}
     for index, share in enumerate(shares, start=1):
         hosts['server%d' % index] = {'role': 'server', 'id': index, 'cpu': share}
+    if late is not None:
+        hosts['server%d' % len(shares)]['start'] = late
     for robot in range(1, robots + 1):
         hosts['robot%d' % robot] = {'role': 'robot', 'id': robot}
     return {'name': 'capacity', 'duration': WARMUP + seconds, 'hosts': hosts,
@@ -101,7 +118,8 @@ def run_once(variant, kind, rate, args, work, name):
     """One run: the figures of :func:`capacity_report.figures` for it."""
     shares = args.shares
     servers = ','.join(str(s) for s in range(1, len(shares) + 1))
-    data = scenario(shares, args.robots, args.seconds, args.delay)
+    late = WARMUP + args.seconds / 3.0 if args.late else None
+    data = scenario(shares, args.robots, args.seconds, args.delay, late)
     profile = 'fleet' if variant == 'fleet' else 'paper'
     fixed = static_assignment(shares, args.robots)
     with scenario_run(data, work, name, 'sscap', record=(
@@ -110,10 +128,17 @@ def run_once(variant, kind, rate, args, work, name):
         if variant != 'static':
             run.launch('manager', 'manager.launch', 'profile:=%s' % profile,
                        'robots:=%s' % ','.join(str(r) for r in range(1, args.robots + 1)),
-                       'servers:=%s' % servers)
+                       'servers:=%s' % servers, *args.manager_args.split())
         for server in range(1, len(shares) + 1):   # a host's /sys hides its cgroup quota
-            run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server,
-                       'routing:=direct', 'workers:=%d' % math.ceil(shares[server - 1]))
+            args_of = ('server%d' % server, 'server.launch', 'server_id:=%d' % server,
+                       'routing:=direct', 'workers:=%d' % math.ceil(shares[server - 1]),
+                       'summary_period:=5')
+            if late is not None and server == len(shares):
+                threading.Thread(target=lambda a=args_of: (run.tb.sleep_until(late),
+                                                           run.launch(*a)),
+                                 daemon=True).start()
+            else:
+                run.launch(*args_of)
         for robot in range(1, args.robots + 1):
             run.launch('robot%d' % robot, 'robot.launch', 'robot_id:=%d' % robot,
                        'profile:=%s' % profile, 'servers:=%s' % servers,
@@ -124,8 +149,15 @@ def run_once(variant, kind, rate, args, work, name):
     with open(bag + '.json', 'w') as stream:     # times since the scenario's t0
         json.dump({'t0': t0}, stream)
     done = capacity_report.detections(bag, t0) if kind == 'image' else None
-    return capacity_report.figures(bag_analysis.load(bag), done, rate * args.robots, WARMUP,
-                                   WARMUP + args.seconds, TIMEOUT)
+    # each server's tasks/s by its share (frames: the CPU a frame takes is the work; a sort
+    # task's is mostly message handling, which is not modelled: no overload figure)
+    capacities = dict((s, share / args.cpu) for s, share in enumerate(shares, start=1)) \
+        if kind == 'image' else None
+    row = capacity_report.figures(bag_analysis.load(bag), done, rate * args.robots, WARMUP,
+                                  WARMUP + args.seconds, TIMEOUT, capacities)
+    row['work'] = capacity_report.work_rate(os.path.join(work, name), t0, WARMUP,
+                                            WARMUP + args.seconds)
+    return row
 
 
 def parse(argv):
@@ -140,15 +172,27 @@ def parse(argv):
     parser.add_argument('--seconds', type=float, default=40.0, help='measured s per run')
     parser.add_argument('--delay', type=float, default=0.5, help='one-way link delay, ms')
     parser.add_argument('--repeats', type=int, default=1)
+    parser.add_argument('--late', action='store_true', help='the last server starts a third '
+                        'of the way into the measured part, idle (herd)')
     parser.add_argument('--out', default='results/bench')
     parser.add_argument('--work', help='keep the runs (bags, node logs) in this folder')
     parser.add_argument('--robot-args', default='', help='more robot.launch arguments for '
                         'every robot, e.g. "max_in_flight:=1 hedge:=false"')
+    parser.add_argument('--manager-args', default='', help='more manager.launch arguments')
+    parser.add_argument('--capacity', action='append', default=[], metavar='KIND=RATE',
+                        help="the servers' capacity in tasks/s that --loads multiply (default: "
+                        'their shares over the CPU a task takes here; a sort task\'s cost is '
+                        'mostly message handling, which that leaves out: measure it, e.g. '
+                        'with --variants static at a high load, and give it here)')
     args = parser.parse_args(argv)
     args.shares = [float(s) for s in args.shares.split(',')]
     args.loads = [float(x) for x in args.loads.split(',')]
     args.kinds = [k for k in args.kinds.split(',') if k]
     args.variants = [v for v in args.variants.split(',') if v]
+    try:
+        args.capacity = dict((k, float(v)) for k, v in (c.split('=') for c in args.capacity))
+    except ValueError:
+        parser.error('--capacity takes KIND=RATE, e.g. sort=40')
     bad = [k for k in args.kinds if k not in ('image', 'sort')] + \
         [v for v in args.variants if v not in VARIANTS]
     if bad or args.robots < 1 or not args.shares:
@@ -166,8 +210,8 @@ def main(argv=None):
         os.makedirs(args.frames, exist_ok=True)
         cv2.imwrite(os.path.join(args.frames, 'face.png'), frame())
         for kind in args.kinds:
-            cpu = cpu_per_task(kind)
-            capacity = sum(args.shares) / cpu
+            cpu = args.cpu = cpu_per_task(kind)
+            capacity = args.capacity.get(kind, sum(args.shares) / cpu)
             runs = results['kinds'][kind] = {'cpu_per_task': cpu, 'capacity': capacity,
                                              'runs': []}
             print('%s: %.1f ms of CPU per task: capacity %.2f tasks/s' % (

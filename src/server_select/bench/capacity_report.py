@@ -1,6 +1,9 @@
 """The capacity benchmark's figures, table and plot, from its bags (see bench/capacity.py)."""
 
 import collections
+import glob
+import os
+import re
 import statistics
 
 import numpy as np
@@ -9,11 +12,36 @@ from server_select.core.tables import markdown_table, median_range
 
 COLUMNS = (('offered', 'offered /s', '%.2f', 1.0), ('sent', 'sent /s', '%.2f', 1.0),
            ('goodput', 'goodput /s', '%.2f', 1.0),
-           ('goodput_share', 'goodput / capacity %', '%.0f', 100.0),
+           ('goodput_share', 'goodput / measured capacity %', '%.0f', 100.0),
            ('failed', 'failed', '%d', 1.0), ('mean', 'mean ms', '%.0f', 1e3),
            ('p50', 'p50 ms', '%.0f', 1e3), ('p99', 'p99 ms', '%.0f', 1e3),
            ('oldest', 'oldest answer ms', '%.0f', 1e3), ('extra', 'extra sends %', '%.1f', 100.0),
-           ('work', 'server work /s', '%.2f', 1.0), ('wanted', 'work wanted %', '%.0f', 100.0))
+           ('work', 'server work /s', '%.2f', 1.0), ('wanted', 'work wanted %', '%.0f', 100.0),
+           ('switches', 'switches /min /robot', '%.1f', 1.0),
+           ('overloaded', 'longest overload s', '%.0f', 1.0))
+
+
+WORKED = re.compile(r'\[INFO\] \[([0-9.]+)\]: server ([0-9]+): .*?([0-9]+) tasks worked on')
+
+
+def work_rate(run_dir, t0, start, end):
+    """Tasks/s the servers worked on between scenario times ``start`` and ``end``, from
+    the periodic summary lines in their logs (``run_dir/ros_home/<host>/log``); None when
+    a server logged fewer than two lines in that time."""
+    counts = collections.defaultdict(list)
+    for path in glob.glob(os.path.join(run_dir, 'ros_home', '*', 'log', '*', '*-stdout.log')):
+        with open(path, errors='replace') as stream:
+            for match in WORKED.finditer(stream.read()):
+                t = float(match.group(1)) - t0
+                if start <= t <= end:
+                    counts[int(match.group(2))].append((t, int(match.group(3))))
+    rates = []
+    for points in counts.values():
+        points = sorted(set(points))
+        if len(points) < 2:
+            return None
+        rates.append((points[-1][1] - points[0][1]) / (points[-1][0] - points[0][0]))
+    return sum(rates) if rates else None
 
 
 def detections(bag_path, t0):
@@ -24,9 +52,32 @@ def detections(bag_path, t0):
                 for _, m, stamp in bag.read_messages(topics=['/detections'])]
 
 
-def figures(run, done, offered, start, end, timeout):
+def overloaded(reports, capacities, timeout, start, end, span=2.0, slack=1.25):
+    """The longest time (s) that some server was sent more than ``slack`` x its capacity
+    (``capacities[server]``, tasks/s), in sliding ``span`` s windows (a stretch counts from
+    the first such window's start to the last one's end; a task is sent at its report's
+    time less its round trip, or less the timeout when it failed)."""
+    sent = collections.defaultdict(list)
+    for r in reports:
+        sent[r.server].append(r.t - (r.rtt if r.ok else timeout))
+    longest = 0.0
+    for server, capacity in capacities.items():
+        times, run_start = np.sort(sent.get(server, [])), None
+        for t in np.arange(start, end, 0.25):
+            count = np.searchsorted(times, t + span) - np.searchsorted(times, t)
+            if count > slack * capacity * span:
+                run_start = t if run_start is None else run_start
+                longest = max(longest, t + span - run_start)
+            else:
+                run_start = None
+    return longest
+
+
+def figures(run, done, offered, start, end, timeout, capacities=None):
     """The figures of one run: ``run`` a bag_analysis Run, ``done`` its detections (None:
-    not frames), ``offered`` tasks/s the robots were asked to send."""
+    not frames), ``offered`` tasks/s the robots were asked to send, ``capacities`` each
+    server's tasks/s."""
+    from server_select.testbed.bag_analysis import switches
     seconds = end - start
     reports = [r for r in run.reports if start <= r.t < end]
     rtts = np.array([r.rtt if r.ok else timeout for r in reports]) if reports \
@@ -38,11 +89,14 @@ def figures(run, done, offered, start, end, timeout):
            'tasks': len(reports), 'mean': float(rtts.mean()),
            'p50': float(np.percentile(rtts, 50)), 'p99': float(np.percentile(rtts, 99)),
            'oldest': max([r.rtt for r in ok] or [0.0]),
-           'extra': (sum(attempts) - len(attempts)) / max(1, len(reports))}
+           'extra': (sum(attempts) - len(attempts)) / max(1, len(reports)),
+           'switches': sum(switches(reports).values()) * 60.0 / seconds / max(
+               1, len(set(r.robot for r in reports)))}
+    if capacities:
+        row['overloaded'] = overloaded(reports, capacities, timeout, start, end)
     if done is not None:
         answered = set((r.robot, r.task, r.answered_by) for r in run.reports if r.ok)
         mine = [d for d in done if start <= d[0] < end]
-        row['work'] = len(mine) / seconds
         row['wanted'] = sum(1 for _, robot, task, server in mine
                             if (robot, task, server) in answered) / max(1, len(mine))
     return row
@@ -55,12 +109,21 @@ def line(row):
         if key in row)
 
 
+def measured(runs):
+    """The most work the servers were seen to do (tasks/s), over ``runs``: their capacity
+    as measured (None: no run logged it)."""
+    seen = [r['work'] for r in runs if r.get('work') is not None]
+    return max(seen) if seen else None
+
+
 def table(kind, runs, capacity):
     groups = collections.OrderedDict()
+    capacity = measured(runs) or capacity
     for row in sorted(runs, key=lambda r: (r['load'], r['variant'])):
         row = dict(row, goodput_share=row['goodput'] / capacity)
         groups.setdefault((row['load'], row['variant']), []).append(row)
-    keys = [c for c in COLUMNS if all(c[0] in r for g in groups.values() for r in g)]
+    keys = [c for c in COLUMNS if all(r.get(c[0]) is not None for g in groups.values()
+                                      for r in g)]
     return markdown_table(
         ['load x capacity', 'variant'] + [title for _, title, _, _ in keys],
         [['%g' % load, variant] + [median_range([scale * r[key] for r in group], spec)
@@ -86,7 +149,8 @@ def plot(results, path):
                 ys = [statistics.median(scale * r[key] for r in loads[x]) for x in xs]
                 axis.plot([x * info['capacity'] for x in xs], ys, marker='o', label=variant)
         top, bottom = axes[0][column], axes[1][column]
-        top.axhline(info['capacity'], color='grey', linestyle=':', label='capacity')
+        top.axhline(measured(info['runs']) or info['capacity'], color='grey', linestyle=':',
+                    label='measured capacity')
         top.set_title('%s tasks: goodput (answered within %g s)' % (kind, results['timeout']))
         top.set_ylabel('answers wanted per s')
         bottom.set_title('%s tasks: mean round trip (failed at %g s)' % (kind, results['timeout']))
@@ -110,8 +174,12 @@ def report(results, png):
                 '%g' % s for s in results['shares']), results['seconds'], results['timeout']),
             '']
     for kind, info in results['kinds'].items():
-        text += ['## %s tasks: %.1f ms of CPU each, capacity %.2f tasks/s' % (
-            kind, 1e3 * info['cpu_per_task'], info['capacity']), '',
-            table(kind, info['runs'], info['capacity']), '']
+        text += ['## %s tasks: %.1f ms of CPU each (measured here on one core), capacity by '
+                 'it %.2f tasks/s; the most the servers did: %s tasks/s' % (
+                     kind, 1e3 * info['cpu_per_task'], info['capacity'],
+                     '%.2f' % measured(info['runs']) if measured(info['runs']) else '-'), '',
+                 'Offered load is in multiples of the capacity by CPU; "goodput / measured '
+                 'capacity" is to the most work the servers were seen to do in any run.', '',
+                 table(kind, info['runs'], info['capacity']), '']
     text.append('![goodput and round trip against offered load](capacity.png)')
     return '\n'.join(text) + '\n'

@@ -58,6 +58,7 @@ class ServerNode(object):
         - ``~workers`` (int, 0: the cores this process may use, its cgroup's CPU quota
           rounded up): tasks worked on at once.
         - ``~max_queue`` (int, 100): tasks waiting for a worker; more are answered busy.
+        - ``~summary_period`` (s, 10): period of the log line of what it has done.
         - ``~detector`` (str, ``haar``): ``haar`` or ``hog``.
         - ``~cascade`` (str, ``haarcascade_frontalface_default.xml``)
         - ``~scale_factor`` (1.2), ``~min_neighbors`` (5), ``~min_size`` (24 px): cascade settings.
@@ -122,6 +123,8 @@ class ServerNode(object):
                       self.server_id, self.probe_srv.resolved_name,
                       ', '.join(t for e in self.endpoints for t in e.topics))
         self.work_timer = rospy.Timer(rospy.Duration(1.0), self.on_work_check)
+        self.summary_timer = rospy.Timer(rospy.Duration(param('summary_period')),
+                                         lambda _e: rospy.loginfo(self.summary()))
         rospy.on_shutdown(self.on_shutdown)
 
     def on_work_check(self, _event):
@@ -233,12 +236,16 @@ class ServerNode(object):
 
     def on_shutdown(self):
         self.work_timer.shutdown()
+        self.summary_timer.shutdown()
         self._pool.shutdown(wait=False)
         self.work.shutdown()
-        rospy.loginfo('server %d: %d tasks done, %d rejected; %s%s', self.server_id,
-                      self.tasks_done, self.tasks_failed, self.work.summary(),
-                      ''.join('; %s: %d done, %d rejected' % (p.plugin.kind, p.done, p.rejected)
-                              for p in self.plugins))
+        rospy.loginfo(self.summary())
+
+    def summary(self):
+        return 'server %d: %d tasks done, %d rejected; %s%s' % (
+            self.server_id, self.tasks_done, self.tasks_failed, self.work.summary(),
+            ''.join('; %s: %d done, %d rejected' % (p.plugin.kind, p.done, p.rejected)
+                    for p in self.plugins))
 
 
 def main():
