@@ -112,10 +112,11 @@ bench-hedging: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.hedging --out results/bench
 
 # Goodput and round trip against offered load on servers of finite CPU (cgroup quotas):
-# paper, fleet and the static assignment, camera frames and sort tasks (root, ~50 min).
+# paper, fleet and the static assignment; overload, crowd and herd (root, ~50 min).
 bench-capacity: build
-	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.capacity --kinds image,sort \
-	  --loads 0.5,1,1.5,2 --repeats 2 --out results/bench
+	@$(ROSENV) cd $(TOP) && for s in overload crowd herd; do \
+	  $(PY) -m server_select.bench.capacity --scenario $$s --repeats 2 --out results/bench \
+	  || exit 1; done
 
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build

@@ -43,8 +43,9 @@ def test_capacity_on_cpu_limited_servers(tmp_path):
     out = run('server_select.bench.capacity',
               ['--shares', '0.2,0.2', '--robots', '2', '--loads', '1', '--variants',
                'fleet,static', '--seconds', '12'], tmp_path)
-    results = json.loads((tmp_path / 'capacity.json').read_text())
+    results = json.loads((tmp_path / 'capacity_overload.json').read_text())
     runs = results['kinds']['image']['runs']
     assert [r['variant'] for r in runs] == ['fleet', 'static']
     assert all(r['tasks'] > 0 and r['work'] > 0 for r in runs), runs
-    assert (tmp_path / 'capacity.png').exists() and 'goodput / measured capacity %' in out
+    assert (tmp_path / 'capacity_overload.png').exists()
+    assert 'goodput / measured capacity %' in out

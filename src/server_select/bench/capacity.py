@@ -47,6 +47,15 @@ from server_select.vision.detection import Detector, search_frame
 from server_select.vision.search import sample_image
 
 VARIANTS = ('paper', 'fleet', 'static')
+# The cases of the capacity work, as defaults of the options (an option given wins):
+SCENARIOS = {
+    # offered load stepping from half to twice the capacity of 3 equal servers
+    'overload': dict(shares='0.25,0.25,0.25', robots=6, loads='0.5,1,2'),
+    # 10 robots, 4 servers of unequal capacity and distance, at a load they can carry
+    'crowd': dict(shares='0.4,0.3,0.2,0.1', delays='5,2,1,0.5', robots=10, loads='0.5'),
+    # a server that comes up idle a third of the way in: robots must not all jump to it
+    'herd': dict(shares='0.25,0.25,0.25', robots=6, loads='0.5', late=True),
+}
 TIMEOUT = 5.0        # the task timeout: an answer later than this is not wanted
 WARMUP = 15.0        # s of scenario time before the measured part (nodes up, first tasks)
 SORT_SIZE = 20000    # 80 kB a task: on this testbed bytes, not CPU, limit larger ones
@@ -94,17 +103,22 @@ def static_assignment(shares, robots):
     return assigned
 
 
-def scenario(shares, robots, seconds, delay, late=None):
-    """The testbed scenario; ``late``: the last server starts then (scenario time)."""
+def scenario(shares, robots, seconds, delays, late=None):
+    """The testbed scenario: ``delays`` one way (ms) from every robot to each server;
+    ``late``: the last server starts then (scenario time)."""
     hosts = {'manager': {'role': 'manager'}}
     for index, share in enumerate(shares, start=1):
         hosts['server%d' % index] = {'role': 'server', 'id': index, 'cpu': share}
     if late is not None:
         hosts['server%d' % len(shares)]['start'] = late
+    links = {}
     for robot in range(1, robots + 1):
         hosts['robot%d' % robot] = {'role': 'robot', 'id': robot}
+        for server, delay in enumerate(delays, start=1):
+            links['robot%d server%d' % (robot, server)] = [
+                {'at': 0, 'delay': delay, 'jitter': delay / 10.0}]
     return {'name': 'capacity', 'duration': WARMUP + seconds, 'hosts': hosts,
-            'default': {'delay': delay, 'jitter': delay / 10.0}}
+            'default': {'delay': 0.5, 'jitter': 0.05}, 'links': links}
 
 
 def robot_args(kind, rate, folder):
@@ -119,7 +133,7 @@ def run_once(variant, kind, rate, args, work, name):
     shares = args.shares
     servers = ','.join(str(s) for s in range(1, len(shares) + 1))
     late = WARMUP + args.seconds / 3.0 if args.late else None
-    data = scenario(shares, args.robots, args.seconds, args.delay, late)
+    data = scenario(shares, args.robots, args.seconds, args.delays, late)
     profile = 'fleet' if variant == 'fleet' else 'paper'
     fixed = static_assignment(shares, args.robots)
     with scenario_run(data, work, name, 'sscap', record=(
@@ -146,8 +160,6 @@ def run_once(variant, kind, rate, args, work, name):
                        'fixed_server:=%d' % fixed[robot], 'task_timeout:=%g' % TIMEOUT,
                        'start_delay:=5', *(robot_args(kind, rate, args.frames) +
                                            args.robot_args.split()))
-    with open(bag + '.json', 'w') as stream:     # times since the scenario's t0
-        json.dump({'t0': t0}, stream)
     done = capacity_report.detections(bag, t0) if kind == 'image' else None
     # each server's tasks/s by its share (frames: the CPU a frame takes is the work; a sort
     # task's is mostly message handling, which is not modelled: no overload figure)
@@ -162,18 +174,19 @@ def run_once(variant, kind, rate, args, work, name):
 
 def parse(argv):
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
-    parser.add_argument('--shares', default='0.25,0.25,0.25',
-                        help="the servers' CPU shares of one core (default %(default)s)")
-    parser.add_argument('--robots', type=int, default=6)
-    parser.add_argument('--loads', default='0.5,1,2',
-                        help='offered load as multiples of the capacity (%(default)s)')
+    parser.add_argument('--scenario', choices=sorted(SCENARIOS), default='overload',
+                        help='a case: its shares, delays, robots, loads and late server are '
+                        'the defaults of those options (%(default)s)')
+    parser.add_argument('--shares', help="the servers' CPU shares of one core")
+    parser.add_argument('--delays', help='one-way link delay to each server, ms (0.5 each)')
+    parser.add_argument('--robots', type=int)
+    parser.add_argument('--loads', help='offered load as multiples of the capacity')
     parser.add_argument('--kinds', default='image', help='image and/or sort (%(default)s)')
     parser.add_argument('--variants', default=','.join(VARIANTS))
     parser.add_argument('--seconds', type=float, default=40.0, help='measured s per run')
-    parser.add_argument('--delay', type=float, default=0.5, help='one-way link delay, ms')
     parser.add_argument('--repeats', type=int, default=1)
-    parser.add_argument('--late', action='store_true', help='the last server starts a third '
-                        'of the way into the measured part, idle (herd)')
+    parser.add_argument('--late', action='store_true', default=None, help='the last server '
+                        'starts a third of the way into the measured part, idle (herd)')
     parser.add_argument('--out', default='results/bench')
     parser.add_argument('--work', help='keep the runs (bags, node logs) in this folder')
     parser.add_argument('--robot-args', default='', help='more robot.launch arguments for '
@@ -185,7 +198,12 @@ def parse(argv):
                         'mostly message handling, which that leaves out: measure it, e.g. '
                         'with --variants static at a high load, and give it here)')
     args = parser.parse_args(argv)
+    for name, value in SCENARIOS[args.scenario].items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
     args.shares = [float(s) for s in args.shares.split(',')]
+    args.delays = [float(d) for d in (args.delays or ','.join(['0.5'] * len(args.shares)))
+                   .split(',')]
     args.loads = [float(x) for x in args.loads.split(',')]
     args.kinds = [k for k in args.kinds.split(',') if k]
     args.variants = [v for v in args.variants.split(',') if v]
@@ -195,14 +213,16 @@ def parse(argv):
         parser.error('--capacity takes KIND=RATE, e.g. sort=40')
     bad = [k for k in args.kinds if k not in ('image', 'sort')] + \
         [v for v in args.variants if v not in VARIANTS]
-    if bad or args.robots < 1 or not args.shares:
-        parser.error('unknown kinds or variants %s, or no robots or servers' % bad)
+    if bad or args.robots < 1 or not args.shares or len(args.delays) != len(args.shares):
+        parser.error('unknown kinds or variants %s, no robots or servers, or not one delay '
+                     'per server' % bad)
     return args
 
 
 def main(argv=None):
     args = parse(sys.argv[1:] if argv is None else argv)
-    results = {'shares': args.shares, 'robots': args.robots, 'timeout': TIMEOUT,
+    results = {'scenario': args.scenario, 'shares': args.shares, 'delays': args.delays,
+               'late': bool(args.late), 'robots': args.robots, 'timeout': TIMEOUT,
                'seconds': args.seconds, 'kinds': {}}
     with tempfile.TemporaryDirectory(prefix='bench_capacity') as scratch:
         work = args.work or scratch
@@ -226,10 +246,11 @@ def main(argv=None):
                         runs['runs'].append(row)
                         print(capacity_report.line(row), file=sys.stderr, flush=True)
     os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, 'capacity.json'), 'w') as stream:
+    stem = os.path.join(args.out, 'capacity_' + args.scenario)
+    with open(stem + '.json', 'w') as stream:
         json.dump(results, stream, indent=1)
-    text = capacity_report.report(results, os.path.join(args.out, 'capacity.png'))
-    with open(os.path.join(args.out, 'capacity.md'), 'w') as stream:
+    text = capacity_report.report(results, stem + '.png')
+    with open(stem + '.md', 'w') as stream:
         stream.write(text)
     print(text)
     return 0

@@ -168,11 +168,14 @@ def plot(results, path):
 def report(results, png):
     """The Markdown report (tables per task kind and the plot's link); writes the plot."""
     plot(results, png)
-    text = ['# Capacity', '', '%d robots, servers of %s of a core (cgroup quota), %g s '
+    text = ['# Capacity: %s' % results['scenario'], '',
+            '%d robots, servers of %s of a core (cgroup quota) %s ms away (one way)%s, %g s '
             'measured per run, task timeout %g s (a failed task counts at it); median '
-            '(min-max) of the runs.' % (results['robots'], ', '.join(
-                '%g' % s for s in results['shares']), results['seconds'], results['timeout']),
-            '']
+            '(min-max) of the runs.' % (
+                results['robots'], ', '.join('%g' % s for s in results['shares']),
+                ', '.join('%g' % d for d in results['delays']),
+                ', the last one starting a third of the way in' if results['late'] else '',
+                results['seconds'], results['timeout']), '']
     for kind, info in results['kinds'].items():
         text += ['## %s tasks: %.1f ms of CPU each (measured here on one core), capacity by '
                  'it %.2f tasks/s; the most the servers did: %s tasks/s' % (
@@ -181,5 +184,5 @@ def report(results, png):
                  'Offered load is in multiples of the capacity by CPU; "goodput / measured '
                  'capacity" is to the most work the servers were seen to do in any run.', '',
                  table(kind, info['runs'], info['capacity']), '']
-    text.append('![goodput and round trip against offered load](capacity.png)')
+    text.append('![goodput and round trip against offered load](%s)' % os.path.basename(png))
     return '\n'.join(text) + '\n'

@@ -116,7 +116,8 @@ def scenario_run(data, work, name, prefix, record=('/task_report',)):
     """The scenario ``data`` (a dict) up on the testbed under ``work/name`` with its
     roscore and a rosbag recording ``record``: yields ``(HostRun, bag path)``; the run
     lasts until the scenario's duration once the block has started the nodes. The link
-    emulator's counts are then in ``work/name/link_stats.json``."""
+    emulator's counts are then in ``work/name/link_stats.json``, and the scenario's time
+    zero beside the bag (``<bag>.json``), so that a loaded bag's times are scenario times."""
     import yaml
     from server_select.testbed.evaluation import HostRun
     from server_select.testbed.netns import Testbed
@@ -132,6 +133,8 @@ def scenario_run(data, work, name, prefix, record=('/task_report',)):
                   'rosbag')
         yield run, bag
         tb.sleep_until(tb.scenario.duration)
+    with open(bag + '.json', 'w') as stream:
+        json.dump({'t0': tb.t0}, stream)
 
 
 def link_bytes(work, name):

@@ -45,7 +45,8 @@ def run_once(hedge, args, work, index):
         run.launch('robot1', 'robot.launch', 'robot_id:=1', 'servers:=1,2',
                    'task_rate:=%g' % args.rate, 'task_timeout:=%g' % TIMEOUT,
                    'start_delay:=3', 'hedge:=%s' % ('true' if hedge else 'false'))
-    reports = [r for r in bag_analysis.load(bag).reports if r.t > 8.0]   # after warm-up
+    start = data['duration'] - args.seconds            # the last --seconds of the run
+    reports = [r for r in bag_analysis.load(bag).reports if r.t > start]
     rtts = np.array([r.rtt if r.ok else TIMEOUT for r in reports])
     attempts = [max(1, r.attempts) for r in reports]
     p50, p99, p999 = np.percentile(rtts, [50, 99, 99.9]) if len(rtts) else (0, 0, 0)
