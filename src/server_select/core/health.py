@@ -109,6 +109,6 @@ class ServerHealth(object):
         busy lately last (order kept otherwise)."""
         usable = [s for s in ranking if self.usable(s)]
         now = self._clock()
-        with self._lock:
-            busy = set(s for s in usable if self._servers[s].busy_until > now)
+        with self._lock:      # (a server may have left since usable() looked)
+            busy = set(s for s in usable if getattr(self._servers.get(s), 'busy_until', 0) > now)
         return [s for s in usable if s not in busy] + [s for s in usable if s in busy]

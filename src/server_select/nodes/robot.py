@@ -84,6 +84,8 @@ class RobotNode(object):
         manager = param('manager_node')   # None: flags from any node
         self.manager_node = rospy.resolve_name(manager) if manager else None
         self.providers = ServiceProviders(rospy.get_name())
+        # one retry budget and one series of task ids for all of the robot's streams
+        self.budget, self._task_ids = RetryBudget(param('retry_budget')), itertools.count(1)
         self.streams = [self._stream(kind, rate, mode) for kind, rate in kinds]
         top = param('top_manager_node')     # grouped: servers and manager from its table
         self.announcements = GroupFollower(self.robot_id, servers, top, self.on_servers,
@@ -102,7 +104,6 @@ class RobotNode(object):
                              % (eject_time, eject_max))
         self.health = ServerHealth(servers, eject_time, eject_max, param('probation_probes'))
         policy, statistic = from_params(param)
-        self.budget, self._task_ids = RetryBudget(param('retry_budget')), itertools.count(1)
         return Selection(self.robot_id, servers, mode, fixed, self.health, param('window'),
                          policy, param('manager_timeout'), statistic=statistic,
                          tau=param('ewma_tau'), passive=param('passive') and mode == 'select',
@@ -112,7 +113,7 @@ class RobotNode(object):
         timeout = param('task_timeout')
         return TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready, dict(
             timeout=timeout, candidates=self.selection.candidates, on_failure=self.on_failure,
-            on_success=self.health.task_ok, ids=self._task_ids,  # per robot, across streams
+            on_success=self.health.task_ok, ids=self._task_ids,
             on_busy=functools.partial(self.on_busy, kind.kind),
             hedge=param('hedge_quantile') if param('hedge') else None, budget=self.budget,
             max_in_flight=param('max_in_flight'),

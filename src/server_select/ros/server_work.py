@@ -19,15 +19,12 @@ class ServerWork(object):
     def __init__(self, server_id, workers, max_queue):
         self.server_id = server_id
         self.queue = WorkQueue(workers, max_queue)
-        self._threads = []
         self._lock = threading.Lock()
         self.busy = 0
 
     def start(self):
         for index in range(self.queue.workers):
-            thread = threading.Thread(target=self._run, name='worker%d' % index, daemon=True)
-            thread.start()
-            self._threads.append(thread)
+            threading.Thread(target=self._run, name='worker%d' % index, daemon=True).start()
 
     def submit(self, endpoint, task, direct):
         """A task addressed here (from a subscriber's thread: never blocks)."""
