@@ -148,6 +148,25 @@ def test_spread_draws_once_per_dwell_and_leaves_an_unranked_server_at_once():
     assert chooser.choose(ranking({2: 0.2}), 0.1) == 2
 
 
+def test_spread_does_not_hold_back_a_move_its_wait_cannot_erase():
+    """A server 7 ms nearer with 1 ms of work: taken at once, not drawn for."""
+    chooser = Chooser(Policy('mean', dwell=3.0, spread=True), random.Random(1))
+    chooser.choose(ranking({1: 0.0097}), 0.0)
+    chooser.note_wait(1, 0.001)
+    chooser.note_wait(3, 0.001)
+    assert chooser.choose(ranking({1: 0.0097, 3: 0.0026}), 5.0) == 3
+    # a server better by 1.4 s of queue (idle, but 0.7 s a task): drawn for, though its
+    # gain is twice its wait: robots that follow add to that wait
+    moves = 0
+    for seed in range(200):
+        chooser = Chooser(Policy('mean', dwell=3.0, spread=True), random.Random(seed))
+        chooser.choose(ranking({1: 2.1}), 0.0)
+        chooser.note_wait(1, 2.1)
+        chooser.note_wait(2, 0.7)
+        moves += chooser.choose(ranking({1: 2.1, 2: 0.7}), 5.0) == 2
+    assert 55 < moves < 80          # (1 - 0.7 / 2.1) / 2 = a third of 200
+
+
 def test_a_herd_is_spread_over_equal_servers():
     """20 robots on server 1, whose completion time grows with its robots; server 2 comes
     up idle. Without spread all 20 move at once and back; with it the load evens out."""

@@ -27,8 +27,12 @@ two), drawn at most once per ``dwell`` s per robot (at least 1 s). Each robot th
 both relieves its old server and loads the new one, so that half the relative gap is about
 the share of robots whose moving evens two servers out: of the robots on a server that
 takes twice as long as the best, a quarter move per draw (selfish load balancing,
-Berenbrink et al. 2007, where a random choice of target does the halving). :class:`Chooser`
-keeps the draws.
+Berenbrink et al. 2007, where a random choice of target does the halving). A move whose
+gain in round trip alone (the statistics less the servers' *waits*, from load-aware
+samples: backlog and work) is larger than the best server's wait is taken at once: robots
+that follow it add to the wait, not to the distance, so a server that is nearer on the
+network by more than the work it is asked for is not held back. :class:`Chooser` keeps the
+draws and the servers' last waits.
 """
 
 import math
@@ -104,6 +108,11 @@ class Chooser(object):
         self.policy, self.current, self.since = policy, None, None
         self.drawn = None
         self.rng = rng or random.Random()
+        self.waits = {}         # server -> its last wait (s), from load-aware samples
+
+    def note_wait(self, server, seconds):
+        """The wait a load-aware sample reported for ``server``."""
+        self.waits[server] = seconds
 
     def choose(self, ranking, now, current=None):
         """The server to select now (``current``: what was last published, if the caller
@@ -121,10 +130,15 @@ class Chooser(object):
         """Whether a warranted move away from a still-ranked server is taken now."""
         if self.current is None or self.current not in ranking.ranking:
             return True                     # nothing to keep: no draw
+        here = ranking.means[ranking.ranking.index(self.current)]
+        best = ranking.ranking[0]
+        if self.current in self.waits and best in self.waits:
+            network = (here - self.waits[self.current]) - (ranking.means[0] - self.waits[best])
+            if network > self.waits[best]:
+                return True     # nearer by more than its wait: robots that follow cannot undo it
         if self.drawn is not None and now - self.drawn < max(1.0, self.policy.dwell):
             return False
         self.drawn = now
-        here = ranking.means[ranking.ranking.index(self.current)]
         return here > 0 and self.rng.random() < (1.0 - ranking.means[0] / here) / 2.0
 
 

@@ -75,10 +75,14 @@ class Selection(object):
         if self.cost is not None:
             self.cost.forget(server)
 
-    def on_sample(self, server, ok, rtt, probe=True):
+    def on_sample(self, server, ok, rtt, probe=True, wait=None):
         """One of the robot's own samples: a probe, or (``probe`` False) an answered task
-        with ``~passive`` (ValueError for an impossible round trip)."""
+        with ``~passive`` (ValueError for an impossible round trip); ``wait``: the part of a
+        load-aware probe's ``rtt`` that is the server's wait."""
         now = self._clock()
+        if wait is not None:
+            with self._lock:
+                self._chooser.note_wait(server, wait)
         value = rtt if self.cost is None else self.cost.enter(server, now, ok, rtt, probe)
         self.window.add(self.robot_id, server, now, ok, value)
         if probe and self.passive:

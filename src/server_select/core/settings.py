@@ -164,7 +164,7 @@ PROFILES = {
               'window': 1.5, 'probe_rate': 4.0, 'passive': True, 'task_memory': 5.0,
               'fail_fast': 2, 'hedge': True,
               # capacity: README, "Capacity and overload"
-              'load_aware': True, 'max_in_flight': 1},
+              'load_aware': True, 'max_in_flight': 1, 'spread': True},
 }
 
 

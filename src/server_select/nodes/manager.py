@@ -175,11 +175,13 @@ class ManagerNode(object):
             if why is None and ok and not (valid_rtt(rtt) and valid_rtt(wait)):
                 why = 'round trip %r + wait %r of server %d is not %s' % (
                     rtt, wait, server, RTT_RANGE)
-            rtt += wait
             if why:
                 self.warn(topic, batch, why)
-            elif self.rankings.add(robot, server, now, ok, rtt,
-                                   probe=topic != names.TASK_SAMPLES_TOPIC):
+                continue
+            if ok and batch.wait:     # what spread needs to tell load from distance
+                self._chooser(robot).note_wait(server, wait)
+            if self.rankings.add(robot, server, now, ok, rtt + wait,
+                                 probe=topic != names.TASK_SAMPLES_TOPIC):
                 changed = True
         if changed:     # one ranking per batch: O(1) per sample
             self.update(robot, only_on_change=True)
@@ -231,10 +233,14 @@ class ManagerNode(object):
         with self._locks.setdefault(robot, threading.Lock()):
             now = rospy.get_time()
             ranking = self.rankings.rank(robot, now)
-            chooser = self._choosers.setdefault(robot, Chooser(self.policy))
+            chooser = self._chooser(robot)
             if self.flags.offer(robot, ranking, only_on_change,
                                 lambda previous: chooser.choose(ranking, now, previous)):
                 self.rankings.selected(robot, self.flags.selected(robot))
+
+    def _chooser(self, robot):
+        """The policy's state for ``robot``."""
+        return self._choosers.setdefault(robot, Chooser(self.policy))
 
 
 def main():

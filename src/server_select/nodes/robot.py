@@ -168,7 +168,8 @@ class RobotNode(object):
 
     def on_sample(self, server, ok, rtt, error, wait=None):
         try:   # load-aware: the expected completion, round trip + wait
-            self.selection.on_sample(server, ok, rtt + wait if ok and wait else rtt)
+            self.selection.on_sample(server, ok, rtt + wait if ok and wait else rtt,
+                                     wait=wait if ok else None)
         except ValueError as err:
             rospy.logwarn_throttle(5.0, 'robot %d: own probe of server %d: %s'
                                    % (self.robot_id, server, err))
