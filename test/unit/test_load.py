@@ -124,6 +124,15 @@ def test_the_retry_budget_is_a_share_of_recent_tasks_plus_a_reserve():
     assert [budget.spend() for _ in range(3)] == [True, True, False]
 
 
+def test_hedges_do_not_draw_on_the_reserve():
+    clock = Clock()
+    budget = RetryBudget(ratio=0.1, window=10.0, reserve=2, clock=clock)
+    for _ in range(10):
+        budget.sent()
+    assert budget.spend(reserve=False) and not budget.spend(reserve=False)   # 10 % of 10
+    assert budget.spend() and budget.spend() and not budget.spend()          # + 2 for re-sends
+
+
 def test_a_zero_retry_budget_means_no_limit():
     budget = RetryBudget(ratio=0.0, reserve=0)
     assert all(budget.spend() for _ in range(100)) and budget.describe() == 'no limit'

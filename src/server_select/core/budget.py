@@ -3,7 +3,9 @@
 Under overload a re-send or a hedge is one more task for servers that have no time to
 spare. As Finagle's ``RetryBudget`` and gRPC's retry throttling do, extra sends are paid
 from a budget: at most ``ratio`` of the tasks first sent in the last ``window`` s, plus a
-``reserve`` so that the few tasks in flight when a server dies can always go elsewhere.
+``reserve`` so that the few tasks in flight when a server dies can always go elsewhere. A
+hedge (a copy of a task nobody has failed) never draws on the reserve: in a scenario with a
+link outage, hedges had spent what the re-sends after it needed, and a task failed.
 """
 
 import collections
@@ -38,14 +40,16 @@ class RetryBudget(object):
             self._prune(now)
             self._sent.append(now)
 
-    def spend(self):
-        """Whether one extra send may go now (and it is counted when it may)."""
+    def spend(self, reserve=True):
+        """Whether one extra send may go now (and it is counted when it may); ``reserve``
+        False (a hedge): only within the ratio."""
         if not self.ratio:
             return True
         with self._lock:
             now = self._clock()
             self._prune(now)
-            if len(self._spent) >= self.reserve + self.ratio * len(self._sent):
+            allowed = self.ratio * len(self._sent) + (self.reserve if reserve else 0)
+            if len(self._spent) >= allowed:
                 self.refused += 1
                 return False
             self._spent.append(now)

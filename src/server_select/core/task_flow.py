@@ -155,7 +155,7 @@ class TaskFlow(object):
         untried = [s for s in self._candidates() if s not in tried and s != LOCAL]
         if not untried:
             return False
-        if self.budget is not None and not self.budget.spend():
+        if self.budget is not None and not self.budget.spend(reserve=not hedge):
             self.unfunded += 1
             return False
         if hedge:
