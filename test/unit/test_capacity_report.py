@@ -5,8 +5,7 @@ import collections
 
 import pytest
 
-from server_select.bench.capacity import static_assignment
-from server_select.bench.capacity_report import figures, overloaded
+from server_select.bench.capacity_report import figures, overloaded, static_assignment
 from server_select.testbed.bag_analysis import Report, Run
 
 

@@ -8,7 +8,6 @@ import pytest
 from server_select.core.attempts import AttemptClock
 from server_select.core.task_flow import (DUPLICATE, FOREIGN, LATE, LOCAL, NO_SERVER, RETRIED,
                                           UNKNOWN, TaskFlow)
-from server_select.msg import SelectionFlag, TaskReport
 
 from fake_clock import Clock
 
@@ -46,11 +45,6 @@ class World(object):
     def answer(self, task_id, server, good=True):
         return self.flow.resolve(task_id, server, True, '',
                                  'good context %d' % task_id if good else 'garbage')
-
-
-def test_no_server_and_local_are_the_message_constants():
-    assert NO_SERVER == TaskReport.NO_SERVER == SelectionFlag.NO_SERVER == -1
-    assert LOCAL == TaskReport.LOCAL == -2
 
 
 def test_send_then_answer_gives_one_checked_report_with_the_round_trip():

@@ -22,7 +22,6 @@ and how many of those a robot still wanted.
 """
 
 import argparse
-import collections
 import io
 import json
 import math
@@ -38,6 +37,7 @@ import numpy as np
 from rospy.numpy_msg import numpy_msg
 
 from server_select.bench import capacity_report
+from server_select.bench.capacity_report import static_assignment
 from server_select.core.sort_task import sort_values
 from server_select.msg import SortResult, SortTask
 from server_select.bench.harness import scenario_run
@@ -89,18 +89,6 @@ def sort_message(raw):
     task = numpy_msg(SortTask)()
     task.deserialize(raw)
     numpy_msg(SortResult)(data=sort_values(task.data, len(task.data))).serialize(io.BytesIO())
-
-
-def static_assignment(shares, robots):
-    """``{robot: server}``: robots to servers in proportion to their shares (D'Hondt)."""
-    count = collections.Counter()
-    assigned = {}
-    for robot in range(1, robots + 1):
-        server = min(range(1, len(shares) + 1),
-                     key=lambda s: ((count[s] + 1) / shares[s - 1], s))
-        count[server] += 1
-        assigned[robot] = server
-    return assigned
 
 
 def scenario(shares, robots, seconds, delays, late=None):

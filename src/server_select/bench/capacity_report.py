@@ -24,6 +24,18 @@ COLUMNS = (('offered', 'offered /s', '%.2f', 1.0), ('sent', 'sent /s', '%.2f', 1
 WORKED = re.compile(r'\[INFO\] \[([0-9.]+)\]: server ([0-9]+): .*?([0-9]+) tasks worked on')
 
 
+def static_assignment(shares, robots):
+    """``{robot: server}``: robots to servers in proportion to their shares (D'Hondt)."""
+    count = collections.Counter()
+    assigned = {}
+    for robot in range(1, robots + 1):
+        server = min(range(1, len(shares) + 1),
+                     key=lambda s: ((count[s] + 1) / shares[s - 1], s))
+        count[server] += 1
+        assigned[robot] = server
+    return assigned
+
+
 def work_rate(run_dir, t0, start, end):
     """Tasks/s the servers worked on between scenario times ``start`` and ``end``, from
     the periodic summary lines in their logs (``run_dir/ros_home/<host>/log``); None when

@@ -17,7 +17,7 @@ import time
 from server_select.bench import emulator, measure
 from server_select.bench.harness import ReportListener, Roscore
 from server_select.bench.report import SECTIONS, report
-from server_select.core.paths import package_file
+from server_select.ros.paths import package_file
 from server_select.testbed.netns import available
 
 # name on the command line -> (results key, benchmark(tiny, log, listener, area))

@@ -5,7 +5,7 @@ import json
 import os
 import xml.etree.ElementTree as ElementTree
 
-from server_select.core.paths import package_file
+from server_select.ros.paths import package_file
 from server_select.testbed.scenario import ScenarioError
 
 REPLICA = 10        # robot r of variant k is robot REPLICA * k + r
