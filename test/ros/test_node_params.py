@@ -1,0 +1,103 @@
+"""Every node refuses bad parameters with a ParamError naming the parameter, before it
+touches the graph: the node classes built against a parameter table of this test (no
+master). The launch-level path (one clear line, exit status 2) is bad_input.test's.
+
+The cases are written as ``rosrun`` arguments and read the way rosrun reads them (each
+value as YAML), so that a case here is what an operator would type.
+"""
+
+import pytest
+import rospy
+import yaml
+
+from server_select.core.params import ParamError
+from server_select.nodes.manager import ManagerNode
+from server_select.nodes.robot import RobotNode
+from server_select.nodes.server import ServerNode
+from server_select.ros import node
+
+NODES = {'robot': RobotNode, 'manager': ManagerNode, 'server': ServerNode}
+ROBOT_OK = ['_robot_id:=1', '_servers:=1,2,3']
+
+BAD_PARAMS = [
+    ('robot', ROBOT_OK + ['_mode:=random'], "~mode: unknown mode 'random'"),
+    ('robot', ['_robot_id:=1', '_servers:=""'], '~servers: expected a non-empty list of ids'),
+    ('robot', ['_robot_id:=1', '_servers:=a,b'], '~servers: expected a non-negative integer id'),
+    ('robot', ['_robot_id:=1', '_servers:=1,1'], '~servers: duplicate ids [1]'),
+    ('robot', ['_servers:=1,2'], '~robot_id: required parameter is not set'),
+    ('robot', ROBOT_OK + ['_mode:=fixed', '_fixed_server:=9'],
+     '~fixed_server: server 9 is not in servers [1, 2, 3]'),
+    ('robot', ROBOT_OK + ['_probe_rate:=0'], '~probe_rate: expected a positive number, got 0'),
+    ('robot', ROBOT_OK + ['_task_rate:=-2'], '~task_rate: expected a positive number, got -2'),
+    ('robot', ROBOT_OK + ['_task_size:=ten'], '~task_size: expected a positive integer'),
+    ('robot', ROBOT_OK + ['_manager_timeout:=0'], '~manager_timeout: expected a positive'),
+    ('robot', ROBOT_OK + ['_sort_tasks:=maybe'], '~sort_tasks: expected true or false'),
+    ('robot', ROBOT_OK + ['_eject_time:=60'], '~eject_time 60 is longer than ~eject_max 30'),
+    ('robot', ROBOT_OK + ['_task_plugins:=no_such_module:Task'],
+     "~task_plugins: cannot load 'no_such_module:Task'"),
+    ('robot', ROBOT_OK + ['_task_plugins:=server_select.tasks.orb:Orb'],
+     '~orb: source: required'),
+    ('robot', ROBOT_OK + ['_sort_tasks:=false'], 'no tasks to send'),
+    ('robot', ROBOT_OK + ['_image_source:=/no/such/folder'], '~image_source:'),
+    ('manager', ['_robots:=1', '_servers:=[]'], '~servers: expected a non-empty list of ids'),
+    ('manager', ['_robots:=1', '_servers:=1', '_window:=0'], '~window: expected a positive'),
+    ('manager', ['_robots:=1', '_servers:=1', '_robot_node:=robot{nr}'],
+     "~robot_node: 'robot{nr}' is not a node name with {id}"),
+    ('server', [], '~server_id: required parameter is not set'),
+    ('server', ['_server_id:=-3'], '~server_id: ids must be non-negative, got -3'),
+    ('server', ['_server_id:=1', '_cascade:=no_such_cascade.xml'], '~detector/~cascade:'),
+]
+
+
+def private_params(args):
+    """``{'~name': value}`` of rosrun's ``_name:=value`` arguments, values read as YAML."""
+    params = {}
+    for arg in args:
+        name, _, value = arg.partition(':=')
+        params['~' + name[1:]] = yaml.safe_load(value)
+    return params
+
+
+@pytest.fixture
+def param_server(monkeypatch):
+    """The node's private parameters from a dict; nothing else of the graph is reachable."""
+    table = {}
+    missing = object()
+
+    def get_param(name, default=missing):
+        if name in table:
+            return table[name]
+        if default is missing:
+            raise KeyError(name)
+        return default
+
+    monkeypatch.setattr(rospy, 'get_param', get_param)
+    monkeypatch.setattr(rospy, 'has_param', lambda name: name in table)
+    monkeypatch.setattr(node, '_PROFILE', None)
+    monkeypatch.setattr(node, '_FLEET_NS', None)
+    return table
+
+
+@pytest.mark.parametrize('kind, args, message', BAD_PARAMS,
+                         ids=['%s %s' % (c[0], ' '.join(c[1])) for c in BAD_PARAMS])
+def test_a_bad_parameter_is_refused_by_name(param_server, kind, args, message):
+    param_server.update(private_params(args))
+    with pytest.raises(ParamError) as error:
+        NODES[kind]()
+    assert message in str(error.value)
+
+
+def test_the_cases_are_read_as_rosrun_reads_them():
+    assert private_params(['_servers:=1,2,3', '_servers2:=""', '_rate:=0', '_list:=[]',
+                           '_on:=false', '_name:=robot{nr}']) == {
+        '~servers': '1,2,3', '~servers2': '', '~rate': 0, '~list': [], '~on': False,
+        '~name': 'robot{nr}'}
+
+
+@pytest.mark.parametrize('kind, args', [('robot', ROBOT_OK), ('manager', ['_robots:=1',
+                                                                          '_servers:=1'])])
+def test_good_parameters_are_accepted(param_server, kind, args):
+    """The table is not refusing everything: the same nodes build with good parameters
+    (their wiring to the graph starts only in ``start()``)."""
+    param_server.update(private_params(args))
+    assert NODES[kind]() is not None
