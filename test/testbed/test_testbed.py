@@ -107,8 +107,11 @@ def test_teardown_leaves_nothing(tmp_path, how):
     marker = '599.%06d' % (os.getpid() % 1000000)   # this run's own sleeper, "sleep 599.<pid>"
     script = CRASHER % {'scenario': SCENARIO,
                         'run': str(tmp_path), 'marker': marker}
+    # Ctrl-C as a terminal sends it, even where this test runs as a background job (which
+    # would hand the script SIGINT ignored)
     proc = subprocess.Popen([sys.executable, '-c', script, 'crash' if how == 'crash' else 'run'],
-                            stdout=subprocess.PIPE, universal_newlines=True)
+                            stdout=subprocess.PIPE, universal_newlines=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert proc.stdout.readline().strip() == 'up'
     assert leftovers('sscrash'), 'the testbed should be up'
     # what must be gone afterwards is there now: the host's process and the emulator,

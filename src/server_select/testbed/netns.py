@@ -210,10 +210,17 @@ class Testbed(object):
                               preexec_fn=self._joiner(host), **kwargs)
 
     def _joiner(self, host):
-        """What a process started in ``host`` runs before its command: joining the host's
-        CPU limit, if it has one (its children inherit it)."""
+        """What a process started in ``host`` runs before its command: SIGINT as by default
+        (:meth:`down` stops processes with it, and a testbed started from a background job
+        would hand them SIGINT ignored), and joining the host's CPU limit, if it has one
+        (its children inherit both)."""
         limit = self.limits.get(host)
-        return limit.join if limit is not None else None
+
+        def prepare():
+            signal.signal(signal.SIGINT, signal.SIG_DFL)
+            if limit is not None:
+                limit.join()
+        return prepare
 
     def down(self):
         """Stop all that was started and delete the namespaces (signals wait till done)."""
