@@ -50,14 +50,20 @@ class Recorder(object):
         with self.lock:
             return [r.msg.msg for r in self.logs if r.msg.name == node and text in r.msg.msg]
 
-    def outcome(self, robot, timeout):
-        """Counts of ``robot``'s tasks so far, once every task up to the last reported one
-        has had ``timeout`` to be reported: tasks, failed, never answered, duplicates."""
-        reports = self.of(self.reports, robot)
-        last = max((r.msg.task_id for r in reports), default=0)
+    def outcomes(self, robots, timeout):
+        """``{robot: counts}`` of the robots' tasks so far (tasks, failed, never answered,
+        duplicates, errors), once every task up to the last reported one has had
+        ``timeout`` to be reported: a task's report, or a second one, may come that late
+        (an observation window, one for all the robots)."""
+        last = dict((robot, max((r.msg.task_id for r in self.of(self.reports, robot)),
+                                default=0)) for robot in robots)
         time.sleep(timeout + 0.5)
-        counts = collections.Counter(r.msg.task_id for r in self.of(self.reports, robot))
-        failed = [r.msg for r in self.of(self.reports, robot) if not r.msg.ok]
+        return dict((robot, self._counts(robot, last[robot])) for robot in robots)
+
+    def _counts(self, robot, last):
+        reports = [r.msg for r in self.of(self.reports, robot) if r.msg.task_id <= last]
+        counts = collections.Counter(m.task_id for m in reports)
+        failed = [m for m in reports if not m.ok]
         return {'tasks': last,
                 'failed': len(failed),
                 'never answered': sum(1 for i in range(1, last + 1) if counts[i] == 0),

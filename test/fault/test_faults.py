@@ -41,6 +41,20 @@ def first_elsewhere(rec, robot, victim, since, timeout=10.0):
     return hit.time - since if hit else None
 
 
+def ranked(rec, robot, server, since):
+    """Whether the manager's newest flag for ``robot`` since ``since`` ranks ``server``
+    (None: no flag yet)."""
+    flags = [r for r in rec.of(rec.flags, robot, since) if r.sender == '/manager']
+    return server in flags[-1].msg.ranking if flags else None
+
+
+def answered(rec, robot, since, tasks, by=None):
+    """Whether ``tasks`` of ``robot``'s tasks were answered since ``since`` (by a server
+    other than ``by``'s negation: ``by`` None for any, else a test of the server)."""
+    return sum(1 for r in rec.of(rec.reports, robot, since)
+               if r.msg.ok and (by is None or by(r.msg.answered_by))) >= tasks
+
+
 def warm_up(rec, robots=(1, 2), tasks=10):
     assert wait_until(lambda: all(sum(1 for r in rec.of(rec.reports, robot) if r.msg.ok)
                                   >= tasks for robot in robots), 40.0), 'no tasks answered'
@@ -66,18 +80,22 @@ def test_selected_server_fails_three_times(ros, how):
             t_fault = time.monotonic()
             os.kill(pid, signal.SIGKILL if how == 'SIGKILL' else signal.SIGSTOP)
             moved = first_elsewhere(rec, 1, victim, t_fault)
-            time.sleep(max(0.0, t_fault + 15.0 - time.monotonic()))
+            # down until the manager has dropped it from robot 1's ranking (its window
+            # holds no answer of it any more), then back
+            dropped = wait_until(lambda: ranked(rec, 1, victim, t_fault) is False, 20.0)
+            t_dropped = time.monotonic()
             if how == 'SIGKILL':
                 fleet.restart_server(victim)
             else:
                 os.kill(pid, signal.SIGCONT)
             assert wait_until(lambda: fleet.pid(node) not in (None, pid if how == 'SIGKILL'
                                                               else None), 20.0)
-            time.sleep(3.0)
+            back = wait_until(lambda: ranked(rec, 1, victim, t_dropped), 20.0)
+            assert dropped and back, (cycle, victim, dropped, back)
             cycles.append({'cycle': cycle + 1, 'server': victim,
                            'first answer elsewhere after s': '%.3f' % moved
                            if moved is not None else 'never'})
-        outcomes = dict((robot, rec.outcome(robot, TASK_TIMEOUT)) for robot in (1, 2))
+        outcomes = rec.outcomes((1, 2), TASK_TIMEOUT)
     show('%s of robot 1\'s server, 3 cycles:' % how, cycles)
     show('tasks:', [dict(robot=r, **o) for r, o in outcomes.items()])
     for outcome in outcomes.values():
@@ -93,12 +111,17 @@ def test_manager_gone_then_the_selected_server_dies(ros):
     with Fleet(ros['log'], **STABLE) as fleet:
         warm_up(rec)
         kill(fleet, '/manager')
-        time.sleep(4.0)                      # past the robots' manager_timeout (3 s)
+        t_gone = time.monotonic()
+        assert wait_until(lambda: all(rec.log_lines('/robot%d' % robot, 'ranking servers from '
+                                                    'its own probes') for robot in (1, 2)),
+                          10.0), 'the robots did not notice that the manager is gone'
+        alone = time.monotonic() - t_gone
         victim = current_server(rec, 1)
         t_kill = time.monotonic()
         kill(fleet, '/server%d' % victim)
         moved = first_elsewhere(rec, 1, victim, t_kill)
-        time.sleep(5.0)
+        # the robots go on alone: 10 more tasks of robot 1 answered elsewhere
+        assert wait_until(lambda: answered(rec, 1, t_kill, 10, lambda s: s != victim), 10.0)
         fleet.restart_manager()
         t_back = time.monotonic()
 
@@ -106,11 +129,12 @@ def test_manager_gone_then_the_selected_server_dies(ros):
             return any(r.sender == '/manager' for r in rec.of(rec.flags, robot, t_back))
         assert wait_until(lambda: flagged(1) and flagged(2), 10.0), 'no flag from the new manager'
         back = max(min(r.time for r in rec.of(rec.flags, robot, t_back)) for robot in (1, 2))
-        time.sleep(5.0)
-        outcomes = dict((robot, rec.outcome(robot, TASK_TIMEOUT)) for robot in (1, 2))
+        assert wait_until(lambda: all(answered(rec, robot, back, 10) for robot in (1, 2)), 10.0)
+        outcomes = rec.outcomes((1, 2), TASK_TIMEOUT)
     own = [rec.log_lines('/robot%d' % robot, 'ranking servers from its own probes')
            for robot in (1, 2)]
     show('manager killed, then server %d (robot 1\'s):' % victim, [{
+        'robots deciding alone after s': '%.2f' % alone,
         'first answer elsewhere after s': '%.3f' % moved if moved is not None else 'never',
         'every robot flagged by the new manager after s': '%.2f' % (back - t_back),
         'robots that said they decide alone': sum(1 for lines in own if lines)}])
@@ -139,7 +163,7 @@ def test_forged_samples_flags_and_results_change_nothing(ros):
         during = [r.msg for r in rec.of(rec.reports, 1, t_spoof) if r.time <= t_end]
         means = [m for r in rec.of(rec.flags, 1, t_spoof) if r.sender == '/manager'
                  for s, m in zip(r.msg.ranking, r.msg.mean_latency) if s == forged]
-        outcome = rec.outcome(1, TASK_TIMEOUT)
+        outcome = rec.outcomes((1,), TASK_TIMEOUT)[1]
     warnings = {'manager': rec.log_lines('/manager', '/spoofer'),
                 'robot 1': rec.log_lines('/robot1', '/spoofer')}
     show('spoofer (as server %d; robot 1 uses server %d):' % (forged, ours), [
@@ -197,7 +221,9 @@ def test_roscore_restart(ros):
         stop_group(core.proc, signal.SIGKILL)
         os.kill(master_pid, signal.SIGKILL)
         t_down = time.monotonic()
-        time.sleep(6.0)
+        # the master is down until 40 tasks were answered without it (at 5 Hz, 4 s)
+        wait_until(lambda: answered(rec, 1, t_down, 20) and answered(rec, 2, t_down, 20), 15.0)
+        down_for = time.monotonic() - t_down
         while_down = [r.msg for r in rec.of(rec.reports, since=t_down)]
         core.proc = subprocess.Popen(['roscore', '-p', str(core.port)],
                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
@@ -212,8 +238,8 @@ def test_roscore_restart(ros):
                        for robot in (1, 2))
         whole = wait_until(lambda: ranked() and fleet_whole(), 30.0, period=0.2)
         t_whole = time.monotonic()
-        outcomes = dict((robot, rec.outcome(robot, TASK_TIMEOUT)) for robot in (1, 2))
-    show('roscore killed for 6 s, then restarted:', [{
+        outcomes = rec.outcomes((1, 2), TASK_TIMEOUT)
+    show('roscore killed for %.1f s, then restarted:' % down_for, [{
         'tasks answered while it was down': sum(1 for m in while_down if m.ok),
         'failed while down': sum(1 for m in while_down if not m.ok),
         'fleet whole again after s': '%.2f' % (t_whole - t_up) if whole else 'never'}])

@@ -82,9 +82,9 @@ def nodes(ros):
 @given(robot=uint32, task=uint32, server=int32, data=st.lists(int32, max_size=2500),
        sender=senders)
 def test_server_sort_tasks(nodes, robot, task, server, data, sender):
-    nodes['server'].on_sort_task(sent_by(SortTask(robot_id=robot, task_id=task,
-                                                  server_id=server,
-                                                  data=np.asarray(data, np.int32)), sender))
+    nodes['server'].handler('sort').on_task(sent_by(SortTask(
+        robot_id=robot, task_id=task, server_id=server, data=np.asarray(data, np.int32)),
+        sender))
 
 
 @FUZZ
@@ -93,10 +93,9 @@ def test_server_sort_tasks(nodes, robot, task, server, data, sender):
     height=st.integers(0, 64), width=st.integers(0, 64), step=st.integers(0, 300),
     data=st.binary(max_size=4000))
 def test_server_image_tasks(nodes, robot, server, encoding, height, width, step, data):
-    nodes['server'].on_image_task(ImageTask(robot_id=robot, task_id=1, server_id=server,
-                                            image=Image(height=height, width=width,
-                                                        encoding=encoding, step=step,
-                                                        data=data)))
+    nodes['server'].handler('image').on_task(ImageTask(
+        robot_id=robot, task_id=1, server_id=server, image=Image(
+            height=height, width=width, encoding=encoding, step=step, data=data)))
 
 
 @FUZZ
@@ -184,11 +183,11 @@ def test_robot_search_callbacks(nodes, robot, task, boxes, x, y, label):
 
 
 def test_every_node_still_serves(nodes):
-    server = nodes['server']
-    done = server.tasks_done
-    server.on_sort_task(SortTask(robot_id=5, task_id=1, server_id=1,
-                                 data=np.asarray([3, 1, 2], np.int32)))
-    assert server.tasks_done == done + 1
+    sort = nodes['server'].handler('sort')
+    done = sort.done
+    result = sort.on_task(SortTask(robot_id=5, task_id=1, server_id=1,
+                                   data=np.asarray([3, 1, 2], np.int32)))
+    assert result.ok and list(result.data) == [1, 2, 3] and sort.done == done + 1
     manager = nodes['manager']
     manager.on_sample(sent_by(LatencySample(robot_id=1, server_id=1, ok=True, rtt=0.002),
                               '/robot1'), (1, 1))
