@@ -185,6 +185,16 @@ def parse_publisher(name, value):
     return None if value in ('', '*') else value
 
 
+def parse_node_pattern(name, value):
+    """A node name with ``{id}`` (``/robot{id}``); ``*`` (or empty) for any node: None."""
+    pattern = parse_publisher(name, value)
+    try:
+        pattern and pattern.format(id=1)
+    except (KeyError, IndexError, ValueError) as error:
+        raise ParamError('%s: %r is not a node name with {id}: %s' % (name, pattern, error))
+    return pattern
+
+
 def one_of(*choices):
     """A parser accepting one of ``choices`` (strings)."""
     def parse(name, value):

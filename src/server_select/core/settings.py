@@ -11,9 +11,9 @@ from server_select.core.groups import parse_groups
 from server_select.core.policy import POLICIES
 from server_select.core.params import (one_of, parse_bool, parse_count, parse_id,
                                        parse_members, parse_mode, parse_names, parse_non_negative,
-                                       parse_number, parse_plugins, parse_positive,
-                                       parse_positive_int, parse_publisher, parse_quantile,
-                                       parse_text)
+                                       parse_node_pattern, parse_number, parse_plugins,
+                                       parse_positive, parse_positive_int, parse_publisher,
+                                       parse_quantile, parse_text)
 
 REQUIRED = object()
 
@@ -135,7 +135,7 @@ PARAMS = {
     'retry_floor': Param(0.25, parse_positive, "shortest attempt deadline (s)"),
     'manager_node': Param('/manager', parse_publisher, 'flags count only from this node '
                           '(*: from any)'),
-    'robot_node': Param('/robot{id}', parse_publisher, 'samples of robot {id} count only from '
+    'robot_node': Param('/robot{id}', parse_node_pattern, 'samples of robot {id} count only from '
                         'this node (*: from any)'),
     'task_plugins': Param('', parse_plugins, 'task types added by plug-in (module:Class ...)'),
     'fleet_ns': Param('/', parse_text, 'namespace of the fleet-level topics and services'),

@@ -13,7 +13,8 @@ from server_select.msg import LatencySample, LatencySamples
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.graph import publisher_of
 from server_select.ros.membership import GroupAssignmentsListener, ServerDiscovery
-from server_select.ros.node import fleet, owned_by, param, run
+from server_select.ros.node import fleet, param, run
+from server_select.ros.senders import SenderGate, node_pattern
 
 
 SLICES = 10     # the periodic flags go out in this many slices of the robots
@@ -83,13 +84,9 @@ class ManagerNode(object):
                                  '~sample_stream robot: one topic per pair)' % name)
         self.publish_rate = param('publish_rate')
         self.update_rate = param('update_rate')
-        self.robot_node = pattern = param('robot_node')      # None: any publisher
-        try:
-            pattern and pattern.format(id=1)
-        except (KeyError, IndexError, ValueError) as error:
-            raise ParamError('~robot_node: %r is not a node name with {id}: %s'
-                             % (pattern, error))
-        self._robot_nodes = {}
+        pattern = param('robot_node')      # None: any publisher
+        self.senders = SenderGate('manager', 'robot {key}', within=True,
+                                  lookup=node_pattern(pattern) if pattern else None)
         self._locks = {}          # robot -> lock of its ranking and flag
         self._choosers = {}       # robot -> its Chooser (the policy's state)
         self._slice = 0
@@ -138,6 +135,9 @@ class ManagerNode(object):
 
     def on_sample(self, sample, pair):
         """One sample on the topic of ``pair`` (paper layout)."""
+        if not self.senders.admits(sample, 'a sample on %s' % names.sample_topic(*pair),
+                                   pair[0]):
+            return
         why = self.refuse(sample, pair[0], pair)
         if why:
             self.warn(names.sample_topic(*pair), sample, why)
@@ -158,6 +158,8 @@ class ManagerNode(object):
         if self.group is not None and self.rankings.admits_robot(robot):
             return      # a robot of another group: not ours to rank
         count = len(batch.server_id)
+        if not self.senders.admits(batch, 'samples on %s' % topic, robot):
+            return
         why = self.refuse(batch, robot)
         waits = batch.wait or [0.0] * count     # load-aware robots: rank by rtt + wait
         if why is None and not len(batch.ok) == len(batch.rtt) == len(waits) == count:
@@ -198,13 +200,6 @@ class ManagerNode(object):
             return 'round trip %r is not %s' % (msg.rtt, RTT_RANGE)
         if pair is None and self.rankings.admits_robot(robot):
             return self.rankings.admits_robot(robot)
-        if self.robot_node is not None:
-            expected = self._robot_nodes.get(robot)
-            if expected is None:
-                expected = self._robot_nodes[robot] = rospy.resolve_name(
-                    self.robot_node.format(id=robot))
-            if not owned_by(publisher_of(msg), expected):
-                return 'robot %d is %s (or a node in its namespace)' % (robot, expected)
         return None
 
     def warn(self, topic, msg, why):

@@ -9,7 +9,8 @@ from server_select.core.groups import GroupAssigner
 from server_select.core.window import valid_rtt
 from server_select.msg import GroupAssignments, LatencySamples, ServerGroup
 from server_select.ros.graph import publisher_of
-from server_select.ros.node import fleet, owned_by, param, run
+from server_select.ros.node import fleet, param, run
+from server_select.ros.senders import SenderGate, node_pattern
 
 
 class TopManagerNode(object):
@@ -37,7 +38,9 @@ class TopManagerNode(object):
     def __init__(self):
         self.groups = param('groups')
         self.assigner = GroupAssigner(self.groups, param('window'), param('group_margin'))
-        self.robot_node = param('robot_node')
+        pattern = param('robot_node')      # None: any publisher
+        self.senders = SenderGate('top manager', 'robot {key}', within=True,
+                                  lookup=node_pattern(pattern) if pattern else None)
         self._dirty = threading.Event()
         self.pub = self.sub = self.timer = None
 
@@ -52,13 +55,8 @@ class TopManagerNode(object):
 
     def on_batch(self, batch):
         robot = batch.robot_id
-        if self.robot_node is not None:
-            expected = rospy.resolve_name(self.robot_node.format(id=robot))
-            if not owned_by(publisher_of(batch), expected):
-                rospy.logwarn_throttle(5.0, 'top manager: ignored samples of robot %d published '
-                                       'by %s (robot %d is %s)' % (robot, publisher_of(batch),
-                                                                   robot, expected))
-                return
+        if not self.senders.admits(batch, 'samples of robot %d' % robot, robot):
+            return
         now = rospy.get_time()
         for server, ok, rtt in zip(batch.server_id, batch.ok, batch.rtt):
             if ok and not valid_rtt(rtt):

@@ -17,7 +17,7 @@ import rospy
 from server_select.core import names
 from server_select.core.groups import probe_set
 from server_select.msg import FleetServers, GroupAssignments
-from server_select.ros.graph import publisher_of
+from server_select.ros.senders import SenderGate
 from server_select.ros.node import fleet
 
 
@@ -69,7 +69,8 @@ class ServerAnnouncements(object):
     def __init__(self, static, on_change, manager_node, robot_id):
         self.static = set(static)
         self.known = set(static)
-        self.on_change, self.manager_node, self.robot_id = on_change, manager_node, robot_id
+        self.on_change, self.robot_id = on_change, robot_id
+        self.senders = SenderGate('robot %d' % robot_id, 'the manager', manager_node)
         self._lock = threading.Lock()
         self.sub = None
 
@@ -78,11 +79,7 @@ class ServerAnnouncements(object):
                                     queue_size=10)
 
     def on_servers(self, msg):
-        sender = publisher_of(msg)
-        if self.manager_node is not None and sender != self.manager_node:
-            rospy.logwarn_throttle(5.0, 'robot %d: ignored a server list published by %s '
-                                   '(the manager is %s)' % (self.robot_id, sender,
-                                                            self.manager_node))
+        if not self.senders.admits(msg, 'a server list'):
             return
         with self._lock:
             wanted = self.static | set(msg.servers)
@@ -99,8 +96,8 @@ class GroupAssignmentsListener(object):
     ignored with a throttled warning naming the publisher."""
 
     def __init__(self, top_node, on_assignments, who):
-        self.top_node = rospy.resolve_name(top_node)
-        self.on_assignments, self.who = on_assignments, who
+        self.on_assignments = on_assignments
+        self.senders = SenderGate(who, 'the top manager', rospy.resolve_name(top_node))
         self.sub = None
 
     def start(self):
@@ -108,10 +105,7 @@ class GroupAssignmentsListener(object):
                                     queue_size=10)
 
     def on_msg(self, msg):
-        sender = publisher_of(msg)
-        if sender != self.top_node:
-            rospy.logwarn_throttle(5.0, '%s: ignored group assignments published by %s (the '
-                                   'top manager is %s)' % (self.who, sender, self.top_node))
+        if not self.senders.admits(msg, 'group assignments'):
             return
         groups = dict((g.group_id, list(g.servers)) for g in msg.groups)
         self.on_assignments(groups, dict(zip(msg.robot_id, msg.group_id)))

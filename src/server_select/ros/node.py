@@ -57,12 +57,6 @@ def _fleet_ns():
     return _FLEET_NS
 
 
-def owned_by(node, owner):
-    """Whether ``node`` is ``owner`` or a node inside ``owner``'s namespace (a robot's
-    nodes may live in ``/robot1/``)."""
-    return node == owner or node.startswith(owner.rstrip('/') + '/')
-
-
 def end_parent_launch():
     """Ask the roslaunch that started this node to shut down, as Ctrl-C would (a clean end,
     without the "REQUIRED process has died" of a required node that exits by itself). False

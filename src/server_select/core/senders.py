@@ -1,0 +1,67 @@
+"""Who may publish what a node takes: the one rule behind every check of a message's
+publisher (no rospy; the ROS side is :class:`server_select.ros.senders.SenderGate`).
+
+In ROS 1 a subscriber hears every publisher of its topic. The fleet's messages count only
+from the node that should send them: a flag from the manager, a result from the node that
+serves the server's probe service, samples of robot ``r`` from robot ``r``'s node (or a node
+in its namespace: a robot's nodes may live in ``/robot1/``).
+"""
+
+import threading
+import time
+
+
+def owned_by(node, owner):
+    """Whether ``node`` is ``owner`` or a node inside ``owner``'s namespace."""
+    return node == owner or node.startswith(owner.rstrip('/') + '/')
+
+
+class ExpectedSender(object):
+    """The node whose messages count, for each key (a robot, a server; None when there is
+    one for all), and whether ``sender`` is it.
+
+    ``expected`` is a resolved node name, or None: any node counts. ``lookup(key, refresh)``
+    instead names the node of a key (None: unknown, any counts); a message from another
+    node makes it look once more with ``refresh=True`` (the node may have been restarted
+    elsewhere). ``within``: a node in the expected node's namespace counts too.
+    """
+
+    def __init__(self, expected=None, lookup=None, within=False):
+        if expected is not None and lookup is not None:
+            raise ValueError('give expected or lookup, not both')
+        self.expected, self.lookup, self.within = expected, lookup, within
+
+    def _matches(self, sender, expected):
+        return expected is None or (owned_by(sender, expected) if self.within
+                                    else sender == expected)
+
+    def refusal(self, sender, key=None):
+        """None when ``sender``'s message counts, else the node that should have sent it."""
+        if self.lookup is None:
+            return None if self._matches(sender, self.expected) else self.expected
+        expected = self.lookup(key, False)
+        if self._matches(sender, expected):
+            return None
+        expected = self.lookup(key, True)
+        return None if self._matches(sender, expected) else expected
+
+
+class Throttle(object):
+    """At most one line a ``period``: :meth:`due` says whether to write one now and how
+    many were held back since the last (thread-safe)."""
+
+    def __init__(self, period=5.0, clock=time.monotonic):
+        self.period, self._clock = period, clock
+        self._lock = threading.Lock()
+        self._last = None
+        self._held = 0
+
+    def due(self):
+        """``(write now, lines held back before this one)``."""
+        with self._lock:
+            now = self._clock()
+            if self._last is not None and now - self._last < self.period:
+                self._held += 1
+                return False, 0
+            held, self._held, self._last = self._held, 0, now
+            return True, held

@@ -1,0 +1,54 @@
+"""The one gate every callback that checks who published a message goes through."""
+
+import rospy
+
+from server_select.core.senders import ExpectedSender, Throttle
+from server_select.ros.graph import publisher_of
+
+
+class SenderGate(object):
+    """Admits a message only from the node that should send it
+    (:class:`~server_select.core.senders.ExpectedSender`); anything else is dropped with a
+    warning naming the publisher, at most one every ``period`` s for this gate.
+
+    ``who`` starts the warning (``robot 1``), ``role`` names the expected node in it
+    (``the manager``, ``server {key}``, ``robot {key}``).
+    """
+
+    def __init__(self, who, role, expected=None, lookup=None, within=False, period=5.0):
+        self.who, self.role = who, role
+        self.rule = ExpectedSender(expected, lookup, within)
+        self.throttle = Throttle(period)
+        self.refused = 0
+
+    def expect(self, expected):
+        """From now on messages count from ``expected`` (a resolved name; None: any)."""
+        self.rule.expected = expected
+
+    def admits(self, msg, what, key=None):
+        """Whether ``msg`` (``what`` it is, for the warning) counts."""
+        sender = publisher_of(msg)
+        expected = self.rule.refusal(sender, key)
+        if expected is None:
+            return True
+        self.refused += 1
+        due, held = self.throttle.due()
+        if due:
+            rospy.logwarn('%s: ignored %s published by %s (%s is %s%s)%s' % (
+                self.who, what, sender, self.role.format(key=key), expected,
+                ' or a node in its namespace' if self.rule.within else '',
+                '; %d more ignored before' % held if held else ''))
+        return False
+
+
+def node_pattern(pattern):
+    """``lookup(id, refresh)`` of ExpectedSender for a node name pattern with ``{id}``
+    (``/robot{id}``), resolved in the caller's namespace once per id."""
+    names = {}
+
+    def lookup(key, _refresh):
+        name = names.get(key)
+        if name is None:
+            name = names[key] = rospy.resolve_name(pattern.format(id=key))
+        return name
+    return lookup

@@ -1,0 +1,67 @@
+"""Who may publish what: the rule every publisher check uses, and its log throttle."""
+
+import pytest
+
+from fake_clock import Clock
+from server_select.core.senders import ExpectedSender, Throttle, owned_by
+
+
+def test_a_node_owns_itself_and_its_namespace_only():
+    assert owned_by('/robot1', '/robot1')
+    assert owned_by('/robot1/camera', '/robot1')
+    assert owned_by('/robot1/camera', '/robot1/')
+    assert not owned_by('/robot10', '/robot1')
+    assert not owned_by('/robot', '/robot1')
+
+
+def test_one_expected_node_exact_or_with_its_namespace():
+    exact = ExpectedSender('/manager')
+    assert exact.refusal('/manager') is None
+    assert exact.refusal('/manager/helper') == '/manager'
+    assert exact.refusal('/spoofer') == '/manager'
+    within = ExpectedSender('/robot1', within=True)
+    assert within.refusal('/robot1/helper') is None
+    assert within.refusal('/robot12') == '/robot1'
+
+
+def test_no_expected_node_admits_any():
+    assert ExpectedSender().refusal('/anyone') is None
+    assert ExpectedSender(lookup=lambda key, refresh: None).refusal('/anyone', 3) is None
+
+
+def test_a_lookup_is_asked_again_once_when_another_node_sends():
+    master = {2: '/server2'}           # what the master says
+    known = dict(master)               # what the lookup last looked up
+    calls = []
+
+    def lookup(key, refresh):
+        calls.append((key, refresh))
+        if refresh:
+            known.update(master)
+        return known.get(key)
+    rule = ExpectedSender(lookup=lookup)
+    assert rule.refusal('/server2', 2) is None
+    assert calls == [(2, False)]
+    master[2] = '/server2_restarted'          # restarted under another name
+    assert rule.refusal('/server2_restarted', 2) is None
+    assert calls[1:] == [(2, False), (2, True)]
+    assert rule.refusal('/spoofer', 2) == '/server2_restarted'
+    assert rule.refusal('/server2', 2) == '/server2_restarted'
+
+
+def test_expected_and_lookup_exclude_each_other():
+    with pytest.raises(ValueError):
+        ExpectedSender('/manager', lookup=lambda key, refresh: None)
+
+
+def test_a_throttle_writes_one_line_a_period_and_counts_the_rest():
+    clock = Clock()
+    throttle = Throttle(5.0, clock)
+    assert throttle.due() == (True, 0)
+    clock.now += 1.0
+    assert throttle.due() == (False, 0)
+    assert throttle.due() == (False, 0)
+    clock.now += 4.0
+    assert throttle.due() == (True, 2)
+    clock.now += 5.0
+    assert throttle.due() == (True, 0)
