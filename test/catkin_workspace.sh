@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The ROS way, tested: this package copied into the src/ of a fresh catkin workspace and
 # built there with Debian's packages only (no venv, no pip: PATH is the system's), then
-#   catkin_make, catkin_make run_tests (the rostests), catkin_test_results,
+#   catkin_make run_tests as the first command (it must build what the tests need): every
+#   launch-level rostest, once, and catkin_test_results;
+#   catkin_make (the README's order) and one rostest after it;
 #   the timed demo launched from the workspace's devel space, and analyze on a bag
 #   recorded with plain rosbag record -a during the demo.
 # Prints "catkin: N passed, N failed" last; exit status non-zero on any failure.
@@ -12,10 +14,12 @@ trap '[ -n "${KEEP_WS:-}" ] || rm -rf "$ws"' EXIT
 mkdir -p "$ws/src/server_select"
 tar -C "$repo" --exclude=./build --exclude=./.venv --exclude=./results --exclude=./.git \
   -cf - . | tar -C "$ws/src/server_select" -xf -
+# within SECONDS COMMAND: until COMMAND succeeds (checked every 0.2 s), at most SECONDS
+within() { timeout "$1" bash -c "until $2 > /dev/null 2>&1; do sleep 0.2; done"; }
 run() {  # a clean environment: Debian's python3 and ROS, nothing of the caller's
   env -i HOME="$HOME" PATH=/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 \
     ROS_HOME="$ws/ros_home" ROS_MASTER_URI="http://localhost:${port:-11311}" \
-    bash -c "cd '$ws' && $1"
+    bash -c "$(declare -f within); cd '$ws' && $1"
 }
 passed=0; failed=0
 step() {
@@ -27,16 +31,20 @@ step() {
     failed=$((failed + 1)); echo "=== $name: FAILED; last lines:"; tail -150 "$ws/$name.log"
   fi
 }
-step catkin_make "catkin_make"
 step run_tests "catkin_make run_tests -j1 && catkin_test_results --verbose build/test_results"
+step catkin_make "catkin_make && rm -rf build/test_results \
+  && catkin_make run_tests_server_select_rostest_test_probe_client.test \
+  && catkin_test_results build/test_results"
 port=$(( 20000 + RANDOM % 20000 ))
 step demo "source devel/setup.bash && roslaunch --port $port server_select demo.launch \
   duration:=10 output:=log | tee demo.out && grep -q '| R1 | S' demo.out && grep -q '| R2 | S' demo.out"
 port=$(( 20000 + RANDOM % 20000 ))
-step bag "source devel/setup.bash && (roscore -p $port > roscore.out 2>&1 &) && sleep 3 \
-  && (rosbag record -a -O plain.bag __name:=recorder > rosbag.out 2>&1 &) && sleep 2 \
+step bag "source devel/setup.bash && (roscore -p $port > roscore.out 2>&1 &) \
+  && within 30 'rosnode list' \
+  && (rosbag record -a -O plain.bag __name:=recorder > rosbag.out 2>&1 &) \
+  && within 30 'rosnode list | grep -q /recorder' \
   && roslaunch server_select demo.launch duration:=8 output:=log > demo2.out 2>&1; \
-  rosnode kill /recorder; sleep 2; pkill -INT -f 'roscore -p $port'; sleep 2; \
+  rosnode kill /recorder; within 30 '[ -f plain.bag ]'; pkill -INT -f 'roscore -p $port'; \
   rosrun server_select analyze plain.bag | tee analyze.out && grep -q '^| plain | [1-9]' analyze.out"
 echo "catkin: $passed passed, $failed failed"
 [ $failed -eq 0 ]

@@ -18,6 +18,7 @@ import numpy as np
 import rospy
 import rostest
 from sensor_msgs.msg import Image
+from std_msgs.msg import Header
 
 from server_select.core import names
 from server_select.core.procs import wait_until
@@ -64,9 +65,11 @@ class ImageTest(unittest.TestCase):
 
     def send(self, task_id, fields):
         encoding, height, width, step, data = fields
+        # a camera frame's own header: its stamp and frame, which the outputs keep
+        frame = Header(stamp=rospy.Time(1000 + task_id, 5), frame_id='camera_%d' % task_id)
         task = ImageTask(robot_id=ROBOT, task_id=task_id, server_id=2,
-                         image=Image(height=height, width=width, encoding=encoding, step=step,
-                                     data=data))
+                         image=Image(header=frame, height=height, width=width,
+                                     encoding=encoding, step=step, data=data))
         task.header.stamp = rospy.Time.now()
         self.pub.publish(task)
         self.assertTrue(self.wait(lambda: task_id in self.results, 10.0), 'no result %d' % task_id)
@@ -89,6 +92,9 @@ class ImageTest(unittest.TestCase):
             self.assertEqual((result.image.width, result.image.height, result.image.encoding),
                              (512, 512, 'bgr8'))
             self.assertIsNotNone(found, name)
+            for header in (found.header, result.image.header):
+                self.assertEqual((header.stamp, header.frame_id),
+                                 (rospy.Time(1000 + task_id, 5), 'camera_%d' % task_id))
             (d,) = found.detections
             box = (d.roi.x_offset, d.roi.y_offset, d.roi.width, d.roi.height)
             self.assertGreater(iou(box, FACE), 0.5, (name, box))

@@ -18,13 +18,15 @@ from server_select.msg import SelectionFlag
 from server_select.ros.camera import TopicSource
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.load import RobotLoad
+from server_select.ros.membership import GroupFollower, ServerAnnouncements
 from server_select.ros.node import fleet, param, run
 from server_select.ros.passive import TaskSamples
-from server_select.ros.membership import GroupFollower, ServerAnnouncements
 from server_select.ros.prober import Prober
 from server_select.ros.routing import ROUTES
-from server_select.ros.task_kinds import ImageKind, stream_kinds
+from server_select.ros.senders import SenderGate
+from server_select.ros.task_kinds import stream_kinds
 from server_select.ros.task_stream import TaskStream
+from server_select.tasks.image import Frames
 
 
 class RobotNode(object):
@@ -69,7 +71,7 @@ class RobotNode(object):
                              '~discover, and a mode other than fixed)')
         self.selection = self._selection(servers, mode)
         kinds = stream_kinds(self.robot_id, mode, param)
-        image = next((k for k, _ in kinds if isinstance(k, ImageKind)), None)
+        image = next((k for k, _ in kinds if isinstance(k, Frames)), None)
         self.search = image.search if image else None
         self.camera = image.source if image and isinstance(image.source, TopicSource) else None
         self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds)) \
@@ -83,6 +85,8 @@ class RobotNode(object):
         self.summary_period = param('summary_period')
         manager = param('manager_node')   # None: flags from any node
         self.manager_node = rospy.resolve_name(manager) if manager else None
+        self.flag_senders = SenderGate('robot %d' % self.robot_id, 'the manager',
+                                       self.manager_node)
         self.providers = ServiceProviders(rospy.get_name())
         # one retry budget and one series of task ids for all of the robot's streams
         self.budget, self._task_ids = RetryBudget(param('retry_budget')), itertools.count(1)
@@ -117,7 +121,7 @@ class RobotNode(object):
             on_busy=functools.partial(self.on_busy, kind.kind),
             hedge=param('hedge_quantile') if param('hedge') else None, budget=self.budget,
             max_in_flight=param('max_in_flight'),
-            newest_wins=getattr(kind, 'newest_wins', False),
+            newest_wins=kind.newest_wins,
             # load-aware: a server's first answers may take half the timeout (its work is
             # not known yet; its probes say whether it is up)
             deadlines=AttemptClock(timeout, factor=param('retry_factor'),
@@ -197,6 +201,7 @@ class RobotNode(object):
     def on_group(self, group):
         """Grouped: the top manager put this robot in ``group``; its manager's flags count."""
         self.manager_node = rospy.resolve_name(param('group_manager_node').format(group=group))
+        self.flag_senders.expect(self.manager_node)
 
     def on_failure(self, server, why):
         ejection = self.health.failure(server, why)
@@ -213,15 +218,12 @@ class RobotNode(object):
     def on_flag(self, flag):
         if flag.robot_id != self.robot_id:
             return
-        sender = publisher_of(flag)
-        if self.manager_node is not None and sender != self.manager_node:
-            rospy.logwarn_throttle(5.0, 'robot %d: ignored a flag published by %s (the manager '
-                                   'is %s)' % (self.robot_id, sender, self.manager_node))
+        if not self.flag_senders.admits(flag, 'a flag'):
             return
         refused = self.selection.on_flag(flag.robot_id, flag.server_id, flag.ranking)
         if refused:
             rospy.logwarn_throttle(5.0, 'robot %d: ignored a flag of %s: it %s'
-                                   % (self.robot_id, sender, refused))
+                                   % (self.robot_id, publisher_of(flag), refused))
 
     def on_decision_timer(self, _event):
         local = self.selection.deciding_locally()

@@ -1,11 +1,12 @@
-"""Task types added without editing the nodes: a plug-in class named by parameter.
+"""Task types: a request/result message pair and one class (see :class:`TaskPlugin`).
 
-A task type is a request/result message pair and one class (see :class:`TaskPlugin`),
-named ``module:Class`` in the robot's and the server's ``~task_plugins``. The robot sends
-its tasks through the same :class:`~server_select.core.task_flow.TaskFlow` as sort and image
-tasks (selection, failover, one ``task_report`` each); the server answers them through
-:class:`PluginHandler`. The plug-in's own settings are the private parameters under its
-kind (``~orb/rate``, ``~orb/source``, ...).
+The built-in sort and image tasks are task types like any other
+(:mod:`server_select.tasks`); more are added without editing the nodes, named
+``module:Class`` in the robot's and the server's ``~task_plugins``. A robot sends every
+type's tasks through a :class:`~server_select.core.task_flow.TaskFlow` (selection, failover,
+one ``task_report`` each); a server answers every type through a :class:`PluginHandler`. A
+plug-in's own settings are the private parameters under its kind (``~orb/rate``,
+``~orb/source``, ...).
 """
 
 import importlib
@@ -15,6 +16,7 @@ import time
 import rospy
 
 from server_select.core.params import ParamError
+from server_select.ros.graph import publisher_of
 from server_select.ros.routing import ServerEndpoint
 
 
@@ -24,9 +26,8 @@ class TaskPlugin(object):
     they cannot do in time); the result message copies them and adds ``ok``, ``error``
     and ``process_time`` (and ``bool busy``); the rest is the plug-in's.
 
-    Robot side (``robot_id`` is an int): ``make``, ``check``, ``run_local``, ``rate``, and
-    optionally ``ready()`` (False: no input for a task yet; none is made). Server side
-    (``robot_id`` is None): ``handle``.
+    Robot side (``robot_id`` is an int): ``make``, ``check``, ``run_local``, ``rate`` and
+    ``ready``. Server side (``robot_id`` is None): ``start`` and ``handle``.
     """
 
     kind = None                          # the name in task reports and of the settings
@@ -44,6 +45,10 @@ class TaskPlugin(object):
         """Tasks per second a robot sends (setting ``rate``, default 1)."""
         return float(self.settings.get('rate', 1.0))
 
+    def ready(self):
+        """Whether there is input for a task now (False: none is made this time)."""
+        return True
+
     def make(self, task_id, stamp):
         """``(request, context)``; raise ValueError when no task can be made now."""
         raise NotImplementedError
@@ -55,6 +60,9 @@ class TaskPlugin(object):
     def run_local(self, task_id, stamp):
         """Do the work in the robot (mode ``local``); an error string or None."""
         raise NotImplementedError
+
+    def start(self):
+        """Server side: make what :meth:`handle` publishes besides the result (if anything)."""
 
     def handle(self, task, result):
         """Fill ``result`` for ``task`` on a server; raise ValueError to reject the task."""
@@ -80,18 +88,21 @@ def load(spec, robot_id, name='~task_plugins'):
 
 
 class PluginHandler(object):
-    """A server's side of one plug-in task type: ``on_task`` makes the result of a task
-    addressed here (an error result when the plug-in rejects it); the endpoint hands its
-    tasks to ``submit`` (the server's workers)."""
+    """A server's side of one task type: ``on_task`` makes the result of a task addressed
+    here (an error result when the task type rejects it), after which ``work()`` runs (the
+    server's ``~work_delay``); the endpoint hands its tasks to ``submit`` (the server's
+    workers)."""
 
-    def __init__(self, server_id, plugin, submit, queue_size=100, direct=False):
+    def __init__(self, server_id, plugin, submit, queue_size=100, direct=False, work=None):
         self.server_id, self.plugin = server_id, plugin
         self.endpoint = ServerEndpoint(server_id, plugin, self.on_task, direct, submit,
                                        queue_size)
+        self.work = work
         self._lock = threading.Lock()
         self.done = self.rejected = 0
 
     def start(self):
+        self.plugin.start()
         self.endpoint.start()
 
     def on_task(self, task):
@@ -103,9 +114,13 @@ class PluginHandler(object):
             self.plugin.handle(task, result)
             result.ok = True
         except ValueError as error:
-            result.ok, result.error = False, str(error)
-            rospy.logerr('server %d: %s task %d of robot %d rejected: %s', self.server_id,
-                         self.plugin.kind, task.task_id, task.robot_id, error)
+            result = self.endpoint.error_result(task, str(error))
+            rospy.logerr_throttle(1.0, 'server %d: %s task %d of robot %d (from %s) rejected: '
+                                  '%s' % (self.server_id, self.plugin.kind, task.task_id,
+                                          task.robot_id, publisher_of(task), error))
+        else:
+            if self.work is not None:
+                self.work()
         result.process_time = time.perf_counter() - start
         with self._lock:
             self.done += result.ok

@@ -14,17 +14,20 @@ from server_select.core.stats import format_ms, summarize
 from server_select.core.task_flow import RETRIED, TaskFlow
 from server_select.msg import TaskReport
 from server_select.ros.graph import publisher_of
+from server_select.ros.senders import SenderGate
 from server_select.ros.node import fleet
 from server_select.ros.routing import BroadcastRoute
 
 
 class TaskStream(object):
-    """Sends tasks of one ``kind`` (see :mod:`server_select.ros.task_kinds`) at ``rate``.
+    """Sends tasks of one ``kind`` (a :class:`~server_select.ros.plugins.TaskPlugin`) at
+    ``rate``.
 
     The stream waits until ``ready()`` and, unless the robot works ``local``ly, until its
     task and result topics are connected; then it sends a task every ``1/rate`` s (at most
     ``limit``, 0: no limit) and publishes one ``task_report`` per task. A result counts
-    only if the node ``expected_publisher(server, refresh=False)`` names published it.
+    only if the node ``expected_publisher(server, refresh)`` names published it (a
+    :class:`~server_select.ros.senders.SenderGate`).
     With ``load`` (a :class:`~server_select.ros.load.RobotLoad`: load-aware), each attempt
     tells its server the seconds its robot still waits (``budget``), and the load board
     hears where tasks went. A send that ``max_in_flight`` held back goes at the next tick
@@ -35,7 +38,8 @@ class TaskStream(object):
                  expected_publisher=None, route=BroadcastRoute, load=None):
         self.robot_id, self.kind, self.rate, self.limit = robot_id, kind, rate, limit
         self.ready, self.local, self.load = ready, local, load
-        self.expected_publisher = expected_publisher
+        self.senders = SenderGate('robot %d' % robot_id, 'server {key}',
+                                  lookup=expected_publisher)
         self.started = False
         self.flow = TaskFlow(kind.kind, make=kind.make, publish=self._publish_task,
                              check=kind.check, report=self._report, run_local=kind.run_local,
@@ -67,7 +71,7 @@ class TaskStream(object):
     def on_timer(self, _event):
         if rospy.is_shutdown() or (self.limit and self.flow.sent >= self.limit):
             return
-        if not getattr(self.kind, 'ready', lambda: True)():
+        if not self.kind.ready():
             source = getattr(getattr(self.kind, 'source', None), 'topic', 'their source')
             rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for input from %s'
                                    % (self.robot_id, self.flow.kind, source))
@@ -92,13 +96,8 @@ class TaskStream(object):
     def on_result(self, result):
         if result.robot_id != self.robot_id:
             return
-        sender = publisher_of(result)
-        expected = self.expected(result.server_id, sender)
-        if expected is not None and sender != expected:
-            rospy.logwarn_throttle(
-                5.0, 'robot %d: ignored a %s result for task %d claiming server %d, published '
-                'by %s (server %d is %s)' % (self.robot_id, self.flow.kind, result.task_id,
-                                             result.server_id, sender, result.server_id, expected))
+        if not self.senders.admits(result, 'a %s result for task %d claiming server %d' % (
+                self.flow.kind, result.task_id, result.server_id), result.server_id):
             return
         busy = bool(getattr(result, 'busy', False))
         outcome = self.flow.resolve(result.task_id, result.server_id, result.ok, result.error,
@@ -116,17 +115,7 @@ class TaskStream(object):
             rospy.logwarn_throttle(
                 5.0, 'robot %d: ignored %s %s result for task %d from server %d (%s)'
                 % (self.robot_id, outcome, self.flow.kind, result.task_id, result.server_id,
-                   sender))
-
-    def expected(self, server, sender):
-        """The node whose results count for ``server`` (None: no check). A result from
-        another node makes it look again (a server may have been restarted elsewhere)."""
-        if self.expected_publisher is None:
-            return None
-        expected = self.expected_publisher(server)
-        if sender != expected:
-            expected = self.expected_publisher(server, refresh=True)
-        return expected
+                   publisher_of(result)))
 
     def _report(self, outcome):
         msg = TaskReport(robot_id=self.robot_id, task_id=outcome.task_id, kind=outcome.kind,

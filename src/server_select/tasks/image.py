@@ -1,0 +1,128 @@
+"""Camera frames searched for targets, the second paper's task, as a task type (built in:
+``~image_source`` or ``~image_topic`` on a robot).
+
+Robot side: frames from a source (a folder, a video, a synthetic search area, or a camera
+topic), sent raw or compressed; where each was taken goes to the cooperative search. Server
+side: the frame is searched with an OpenCV detector (one per worker), the annotated frame
+goes back in the result and what was found on ``detections``, under the frame's own header
+(its camera stamp and frame_id).
+"""
+
+import queue
+import time
+
+import rospy
+from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
+from std_msgs.msg import Header
+
+from server_select.core import names
+from server_select.msg import Detection, Detections, ImageResult, ImageTask
+from server_select.ros.node import fleet
+from server_select.ros.plugins import TaskPlugin
+from server_select.vision import image_codec
+from server_select.vision.detection import search_frame
+
+
+class Frames(TaskPlugin):
+    """One camera frame a task. Settings: ``encoding`` (bgr8), ``transport`` (raw or
+    compressed), ``quality`` (JPEG, 80), ``max_pixels`` (larger frames are refused), and
+    on a robot ``start`` (the source's time zero, epoch seconds; 0: now)."""
+
+    kind = 'image'
+    newest_wins = True        # a frame nobody waits for any more is worth nothing
+    task_topic, task_type = names.IMAGE_TASK_TOPIC, ImageTask
+    result_topic, result_type = names.IMAGE_RESULT_TOPIC, ImageResult
+
+    def __init__(self, robot_id, settings, source=None, search=None, detectors=()):
+        """``source``: a robot's frames (``frame(t)`` -> ``(array, where)``); ``search``: its
+        SearchParticipant (or None); ``detectors``: the server's, one per worker (a robot in
+        mode local has one too)."""
+        super(Frames, self).__init__(robot_id, settings)
+        self.encoding = settings.get('encoding', 'bgr8')
+        self.transport = settings.get('transport', 'raw')
+        self.quality = int(settings.get('quality', 80))
+        self.max_pixels = int(settings.get('max_pixels', 1 << 24))
+        self.source, self.search = source, search
+        self.detectors = queue.Queue()
+        for detector in detectors:
+            self.detectors.put(detector)
+        start = settings.get('start', 0.0)
+        # the source's time zero: now, or the epoch time ``start`` (a shared clock)
+        self.t0 = time.monotonic() - (time.time() - start if start else 0.0)
+        self.detections_pub = None
+
+    # -- robot side ---------------------------------------------------------------------------
+
+    def ready(self):
+        """Whether a frame is there to send (a camera topic may not have sent one yet)."""
+        return getattr(self.source, 'ready', lambda: True)()
+
+    def capture(self, task_id):
+        """A frame from the source in ``encoding``; the search learns where it was."""
+        frame, where = self.source.frame(time.monotonic() - self.t0)
+        if self.search is not None:
+            self.search.remember(task_id, where)
+        return image_codec.convert(frame, self.encoding)
+
+    def make(self, task_id, stamp):
+        frame = self.capture(task_id)
+        header = Header(stamp=stamp, frame_id='robot%d_camera' % self.robot_id)
+        task = ImageTask(header=Header(stamp=stamp), robot_id=self.robot_id, task_id=task_id)
+        if self.transport == 'compressed':
+            fmt, data = image_codec.encode(frame, self.quality)
+            task.compressed = CompressedImage(header=header, format=fmt, data=data)
+        else:
+            encoding, height, width, step, data = image_codec.from_array(frame, self.encoding)
+            task.image = Image(header=header, height=height, width=width, encoding=encoding,
+                               step=step, data=data)
+        return task, None
+
+    def check(self, result, _context):
+        if result.image.width == 0 and not result.compressed.data:
+            return 'result carries no annotated image'
+        return None
+
+    def run_local(self, task_id, _stamp):
+        # The same work a server does for a frame (message fields in, detection,
+        # annotation), so that robot CPU with and without offloading compare fairly.
+        boxes, _ = self._search(image_codec.from_array(self.capture(task_id), self.encoding),
+                                ('', b''))
+        if self.search is not None:
+            self.search.found_in(task_id, [(b.x, b.y, b.width, b.height, b.label)
+                                           for b in boxes])
+        return None
+
+    # -- server side --------------------------------------------------------------------------
+
+    def start(self):
+        self.detections_pub = rospy.Publisher(fleet(names.DETECTIONS_TOPIC), Detections,
+                                              queue_size=100)
+
+    def handle(self, task, result):
+        img, packed = task.image, task.compressed
+        raw = not packed.data
+        boxes, annotated = self._search((img.encoding, img.height, img.width, img.step,
+                                         img.data), (packed.format, packed.data))
+        if raw:
+            encoding, height, width, step, data = image_codec.from_array(annotated)
+            result.image = Image(header=img.header, height=height, width=width,
+                                 encoding=encoding, step=step, data=data)
+        else:
+            fmt, data = image_codec.encode(annotated, self.quality)
+            result.compressed = CompressedImage(header=packed.header, format=fmt, data=data)
+        result.detection_count = len(boxes)
+        self.detections_pub.publish(Detections(
+            header=img.header if raw else packed.header, robot_id=task.robot_id,
+            task_id=task.task_id, server_id=result.server_id, detections=[
+                Detection(roi=RegionOfInterest(x_offset=b.x, y_offset=b.y, width=b.width,
+                                               height=b.height),
+                          label=b.label, score=b.score) for b in boxes]))
+
+    def _search(self, raw, packed):
+        """Boxes and annotated frame of a raw or ``packed`` frame, with a detector of this
+        worker's own (ImageError, a ValueError, when it cannot be decoded or is too big)."""
+        detector = self.detectors.get()
+        try:
+            return search_frame(detector, raw, packed, self.max_pixels)
+        finally:
+            self.detectors.put(detector)
