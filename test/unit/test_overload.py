@@ -20,6 +20,10 @@ def busy(w, task_id, server):
     return w.flow.resolve(task_id, server, False, 'busy: would finish in 3 s', busy=True)
 
 
+def busy_status(w, task_id, server):
+    return busy(w, task_id, server).status
+
+
 def test_each_attempt_tells_the_server_how_long_its_robot_still_waits():
     w = World(candidates=(3, 1), timeout=2.0, first=0.5)
     w.flow.send_next('s1')
@@ -32,16 +36,16 @@ def test_each_attempt_tells_the_server_how_long_its_robot_still_waits():
 def test_a_busy_answer_sends_the_task_on_and_blames_nobody():
     w = World(candidates=(3, 1))
     w.flow.send_next('s1')
-    assert busy(w, 1, 3) == RETRIED
+    assert busy_status(w, 1, 3) == RETRIED
     assert w.failures == [] and w.flow.busy == 1
-    outcome = w.answer(1, 1)
+    outcome = w.answer(1, 1).outcome
     assert (outcome.ok, outcome.answered_by, outcome.attempts) == (True, 1, 2)
 
 
 def test_busy_everywhere_fails_the_task_at_once_with_the_reason():
     w = World(candidates=(3,))
     w.flow.send_next('s1')
-    outcome = busy(w, 1, 3)
+    outcome = busy(w, 1, 3).outcome
     assert not outcome.ok and outcome.error.startswith('server 3 busy (busy: would finish')
     assert w.failures == [] and len(w.flow) == 0
 
@@ -51,8 +55,8 @@ def test_without_budget_a_task_keeps_its_one_attempt():
     w = World(candidates=(3, 1), budget=budget)
     for stamp in ('s1', 's2', 's3'):
         w.flow.send_next(stamp)
-    assert busy(w, 1, 3) == RETRIED == busy(w, 2, 3)    # 1 + 10 % of 3 tasks: 1.3
-    outcome = busy(w, 3, 3)
+    assert busy_status(w, 1, 3) == RETRIED == busy_status(w, 2, 3)    # 1 + 10 % of 3 tasks: 1.3
+    outcome = busy(w, 3, 3).outcome
     assert not outcome.ok and w.flow.unfunded == 1 and budget.refused == 1
     assert [s for _, s in w.published] == [3, 3, 3, 1, 1]
 
@@ -100,7 +104,7 @@ def test_a_busy_frame_gives_way_to_a_newer_one():
     w = World(candidates=(3, 1), max_in_flight=1, newest_wins=True)
     w.flow.send_next('s1')
     w.flow.send_next('s2')                           # held back
-    outcome = busy(w, 1, 3)
+    outcome = busy(w, 1, 3).outcome
     assert not outcome.ok and outcome.error.endswith('a newer task waits')
     assert [s for _, s in w.published] == [3] and w.flow.due()
 

@@ -21,10 +21,10 @@ def test_a_robot_is_ranked_as_the_paper_ranks_it():
 
 def test_fixed_lists_refuse_others_learned_lists_take_whoever_comes():
     fixed = FleetRankings(5.0, robots=[1], servers=[1, 2])
-    assert 'robot 7' in fixed.admits(7, 1) and 'server 9' in fixed.admits(1, 9)
-    assert fixed.admits(1, 2) is None
+    assert 'robot 7' in fixed.refusal(7, 1) and 'server 9' in fixed.refusal(1, 9)
+    assert fixed.refusal(1, 2) is None
     learned = FleetRankings(5.0)
-    assert learned.admits(7, 9) is None and learned.robots() == []
+    assert learned.refusal(7, 9) is None and learned.robots() == []
     learned.add(7, 9, 0.0, True, 0.001)
     learned.add(3, 9, 0.0, False, 0.0)
     assert learned.robots() == [3, 7] and learned.heard(7) and not learned.heard(4)
@@ -133,15 +133,15 @@ def test_profiles_only_name_known_parameters():
 def test_a_group_manager_ranks_only_its_members():
     r = FleetRankings(5.0)
     r.set_members([], [])                         # no table from the top manager yet
-    assert r.robots() == [] and 'robot 1' in r.admits(1, 1)
+    assert r.robots() == [] and 'robot 1' in r.refusal(1, 1)
     r.set_members([2, 1], [4, 5])
-    assert r.robots() == [1, 2] and r.admits(1, 4) is None
-    assert 'server 7' in r.admits(1, 7)           # another group's representative
+    assert r.robots() == [1, 2] and r.refusal(1, 4) is None
+    assert 'server 7' in r.refusal(1, 7)           # another group's representative
     r.add(1, 4, 0.0, True, 0.002)
     r.add(1, 5, 0.0, True, 0.001)
     assert r.rank(1, 0.1).ranking == [5, 4]
     r.set_members([2], [4, 5])                    # robot 1 moved to another group
-    assert r.robots() == [2] and 'robot 1' in r.admits(1, 4)
+    assert r.robots() == [2] and 'robot 1' in r.refusal(1, 4)
 
 
 def _loaded_server_switches(task_memory, seconds=60.0, seed=3):

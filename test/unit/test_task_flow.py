@@ -52,7 +52,7 @@ def test_send_then_answer_gives_one_checked_report_with_the_round_trip():
     assert w.flow.send_next('stamp-1') == 1
     assert w.published == [(('request', 1, 'stamp-1'), 3)]
     w.clock.now += 0.25
-    outcome = w.answer(1, 3)
+    outcome = w.answer(1, 3).outcome
     assert w.reports == [outcome] and w.successes == [3]
     assert outcome == (1, 'sort', 'stamp-1', 3, 3, True, '', pytest.approx(0.25), 1)
     assert (w.flow.sent, w.flow.ok, w.flow.failed, len(w.flow)) == (1, 1, 0, 0)
@@ -61,9 +61,9 @@ def test_send_then_answer_gives_one_checked_report_with_the_round_trip():
 def test_an_error_answer_goes_to_the_next_candidate_and_the_server_is_blamed():
     w = World(candidates=(3, 1))
     w.flow.send_next('s1')
-    assert w.flow.resolve(1, 3, False, 'server overloaded') == RETRIED
+    assert w.flow.resolve(1, 3, False, 'server overloaded').status == RETRIED
     assert w.failures == [3] and [s for _, s in w.published] == [3, 1]
-    outcome = w.answer(1, 1)
+    outcome = w.answer(1, 1).outcome
     assert (outcome.ok, outcome.server_id, outcome.answered_by, outcome.attempts) == \
         (True, 3, 1, 2)
 
@@ -71,7 +71,7 @@ def test_an_error_answer_goes_to_the_next_candidate_and_the_server_is_blamed():
 def test_a_wrong_result_with_no_candidate_left_fails_the_task():
     w = World(candidates=(3,))
     w.flow.send_next('s1')
-    outcome = w.answer(1, 3, good=False)
+    outcome = w.answer(1, 3, good=False).outcome
     assert (outcome.ok, outcome.error, outcome.attempts) == (False, 'wrong result', 1)
     assert (w.flow.ok, w.flow.failed) == (0, 1) and w.failures == [3]
 
@@ -86,10 +86,10 @@ def test_a_silent_server_is_left_at_its_attempt_deadline_and_nothing_is_lost():
     assert [s for _, s in w.published] == [3, 1] and w.failures == [3]
     # the first server answers after all: first answer wins, the second is a duplicate
     w.clock.now += 0.1
-    outcome = w.answer(1, 3)
+    outcome = w.answer(1, 3).outcome
     assert (outcome.ok, outcome.answered_by, outcome.attempts) == (True, 3, 2)
     assert outcome.rtt == pytest.approx(0.6)
-    assert w.answer(1, 1) == DUPLICATE
+    assert w.answer(1, 1).status == DUPLICATE
     assert len(w.reports) == 1
 
 
@@ -117,7 +117,7 @@ def test_when_every_candidate_was_tried_the_task_fails_at_its_timeout():
         (False, NO_SERVER, 2, 's1')
     assert 'task_timeout 2 s (2 attempts: servers 3, 1)' in outcome.error
     assert w.failures == [3, 1]
-    assert w.answer(1, 1) == LATE
+    assert w.answer(1, 1).status == LATE
 
 
 def test_duplicate_late_unknown_and_foreign_results_are_ignored_and_counted():
@@ -126,12 +126,12 @@ def test_duplicate_late_unknown_and_foreign_results_are_ignored_and_counted():
     w.flow.send_next('s2')
     w.flow.send_next('s3')
     w.answer(1, 3)
-    assert w.answer(1, 3) == DUPLICATE
-    assert w.answer(3, 7) == FOREIGN               # never sent to server 7
+    assert w.answer(1, 3).status == DUPLICATE
+    assert w.answer(3, 7).status == FOREIGN               # never sent to server 7
     w.clock.now += 1.0
     w.flow.tick()
-    assert w.answer(2, 3) == LATE
-    assert w.answer(99, 3) == UNKNOWN
+    assert w.answer(2, 3).status == LATE
+    assert w.answer(99, 3).status == UNKNOWN
     assert [(r.task_id, r.ok) for r in w.reports] == [(1, True), (2, False), (3, False)]
     assert w.flow.ignored == {DUPLICATE: 1, LATE: 1, UNKNOWN: 1, FOREIGN: 1}
 
@@ -167,7 +167,7 @@ def test_candidates_are_asked_at_send_time_and_switches_counted():
     w.flow.send_next('s2')
     w.flow.send_next('s3')
     assert [s for _, s in w.published] == [1, 2, 2] and w.flow.switches == 1
-    assert w.answer(2, 2).server_id == 2
+    assert w.answer(2, 2).outcome.server_id == 2
 
 
 def test_remembered_ids_and_round_trips_are_bounded():
@@ -175,7 +175,7 @@ def test_remembered_ids_and_round_trips_are_bounded():
     for _ in range(10):
         w.answer(w.flow.send_next('s'), 3)
     assert len(w.flow._ended) == 5 and len(w.flow.rtts) == 3
-    assert w.answer(1, 3) == UNKNOWN   # forgotten: no longer a duplicate
+    assert w.answer(1, 3).status == UNKNOWN   # forgotten: no longer a duplicate
 
 
 @pytest.mark.parametrize('bad', [0, -1, float('nan')])
@@ -218,9 +218,9 @@ def test_a_hedged_task_also_goes_to_the_next_server_after_the_p95_and_the_first_
     assert [s for _, s in w.published] == [3, 4]  # 25 ms: a copy to server 4
     assert (w.flow.hedged, w.flow.resent, w.failures) == (1, 0, [])   # nobody blamed
     w.clock.now += 0.001
-    outcome = w.answer(task, 4)                   # the copy wins
+    outcome = w.answer(task, 4).outcome                   # the copy wins
     assert outcome.ok and outcome.answered_by == 4 and outcome.attempts == 2
-    assert w.answer(task, 3) == DUPLICATE         # the original, late: counted, dropped
+    assert w.answer(task, 3).status == DUPLICATE         # the original, late: counted, dropped
     assert w.flow.ignored[DUPLICATE] == 1
     w.flow.tick()
     assert [s for _, s in w.published] == [3, 4]  # once per task
@@ -256,5 +256,5 @@ def test_answers_of_tasks_sent_once_are_latency_samples_hedged_ones_are_not():
     w.clock.now += 0.025
     w.flow.tick()                                 # hedged to server 4
     w.clock.now += 0.001
-    assert w.answer(task, 4).ok
+    assert w.answer(task, 4).outcome.ok
     assert len(answers) == 20                     # the race's winner is not sampled

@@ -12,8 +12,14 @@ Outcome = collections.namedtuple(
 Outcome.__doc__ = """How one task ended, as published on ``task_report``: ``server_id`` is
 the first server it was sent to, ``rtt`` None when no answer arrived."""
 
-# What became of a result that resolves nothing.
-DUPLICATE, LATE, UNKNOWN, FOREIGN, RETRIED = 'duplicate', 'late', 'unknown', 'foreign', 'retried'
+# What an answer did: ENDED its task (the Resolution has its Outcome); RETRIED: an error or
+# busy answer, the task went to the next candidate; the others resolve nothing (ignored).
+ENDED, RETRIED = 'ended', 'retried'
+DUPLICATE, LATE, UNKNOWN, FOREIGN = 'duplicate', 'late', 'unknown', 'foreign'
+
+Resolution = collections.namedtuple('Resolution', 'status outcome')
+Resolution.__doc__ = """What an answer did: ``status`` (ENDED, RETRIED, DUPLICATE, LATE,
+UNKNOWN or FOREIGN) and, when ENDED, the task's ``outcome`` (else None)."""
 
 
 class Pending(object):

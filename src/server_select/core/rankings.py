@@ -50,16 +50,16 @@ class FleetRankings(object):
             self._robot_set, self._server_set = set(robots), set(servers)
             self.learn_robots = self.learn_servers = False
 
-    def admits_robot(self, robot):
+    def robot_refusal(self, robot):
         """Why samples of ``robot`` are not taken (or None)."""
         if not self.learn_robots and robot not in self._robot_set:
             return 'robot %d is not one of ~robots %s' % (robot, self.fixed_robots)
         return None
 
-    def admits(self, robot, server):
+    def refusal(self, robot, server):
         """Why a sample of (``robot``, ``server``) is not taken (or None)."""
         if not self.learn_robots and robot not in self._robot_set:
-            return self.admits_robot(robot)
+            return self.robot_refusal(robot)
         if not self.learn_servers and server not in self._server_set:
             return 'server %d is not one of ~servers %s' % (server, self.fixed_servers)
         return None

@@ -28,8 +28,9 @@ import threading
 import time
 
 from server_select.core.attempts import AttemptClock
-from server_select.core.outcome import (DUPLICATE, FOREIGN, LATE, LOCAL,  # noqa: F401
-                                        NO_SERVER, RETRIED, UNKNOWN, Outcome, Pending)
+from server_select.core.outcome import (DUPLICATE, ENDED, FOREIGN, LATE,  # noqa: F401
+                                        LOCAL, NO_SERVER, RETRIED, UNKNOWN, Outcome, Pending,
+                                        Resolution)
 
 
 class TaskFlow(object):
@@ -166,10 +167,10 @@ class TaskFlow(object):
         return True
 
     def resolve(self, task_id, answered_by, ok, error='', result=None, busy=False):
-        """An answer for ``task_id`` from ``answered_by``: its Outcome, RETRIED (an error
-        or ``busy`` answer, the task went to the next candidate), or DUPLICATE / LATE /
-        UNKNOWN / FOREIGN (ignored: not from a server the task was sent to). A ``busy``
-        answer blames nobody."""
+        """An answer for ``task_id`` from ``answered_by``: a :class:`Resolution`, ENDED with
+        the task's Outcome, RETRIED (an error or ``busy`` answer, the task went to the next
+        candidate), or DUPLICATE / LATE / UNKNOWN / FOREIGN (ignored: not from a server the
+        task was sent to). A ``busy`` answer blames nobody."""
         now = self._clock()
         with self._lock:
             pending = self._pending.get(task_id)
@@ -177,11 +178,11 @@ class TaskFlow(object):
                 why = UNKNOWN if task_id not in self._ended else (
                     DUPLICATE if self._ended[task_id] else LATE)
                 self.ignored[why] += 1
-                return why
+                return Resolution(why, None)
             sent_at = pending.sent_at(answered_by)
             if sent_at is None:
                 self.ignored[FOREIGN] += 1
-                return FOREIGN
+                return Resolution(FOREIGN, None)
             if ok:
                 error = self._check(result, pending.context) or ''
                 ok = not error
@@ -199,14 +200,14 @@ class TaskFlow(object):
                 if busy and self._gives_way():
                     error += '; a newer task waits'
                 elif self._next(pending):
-                    return RETRIED
+                    return Resolution(RETRIED, None)
                 del self._pending[task_id]
         if ok:
             self._on_success(answered_by)
             if len(pending.attempts) == 1:    # the winner of a race is no fair sample
                 self._on_answer(answered_by, answer_rtt)
-        return self._end(pending.outcome(self.kind, answered_by, ok, error,
-                                         now - pending.started))
+        return Resolution(ENDED, self._end(pending.outcome(self.kind, answered_by, ok, error,
+                                                           now - pending.started)))
 
     def tick(self):
         """Act on passed deadlines: re-send, or report tasks out of time. Returns the

@@ -155,7 +155,7 @@ class ManagerNode(object):
     def on_batch(self, batch, topic=names.SAMPLES_TOPIC):
         """One robot's probe round (fleet layout), or its answered tasks (``~passive``)."""
         robot = batch.robot_id
-        if self.group is not None and self.rankings.admits_robot(robot):
+        if self.group is not None and self.rankings.robot_refusal(robot):
             return      # a robot of another group: not ours to rank
         count = len(batch.server_id)
         if not self.senders.admits(batch, 'samples on %s' % topic, robot):
@@ -171,7 +171,7 @@ class ManagerNode(object):
         now = rospy.get_time()
         changed = False
         for server, ok, rtt, wait in zip(batch.server_id, batch.ok, batch.rtt, waits):
-            why = self.rankings.admits(robot, server)
+            why = self.rankings.refusal(robot, server)
             if why is not None and self.group is not None:
                 continue    # another group's representative: probed for the top manager
             if why is None and ok and not (valid_rtt(rtt) and valid_rtt(wait)):
@@ -198,8 +198,8 @@ class ManagerNode(object):
             return 'it claims robot %d / server %d' % (msg.robot_id, msg.server_id)
         if pair is not None and msg.ok and not valid_rtt(msg.rtt):
             return 'round trip %r is not %s' % (msg.rtt, RTT_RANGE)
-        if pair is None and self.rankings.admits_robot(robot):
-            return self.rankings.admits_robot(robot)
+        if pair is None and self.rankings.robot_refusal(robot):
+            return self.rankings.robot_refusal(robot)
         return None
 
     def warn(self, topic, msg, why):

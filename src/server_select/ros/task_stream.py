@@ -11,7 +11,7 @@ import rospy
 
 from server_select.core import names
 from server_select.core.stats import format_ms, summarize
-from server_select.core.task_flow import RETRIED, TaskFlow
+from server_select.core.task_flow import ENDED, RETRIED, TaskFlow
 from server_select.msg import TaskReport
 from server_select.ros.graph import publisher_of
 from server_select.ros.senders import SenderGate
@@ -100,21 +100,21 @@ class TaskStream(object):
                 self.flow.kind, result.task_id, result.server_id), result.server_id):
             return
         busy = bool(getattr(result, 'busy', False))
-        outcome = self.flow.resolve(result.task_id, result.server_id, result.ok, result.error,
-                                    result, busy=busy)
-        if outcome == RETRIED and busy:
+        status = self.flow.resolve(result.task_id, result.server_id, result.ok, result.error,
+                                   result, busy=busy).status
+        if status == RETRIED and busy:
             rospy.logwarn_throttle(5.0, 'robot %d: server %d refused %s task %d as busy (%s): '
                                    'sent to the next server (%d busy answers so far)'
                                    % (self.robot_id, result.server_id, self.flow.kind,
                                       result.task_id, result.error, self.flow.busy))
-        elif outcome == RETRIED:
+        elif status == RETRIED:
             rospy.logwarn('robot %d: %s task %d failed on server %d (%s): sent to the next '
                           'server', self.robot_id, self.flow.kind, result.task_id,
                           result.server_id, result.error)
-        elif isinstance(outcome, str):
+        elif status != ENDED:
             rospy.logwarn_throttle(
                 5.0, 'robot %d: ignored %s %s result for task %d from server %d (%s)'
-                % (self.robot_id, outcome, self.flow.kind, result.task_id, result.server_id,
+                % (self.robot_id, status, self.flow.kind, result.task_id, result.server_id,
                    publisher_of(result)))
 
     def _report(self, outcome):
