@@ -21,9 +21,7 @@ oldest answer, extra sends per task, and for frames how many detections the serv
 and how many of those a robot still wanted.
 """
 
-import argparse
 import io
-import json
 import math
 import os
 import sys
@@ -36,7 +34,7 @@ import numpy as np
 
 from rospy.numpy_msg import numpy_msg
 
-from server_select.bench import capacity_report
+from server_select.bench import capacity_report, cli
 from server_select.bench.capacity_report import static_assignment
 from server_select.core.sort_task import sort_values
 from server_select.msg import SortResult, SortTask
@@ -161,7 +159,7 @@ def run_once(variant, kind, rate, args, work, name):
 
 
 def parse(argv):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser = cli.parser(__doc__)
     parser.add_argument('--scenario', choices=sorted(SCENARIOS), default='overload',
                         help='a case: its shares, delays, robots, loads and late server are '
                         'the defaults of those options (%(default)s)')
@@ -175,7 +173,6 @@ def parse(argv):
     parser.add_argument('--repeats', type=int, default=1)
     parser.add_argument('--late', action='store_true', default=None, help='the last server '
                         'starts a third of the way into the measured part, idle (herd)')
-    parser.add_argument('--out', default='results/bench')
     parser.add_argument('--work', help='keep the runs (bags, node logs) in this folder')
     parser.add_argument('--robot-args', default='', help='more robot.launch arguments for '
                         'every robot, e.g. "max_in_flight:=1 hedge:=false"')
@@ -233,13 +230,10 @@ def main(argv=None):
                         row.update(variant=variant, load=load, repeat=repeat)
                         runs['runs'].append(row)
                         print(capacity_report.line(row), file=sys.stderr, flush=True)
-    os.makedirs(args.out, exist_ok=True)
-    stem = os.path.join(args.out, 'capacity_' + args.scenario)
-    with open(stem + '.json', 'w') as stream:
-        json.dump(results, stream, indent=1)
-    text = capacity_report.report(results, stem + '.png')
-    with open(stem + '.md', 'w') as stream:
-        stream.write(text)
+    stem = 'capacity_' + args.scenario
+    cli.write(args.out, stem + '.json', results)
+    text = capacity_report.report(results, os.path.join(args.out, stem + '.png'))
+    cli.write(args.out, stem + '.md', text)
     print(text)
     return 0
 

@@ -6,7 +6,6 @@ with the LatencyProbe service (roscore on ``a``, a server node on ``b``). Prints
 table and writes JSON; it asserts nothing about timings.
 """
 
-import argparse
 import json
 import os
 import sys
@@ -15,6 +14,7 @@ import time
 
 import yaml
 
+from server_select.bench import cli
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.scenario import Scenario
 from server_select.core.stats import summarize
@@ -83,10 +83,9 @@ def table(results):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser = cli.parser(__doc__)
     parser.add_argument('--count', type=int, default=300, help='socket round trips per case')
     parser.add_argument('--probe-count', type=int, default=100, help='probes per case')
-    parser.add_argument('--out', default='results/bench', help='folder for the JSON')
     parser.add_argument('--cases', default='',
                         help='comma-separated RTT[:jitter] ms, default 1,5,20,100,20:2')
     args = parser.parse_args(argv)
@@ -104,12 +103,9 @@ def main(argv=None):
         except EmulatorError as error:
             print('emulator_bench: %s' % error, file=sys.stderr)
             return 2
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, 'emulator_accuracy.json'), 'w') as stream:
-        json.dump(results, stream, indent=1)
+    cli.write(args.out, 'emulator_accuracy.json', results)
     text = table(results)
-    with open(os.path.join(args.out, 'emulator_accuracy.md'), 'w') as stream:
-        stream.write('# Link emulator accuracy\n\n' + text + '\n')
+    cli.write(args.out, 'emulator_accuracy.md', '# Link emulator accuracy\n\n' + text + '\n')
     print('\nLink emulator accuracy (round trip a -> b -> a)\n\n' + text + '\n')
     return 0
 

@@ -119,7 +119,7 @@ def scenario_run(data, work, name, prefix, record=('/task_report',)):
     emulator's counts are then in ``work/name/link_stats.json``, and the scenario's time
     zero beside the bag (``<bag>.json``), so that a loaded bag's times are scenario times."""
     import yaml
-    from server_select.testbed.evaluation import HostRun
+    from server_select.testbed.runner import HostRun
     from server_select.testbed.netns import Testbed
     from server_select.testbed.scenario import Scenario
     path = os.path.join(work, name + '.yaml')

@@ -10,14 +10,12 @@ share of tasks answered by a second server, and the extra requests per task (eve
 attempt after the first: hedges and re-sends). Median of the runs, (min-max).
 """
 
-import argparse
-import json
-import os
 import sys
 import tempfile
 
 import numpy as np
 
+from server_select.bench import cli
 from server_select.bench.harness import scenario_run
 from server_select.core.tables import markdown_table, median_range
 from server_select.testbed import bag_analysis
@@ -70,14 +68,13 @@ def table(results):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser = cli.parser(__doc__)
     parser.add_argument('--delay', type=float, default=5.0, help='one-way ms to server 1 '
                         '(server 2: 1.5 x)')
     parser.add_argument('--loss', type=float, default=0.01)
     parser.add_argument('--rate', type=float, default=10.0)
     parser.add_argument('--seconds', type=float, default=60.0, help='tasks sent per run')
     parser.add_argument('--runs', type=int, default=2)
-    parser.add_argument('--out', default='results/bench')
     args = parser.parse_args(argv)
     results = {'off': [], 'on': []}
     with tempfile.TemporaryDirectory(prefix='bench_hedging') as work:
@@ -86,9 +83,7 @@ def main(argv=None):
                 results[setting].append(run_once(setting == 'on', args, work, index))
                 print(table({setting: results[setting][-1:]}).splitlines()[-1],
                       file=sys.stderr, flush=True)
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, 'hedging.json'), 'w') as stream:
-        json.dump(results, stream, indent=1)
+    cli.write(args.out, 'hedging.json', results)
     print('\nSort tasks at %g/s over %g ms one way (server 2: %g ms), %g %% loss each way; '
           'failed tasks counted at %g s; median (min-max) of %d runs\n\n%s\n'
           % (args.rate, args.delay, args.delay * 1.5, 100 * args.loss, TIMEOUT, args.runs,

@@ -6,8 +6,6 @@ and prints one Markdown table (RSS MiB per node per sample time) with the growth
 first sample after warm-up to the last. Nothing is asserted.
 """
 
-import argparse
-import json
 import os
 import subprocess
 import sys
@@ -16,6 +14,7 @@ import time
 
 import psutil
 
+from server_select.bench import cli
 from server_select.bench.harness import Roscore, node_pid
 from server_select.core.procs import stop_group, wait_until
 from server_select.core.tables import markdown_table
@@ -75,16 +74,14 @@ def table(rows):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser = cli.parser(__doc__)
     parser.add_argument('--minutes', type=float, default=10.0)
     parser.add_argument('--rate', type=float, default=20.0, help='sort tasks/s per robot')
     parser.add_argument('--every', type=float, default=60.0, help='seconds between samples')
-    parser.add_argument('--out', default='results/bench')
     args = parser.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
     rows = run(args.minutes, args.rate, args.every, os.path.join(args.out, 'memory_nodes.log'))
-    with open(os.path.join(args.out, 'memory.json'), 'w') as stream:
-        json.dump([{'t': t, 'rss_mb': rss} for t, rss in rows], stream, indent=1)
+    cli.write(args.out, 'memory.json', [{'t': t, 'rss_mb': rss} for t, rss in rows])
     text = table(rows)
     print('\nRSS MiB of every node, sort tasks at %g/s per robot\n\n%s\n' % (args.rate, text))
     return 0

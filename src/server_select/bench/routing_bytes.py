@@ -9,12 +9,10 @@ bytes per task on robot 1's links (sum over its links to every server) in each d
 (its one probe per server per second is included: about 0.2 kB per server and second).
 """
 
-import argparse
-import json
-import os
 import sys
 import tempfile
 
+from server_select.bench import cli
 from server_select.bench.harness import link_bytes, scenario_run
 from server_select.ros.paths import package_file
 from server_select.core.tables import markdown_table
@@ -65,11 +63,10 @@ def table(rows):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser = cli.parser(__doc__)
     parser.add_argument('--servers', default='2,4,8')
     parser.add_argument('--kinds', default='sort,frame')
     parser.add_argument('--seconds', type=float, default=20.0, help='tasks sent per run')
-    parser.add_argument('--out', default='results/bench')
     args = parser.parse_args(argv)
     rows = []
     with tempfile.TemporaryDirectory(prefix='bench_routing') as work:
@@ -78,9 +75,7 @@ def main(argv=None):
                 for routing in ('broadcast', 'direct'):
                     rows.append(run_once(routing, kind, servers, args.seconds, work))
                     print(table(rows[-1:]).splitlines()[-1], file=sys.stderr, flush=True)
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, 'routing_bytes.json'), 'w') as stream:
-        json.dump(rows, stream, indent=1)
+    cli.write(args.out, 'routing_bytes.json', rows)
     print('\nTwo robots, tasks to server 1; bytes counted by the link emulator\n\n%s\n'
           % table(rows))
     return 0

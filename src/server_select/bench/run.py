@@ -6,7 +6,6 @@ as the paper's). Nothing here asserts a timing. ``--tiny`` runs each benchmark o
 minimal configuration (the smoke test of ``make test``).
 """
 
-import argparse
 import collections
 import json
 import os
@@ -14,6 +13,7 @@ import sys
 import tempfile
 import time
 
+from server_select.bench import cli
 from server_select.bench import emulator, measure
 from server_select.bench.harness import ReportListener, Roscore
 from server_select.bench.report import SECTIONS, report
@@ -66,8 +66,7 @@ def run_emulated():
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
-    parser.add_argument('--out', default='results/bench')
+    parser = cli.parser(__doc__)
     parser.add_argument('--tiny', action='store_true', help='one minimal run of each benchmark')
     parser.add_argument('--only', default='', help='comma-separated subset: %s, emulated (the '
                         'report then also shows earlier results found in --out)'

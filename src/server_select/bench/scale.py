@@ -16,7 +16,6 @@ simulated probe rounds per robot and second (the fleet probes at 4 Hz). Nothing 
 asserted.
 """
 
-import argparse
 import json
 import os
 import subprocess
@@ -26,6 +25,7 @@ import time
 
 import psutil
 
+from server_select.bench import cli
 from server_select.bench.harness import PY, Roscore, node_pid
 from server_select.bench.scale_sim import group_table
 from server_select.core.procs import measure, stop_group, wait_until
@@ -181,7 +181,7 @@ def table(rows):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = cli.parser(__doc__)
     parser.add_argument('--sizes', default=SIZES, help='RxS,... (default %(default)s)')
     parser.add_argument('--layouts', default='pair,robot')
     parser.add_argument('--grouped-sizes', default=GROUPED,
@@ -196,7 +196,6 @@ def main(argv=None):
                         help="the manager's profile (default %(default)s)")
     parser.add_argument('--rate', type=float, default=1.0,
                         help='probe rounds per simulated robot and second (default 1)')
-    parser.add_argument('--out', default='results/bench')
     args = parser.parse_args(argv)
     runs = []
     for size in args.sizes.split(','):

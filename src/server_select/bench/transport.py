@@ -8,12 +8,12 @@ round trip at the task timeout), achieved frames/s, round trip median and p95, a
 bytes on the link per frame each way (the emulator counts them).
 """
 
-import argparse
 import json
 import os
 import sys
 import tempfile
 
+from server_select.bench import cli
 from server_select.bench.harness import link_bytes, scenario_run
 from server_select.ros.paths import package_file
 from server_select.core.stats import summarize
@@ -67,14 +67,13 @@ def table(results):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser = cli.parser(__doc__)
     parser.add_argument('--delay', type=float, default=10.0, help='one-way ms (20 ms RTT)')
     parser.add_argument('--rate', type=float, default=10.0, help='MB/s each way')
     parser.add_argument('--fps', type=float, default=10.0)
     parser.add_argument('--quality', type=int, default=80)
     parser.add_argument('--seconds', type=float, default=20.0, help='measured per run')
     parser.add_argument('--runs', type=int, default=2)
-    parser.add_argument('--out', default='results/bench')
     args = parser.parse_args(argv)
     results = dict((t, []) for t in ('raw', 'compressed'))
     with tempfile.TemporaryDirectory(prefix='bench_transport') as work:

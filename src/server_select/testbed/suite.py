@@ -21,7 +21,7 @@ import threading
 
 import yaml
 
-from server_select.testbed.evaluation import RECORDED, HostRun, RunOptions, _ids
+from server_select.testbed.runner import RECORDED, HostRun, RunOptions, host_ids
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.netns import Testbed, netns_pids
 from server_select.testbed.scenario import Scenario, ScenarioError
@@ -84,7 +84,7 @@ class SuiteRun(HostRun):
                 self.launch(manager, 'manager.launch', 'name:=manager_%s' % name,
                             'profile:=%s' % variant.profile, 'robots:=%s' % ids,
                             'servers:=%s' % ('[]' if variant.profile == 'fleet' else
-                                             _ids(self.scenario.of_role('server'))),
+                                             host_ids(self.scenario.of_role('server'))),
                             *_args(variant.params, manager_args))
         for server in self.scenario.of_role('server'):
             self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
@@ -104,7 +104,7 @@ class SuiteRun(HostRun):
         self.launch(robot.name, 'robot.launch', 'robot_id:=%d' % robot.id,
                     'profile:=%s' % variant.profile,
                     'servers:=%s' % ('[]' if learned else
-                                     _ids(self.scenario.of_role('server'))),
+                                     host_ids(self.scenario.of_role('server'))),
                     'mode:=%s' % ('fixed' if variant.mode == 'fixed' else 'select'),
                     'fixed_server:=%d' % options.fixed_server,
                     'manager_node:=/%s' % (name if variant.mode == 'oracle' else

@@ -6,7 +6,7 @@ import collections
 import os
 import sys
 
-from server_select.testbed.evaluation import guarded
+from server_select.testbed.runner import guarded
 from server_select.testbed.scenario import Scenario
 from server_select.testbed.suite import (DEFAULT_VARIANTS, MEASURE_FROM, SCENARIOS, VARIANTS,
                                          default_options, run_scenario)

@@ -1,0 +1,143 @@
+"""What every testbed run shares (no rospy): its options, the hosts' environments and
+launches (:class:`HostRun`), the topics a run records, and the guard that turns testbed
+errors and Ctrl-C into an exit status. Used by the experiment
+(:mod:`~server_select.testbed.evaluation`), the scenario suite
+(:mod:`~server_select.testbed.suite`) and the benchmarks on the testbed."""
+
+import os
+import signal
+import sys
+import threading
+
+from server_select.core.procs import wait_until
+from server_select.core.settings import default
+from server_select.testbed.linkemu import EmulatorError
+from server_select.testbed.scenario import ScenarioError
+
+MASTER_PORT = 11311
+RECORDED = ('/(latency_R[0-9]+S[0-9]+|latency_samples|fleet_servers|server_select_flag|'
+            '(server_[0-9]+/)?data|(robot_[0-9]+/)?processed_data|task_report)')
+
+
+class RunOptions(object):
+    """What a run does besides the scenario (the nodes' defaults reproduce the paper;
+    ``window``, ``probe_rate`` and ``hysteresis`` None: the profile's)."""
+
+    def __init__(self, fixed_server=1, window=None, task_rate=default('task_rate'),
+                 task_size=default('task_size'), probe_rate=None,
+                 probe_timeout=default('probe_timeout'), task_timeout=default('task_timeout'),
+                 start_delay=5.0, hysteresis=None, prefix=None,
+                 profile=default('profile')):
+        self.fixed_server = fixed_server
+        self.window = window
+        self.task_rate = task_rate
+        self.task_size = task_size
+        self.probe_rate = probe_rate
+        self.probe_timeout = probe_timeout
+        self.task_timeout = task_timeout
+        self.start_delay = start_delay
+        self.hysteresis = hysteresis
+        self.prefix = prefix
+        self.profile = profile
+
+
+def _given(options, *names):
+    """Launch arguments of the ``options`` set (None: the profile's default)."""
+    return ['%s:=%g' % (n, getattr(options, n)) for n in names
+            if getattr(options, n) is not None]
+
+
+def host_ids(hosts):
+    return ','.join(str(h.id) for h in sorted(hosts, key=lambda h: h.id))
+
+
+class HostRun(object):
+    """One mode of one scenario on an up testbed: environments and launches per host."""
+
+    def __init__(self, tb, scenario, run_dir):
+        self.tb = tb
+        self.scenario = scenario
+        self.run_dir = run_dir
+        self.master = 'http://%s:%d' % (tb.address(scenario.manager.name), MASTER_PORT)
+
+    def env(self, host):
+        env = dict(os.environ, ROS_MASTER_URI=self.master, ROS_IP=self.tb.address(host),
+                   ROS_HOME=os.path.join(self.run_dir, 'ros_home', host))
+        env.pop('ROS_HOSTNAME', None)
+        return env
+
+    def popen(self, host, argv, log):
+        return self.tb.popen(host, argv, env=self.env(host),
+                             log=os.path.join(self.run_dir, '%s.log' % log))
+
+    def launch(self, host, name, *args):
+        return self.popen(host, ['roslaunch', '--wait', 'server_select', name] + list(args)
+                          + ['output:=log'], host)
+
+    def start_master(self):
+        manager = self.scenario.manager.name
+        self.popen(manager, ['roscore', '-p', str(MASTER_PORT)], 'roscore')
+        up = wait_until(lambda: self.tb.run(manager, ['rostopic', 'list'], env=self.env(manager),
+                                            timeout=10).returncode == 0, 30.0, period=0.3)
+        if not up:
+            raise EmulatorError('roscore on %s did not come up within 30 s' % manager)
+
+    def start_nodes(self, mode, options, bag):
+        scenario, manager = self.scenario, self.scenario.manager.name
+        servers, robots = scenario.of_role('server'), scenario.of_role('robot')
+        if mode == 'oracle':
+            self.launch(manager, 'oracle.launch', 'scenario:=%s' % scenario.source,
+                        't0:=%.6f' % self.tb.t0, 'robots:=%s' % host_ids(robots))
+        elif mode == 'select':   # fixed mode has no manager: no flag names an unused server
+            fleet = options.profile == 'fleet'   # robots and servers learned at run time
+            self.launch(manager, 'manager.launch', 'profile:=%s' % options.profile,
+                        'robots:=%s' % ('[]' if fleet else host_ids(robots)),
+                        'servers:=%s' % ('[]' if fleet else host_ids(servers)),
+                        *_given(options, 'window', 'hysteresis'))
+        self.popen(manager, ['rosbag', 'record', '--tcpnodelay', '-O', bag, '-e', RECORDED],
+                   'rosbag')
+        for server in servers:
+            if server.start or server.stop is not None:
+                threading.Thread(target=self.server_lifetime, args=(server, options),
+                                 daemon=True).start()
+            else:
+                self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
+                            'profile:=%s' % options.profile)
+        # fleet, select mode: every server found at run time (the manager lists them)
+        learned = options.profile == 'fleet' and mode == 'select'
+        for robot in robots:
+            self.launch(robot.name, 'robot.launch', 'robot_id:=%d' % robot.id,
+                        'profile:=%s' % options.profile,
+                        'servers:=%s' % ('[]' if learned else host_ids(servers)),
+                        'mode:=%s' % ('fixed' if mode == 'fixed' else 'select'),
+                        'fixed_server:=%d' % options.fixed_server,
+                        'probe_timeout:=%g' % options.probe_timeout,
+                        'task_rate:=%g' % options.task_rate, 'task_size:=%d' % options.task_size,
+                        'task_timeout:=%g' % options.task_timeout,
+                        'start_delay:=%g' % options.start_delay,
+                        'manager_node:=%s' % ('/oracle' if mode == 'oracle' else '/manager'),
+                        *_given(options, 'probe_rate'))
+
+    def server_lifetime(self, server, options):
+        """A server that starts late or stops early (the scenario's ``start`` / ``stop``):
+        launched at its start, stopped with SIGINT (a clean shutdown) at its stop."""
+        self.tb.sleep_until(server.start)
+        proc = self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
+                           'profile:=%s' % options.profile)
+        if server.stop is not None:
+            self.tb.sleep_until(server.stop)
+            proc.send_signal(signal.SIGINT)
+
+
+def guarded(prog, work):
+    """Run ``work()``; 0, or 2 (a testbed or scenario error, said on stderr) or 130
+    (interrupted; the testbed was torn down on the way out)."""
+    try:
+        work()
+    except (EmulatorError, ScenarioError) as error:
+        print('%s: %s' % (prog, error), file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print('%s: interrupted; the testbed was torn down' % prog, file=sys.stderr)
+        return 130
+    return 0
