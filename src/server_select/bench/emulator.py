@@ -49,7 +49,7 @@ def measure_case(rtt_ms, jitter_ms, work_dir, count, probe_count, prefix='ssbenc
         env.pop('ROS_HOSTNAME', None)
         env_a = dict(env, ROS_IP=tb.address('a'), ROS_HOME=os.path.join(work_dir, 'ros_a'))
         env_b = dict(env, ROS_IP=tb.address('b'), ROS_HOME=os.path.join(work_dir, 'ros_b'))
-        tb.popen('a', ['roscore', '-p', '11311'], env=env_a)
+        tb.popen('a', ['roscore', '-p', '11311'], env=env_a, stage=2)
         tb.popen('b', ['roslaunch', '--wait', 'server_select', 'server.launch', 'server_id:=1',
                        'output:=log'], env=env_b)
         out = tb.run('a', py + ['probe-client', '--server-id', '1', '--count', str(probe_count)],

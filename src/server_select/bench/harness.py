@@ -129,8 +129,7 @@ def scenario_run(data, work, name, prefix, record=('/task_report',)):
     with Testbed(Scenario(data), path, run_dir, prefix=prefix) as tb:
         run = HostRun(tb, tb.scenario, run_dir)
         run.start_master()
-        run.popen('manager', ['rosbag', 'record', '--tcpnodelay', '-O', bag] + list(record),
-                  'rosbag')
+        run.record(bag, *record)
         yield run, bag
         tb.sleep_until(tb.scenario.duration)
     with open(bag + '.json', 'w') as stream:

@@ -24,16 +24,31 @@ def wait_until(condition, timeout, period=0.05, clock=time.monotonic, sleep=time
 def stop_group(proc, sig=signal.SIGINT, timeout=15.0):
     """Stop a ``Popen`` started with ``start_new_session=True``, with its whole process
     group: ``sig`` first, SIGKILL after ``timeout`` s. Returns the exit status."""
-    if proc.poll() is not None:
-        return proc.returncode
-    try:
-        os.killpg(proc.pid, sig)
-        return proc.wait(timeout)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        return proc.wait()
-    except ProcessLookupError:
-        return proc.wait()
+    return stop_groups([proc], sig, timeout)[0]
+
+
+def stop_groups(procs, sig=signal.SIGINT, timeout=15.0, clock=time.monotonic):
+    """:func:`stop_group` for several at once: ``sig`` to every group, then each is waited
+    for until ``timeout`` s from then, and SIGKILLed if still there. Their exit statuses."""
+    procs = list(procs)
+    for proc in procs:
+        if proc.poll() is None:
+            try:
+                os.killpg(proc.pid, sig)
+            except ProcessLookupError:
+                pass
+    deadline = clock() + timeout
+    statuses = []
+    for proc in procs:
+        try:
+            statuses.append(proc.wait(max(0.0, deadline - clock())))
+        except subprocess.TimeoutExpired:
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            statuses.append(proc.wait())
+    return statuses
 
 
 def usable_cpus(pid='self', root='/sys/fs/cgroup'):

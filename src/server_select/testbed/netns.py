@@ -17,7 +17,7 @@ import subprocess
 import sys
 import time
 
-from server_select.core.procs import alive, kill_all, stop_group
+from server_select.core.procs import alive, kill_all, stop_group, stop_groups
 from server_select.testbed import cpu
 from server_select.testbed.linkemu import EmulatorError
 
@@ -192,14 +192,15 @@ class Testbed(object):
         while self.scenario_time() < t:
             time.sleep(min(0.2, max(0.0, t - self.scenario_time())))
 
-    def popen(self, host, argv, env=None, log=None, **kwargs):
-        """Start ``argv`` inside ``host``; it is stopped by :meth:`down`."""
+    def popen(self, host, argv, env=None, log=None, stage=0, **kwargs):
+        """Start ``argv`` inside ``host``; it is stopped by :meth:`down`, with the others of
+        its ``stage``: the nodes (0) at once, then a recorder (1), then the master (2)."""
         stream = open(log, 'w') if log else subprocess.DEVNULL
         proc = subprocess.Popen(['ip', 'netns', 'exec', self.hosts[host]['netns']] + list(argv),
                                 env=env, stdout=stream, stderr=subprocess.STDOUT,
                                 start_new_session=True, preexec_fn=self._joiner(host),
                                 **kwargs)
-        self.processes.append(proc)
+        self.processes.append((stage, proc))
         return proc
 
     def run(self, host, argv, env=None, timeout=60, **kwargs):
@@ -226,8 +227,8 @@ class Testbed(object):
         """Stop all that was started and delete the namespaces (signals wait till done)."""
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
             self._old_handlers.setdefault(sig, signal.signal(sig, signal.SIG_IGN))
-        for proc in reversed(self.processes):
-            stop_group(proc)
+        for stage in sorted(set(s for s, _ in self.processes)):
+            stop_groups([p for s, p in self.processes if s == stage])
         self.processes = []
         if self.emulator is not None:
             stop_group(self.emulator, signal.SIGTERM, 5.0)

@@ -66,9 +66,14 @@ class HostRun(object):
         env.pop('ROS_HOSTNAME', None)
         return env
 
-    def popen(self, host, argv, log):
+    def popen(self, host, argv, log, stage=0):
         return self.tb.popen(host, argv, env=self.env(host),
-                             log=os.path.join(self.run_dir, '%s.log' % log))
+                             log=os.path.join(self.run_dir, '%s.log' % log), stage=stage)
+
+    def record(self, bag, *args):
+        """``rosbag record ARGS`` into ``bag`` on the manager host; stopped after the nodes."""
+        return self.popen(self.scenario.manager.name, ['rosbag', 'record', '--tcpnodelay',
+                                                       '-O', bag] + list(args), 'rosbag', 1)
 
     def launch(self, host, name, *args):
         return self.popen(host, ['roslaunch', '--wait', 'server_select', name] + list(args)
@@ -76,7 +81,7 @@ class HostRun(object):
 
     def start_master(self):
         manager = self.scenario.manager.name
-        self.popen(manager, ['roscore', '-p', str(MASTER_PORT)], 'roscore')
+        self.popen(manager, ['roscore', '-p', str(MASTER_PORT)], 'roscore', stage=2)
         up = wait_until(lambda: self.tb.run(manager, ['rostopic', 'list'], env=self.env(manager),
                                             timeout=10).returncode == 0, 30.0, period=0.3)
         if not up:
@@ -94,8 +99,7 @@ class HostRun(object):
                         'robots:=%s' % ('[]' if fleet else host_ids(robots)),
                         'servers:=%s' % ('[]' if fleet else host_ids(servers)),
                         *_given(options, 'window', 'hysteresis'))
-        self.popen(manager, ['rosbag', 'record', '--tcpnodelay', '-O', bag, '-e', RECORDED],
-                   'rosbag')
+        self.record(bag, '-e', RECORDED)
         for server in servers:
             if server.start or server.stop is not None:
                 threading.Thread(target=self.server_lifetime, args=(server, options),

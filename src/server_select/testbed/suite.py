@@ -73,8 +73,7 @@ class SuiteRun(HostRun):
         for rid, (variant, _) in sorted(owners.items()):
             robots_of[variant].append(rid)
         manager_args, robot_args_of = launch_args('manager.launch'), launch_args('robot.launch')
-        self.popen(manager, ['rosbag', 'record', '--tcpnodelay', '-O', bag, '-e',
-                             SUITE_RECORDED], 'rosbag')
+        self.record(bag, '-e', SUITE_RECORDED)
         for name in variants:
             variant, ids = VARIANTS[name], ','.join(str(r) for r in robots_of[name])
             if variant.mode == 'oracle':
