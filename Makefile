@@ -22,7 +22,7 @@ ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
   bench-scale bench-routing bench-hedging bench-capacity \
-  test unit-test testbed-test fault-test catkin-test rostest lint clean
+  test check unit-test testbed-test fault-test catkin-test rostest lint clean
 all: build
 
 $(BUILD)/.apt-stamp: Makefile
@@ -123,7 +123,7 @@ bench-emulator: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.emulator --out results/bench
 
 unit-test: build
-	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q test/unit
+	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q test/unit test/ros
 
 # One rostest file: make rostest T=manager.test (default: all of them)
 rostest: build
@@ -132,17 +132,24 @@ rostest: build
 # catkin_lint for the package, flake8 (Debian's, settings in setup.cfg) for the Python.
 LINT := catkin_lint -W2 --strict --ignore package_path_name $(TOP) && \
   /usr/bin/python3 -m flake8 src test $(filter-out %.sh,$(wildcard scripts/*))
-lint: build
-	@$(ROSENV) cd $(TOP) && $(LINT)
+lint: deps
+	@cd $(TOP) && $(LINT)
 
-# Lint first, then unit tests (no master), the testbed tests (root and TUN; reported as
-# skipped elsewhere), the benchmarks' smoke run, the fault tests (a roscore of their own,
-# real signals; they print their counts), the package in a fresh catkin workspace, then the
-# launch-level rostests; the last line printed is the rostest tally "rostest: N passed, N failed".
+# The quick check while working: lint and the unit tests, with no build and no master
+# (the ROS-free layers need neither; package files are found on ROS_PACKAGE_PATH).
+check: deps
+	@cd $(TOP) && $(LINT) && env -u PYTHONPATH ROS_PACKAGE_PATH=$(TOP) \
+	  $(PY) -m pytest -q -p no:cacheprovider test/unit
+
+# Lint first, then the unit tests, the ROS-side tests that need the build but no master,
+# the testbed tests (root and TUN; reported as skipped elsewhere), the benchmarks' smoke
+# run, the fault tests (a roscore of their own, real signals; they print their counts),
+# then the package in a fresh catkin workspace: `catkin_make run_tests` runs every
+# launch-level rostest once, then the demo and a bag. The slowest tests are listed.
 test: build
 	@$(ROSENV) cd $(TOP) && $(LINT) \
-	  && $(PY) -m pytest -q -rs test/unit test/testbed test/bench \
-	  && $(FAULT_TEST) && bash test/catkin_workspace.sh && bash test/run_rostests.sh
+	  && $(PY) -m pytest -q -rs --durations=20 test/unit test/ros test/testbed test/bench \
+	  && $(FAULT_TEST) && bash test/catkin_workspace.sh
 
 # The package in a fresh catkin workspace with Debian's packages only: catkin_make,
 # catkin_make run_tests, the timed demo.
@@ -151,7 +158,8 @@ catkin-test: deps
 
 # Servers killed and stopped, manager and roscore killed, forged input: counts printed.
 # A process of its own: this pytest process is a ROS node of the roscore it starts.
-FAULT_TEST := $(PY) -m pytest -q -s -p no:logging -W ignore::DeprecationWarning test/fault
+FAULT_TEST := $(PY) -m pytest -q -s -p no:logging -W ignore::DeprecationWarning --durations=10 \
+  test/fault
 fault-test: build
 	@$(ROSENV) cd $(TOP) && $(FAULT_TEST)
 
