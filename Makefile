@@ -21,7 +21,7 @@ DEMO_DURATION ?= 30
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
-  bench-scale bench-routing bench-hedging bench-capacity \
+  bench-scale bench-routing bench-hedging bench-capacity bench-master \
   test check unit-test testbed-test fault-test catkin-test rostest lint clean
 all: build
 
@@ -117,6 +117,11 @@ bench-capacity: build
 	@$(ROSENV) cd $(TOP) && for s in overload crowd herd; do \
 	  $(PY) -m server_select.bench.capacity --scenario $$s --repeats 2 --out results/bench \
 	  || exit 1; done
+
+# Calls to the master per node in steady state, both profiles, through a counting proxy
+# (20 robots, 5 servers, the manager on this host; ~4 min).
+bench-master: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.master_calls --out results/bench
 
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build

@@ -51,3 +51,19 @@ def test_the_scale_benchmark_runs_and_reports(tmp_path):
     for row in rows:        # every robot ranked, flags moved by the slow samples
         assert finite(row['ranked_s']) and row['changes'] > 0, row
         assert finite(row['manager_cpu']) and row['threads'] > 0, row
+
+
+def test_the_master_call_benchmark_counts_calls(tmp_path):
+    """`make bench-master` in a tiny configuration: the proxy sees the fleet's calls."""
+    proc = subprocess.run([sys.executable, '-m', 'server_select.bench.master_calls',
+                           '--robots', '2', '--servers', '2', '--warmup', '1', '--seconds', '4',
+                           '--profiles', 'fleet', '--out', str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:]
+    (run,) = json.loads((tmp_path / 'master_calls.json').read_text())
+    assert run['nodes'] == ['/manager', '/server1', '/server2', '/robot1', '/robot2']
+    # the manager, at least, checks the master's pid every second
+    assert any(c['method'] == 'getPid' and c['caller'] == '/manager' and c['count'] > 0
+               for c in run['calls']), run['calls']
+    assert 'per node' in proc.stdout

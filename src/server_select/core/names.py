@@ -16,6 +16,7 @@ SAMPLES_TOPIC = 'latency_samples'       # fleet profile: one batch per robot pro
 TASK_SAMPLES_TOPIC = 'task_samples'     # ~passive: robots' answered tasks as samples
 SERVERS_TOPIC = 'fleet_servers'         # fleet profile: the servers found in the master
 GROUPS_TOPIC = 'group_assignments'      # grouped deployments: robots to server groups
+MASTER_PID_TOPIC = 'master_pid'         # the watcher's news of the master (a restart)
 
 
 def probe_service(server_id):

@@ -139,7 +139,10 @@ PARAMS = {
                         'this node (*: from any)'),
     'task_plugins': Param('', parse_plugins, 'task types added by plug-in (module:Class ...)'),
     'fleet_ns': Param('/', parse_text, 'namespace of the fleet-level topics and services'),
-    'master_check': Param(1.0, parse_positive, 'period of the check for a restarted roscore (s)'),
+    'master_check': Param(60.0, parse_positive, 'period of a node\'s own check for a restarted '
+                          'roscore (s, +-20 %); it checks at once when the watcher says so'),
+    'master_watch': Param(1.0, parse_positive, 'the watcher\'s (the manager\'s) period of the '
+                          'check for a restarted roscore (s); it tells the others'),
     'scenario': Param(REQUIRED, parse_text, 'scenario YAML file'),
     't0': Param(REQUIRED, parse_number, 'scenario time zero (epoch s)'),
     'duration': Param(30.0, parse_positive, 'how long to listen or measure (s)'),

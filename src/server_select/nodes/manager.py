@@ -70,6 +70,8 @@ class ManagerNode(object):
         - ``fleet_servers`` (server_select/FleetServers, latched; with ``~discover``)
     """
 
+    MASTER_WATCHER = True     # checks for a restarted roscore and tells the fleet
+
     def __init__(self):
         self.stream = param('sample_stream')
         self.policy, statistic = from_params(param)

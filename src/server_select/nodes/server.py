@@ -8,7 +8,7 @@ import rospy
 from server_select.core import names
 from server_select.core.params import ParamError
 from server_select.core.procs import usable_cpus
-from server_select.ros.node import fleet, param, run
+from server_select.ros.node import fleet, live_param, param, run
 from server_select.ros.plugins import PluginHandler
 from server_select.ros.server_work import ServerWork
 from server_select.ros.task_kinds import server_kinds
@@ -86,6 +86,7 @@ class ServerNode(object):
         return next(h for h in self.handlers if h.plugin.kind == kind)
 
     def start(self):
+        self.work_delay = live_param('work_delay')      # from now on, as the master says
         for handler in self.handlers:
             handler.start()
         self.work.start()
@@ -101,9 +102,10 @@ class ServerNode(object):
         rospy.on_shutdown(self.on_shutdown)
 
     def on_work_check(self, _event):
-        """``~work_delay`` again (``rosparam set`` changes it while the server runs)."""
+        """``~work_delay`` again (``rosparam set`` changes it while the server runs; the
+        master tells the node, so reading it costs no call)."""
         try:
-            delay = param('work_delay')
+            delay = live_param('work_delay')
         except ParamError as error:
             rospy.logwarn_throttle(30.0, 'server %d: %s (keeping %g s)'
                                    % (self.server_id, error, self.work_delay))

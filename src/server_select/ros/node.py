@@ -4,15 +4,19 @@ import os
 import signal
 import sys
 
+import rosgraph
 import rosgraph.names
 import rospy
 
+from server_select.core import names
 from server_select.core.params import ParamError
 from server_select.core.settings import PARAMS, REQUIRED, default as profile_default
 from server_select.ros.master_watch import MasterWatch
 
 _FLEET_NS = None
 _PROFILE = None
+_LIVE = set()           # private parameters followed through the master's updates
+ROSOUT_TOPICS = '/rosout_disable_topics_generation'
 
 
 def param(name, default=None, parse=None):
@@ -33,6 +37,40 @@ def param(name, default=None, parse=None):
     if value is None:
         return None
     return (parse or spec.parse)(private, value)
+
+
+def live_param(name):
+    """``~name`` as :func:`param` reads it, kept up to date by the master instead of asked
+    for: the first call subscribes to it (setting it to its default when unset, so that
+    there is a value to follow), later calls read rospy's cache, which the master updates
+    on ``rosparam set`` (no master call in steady state)."""
+    private = '~' + name
+    if private not in _LIVE:
+        if not rospy.has_param(private):
+            rospy.set_param(private, profile_default(name, profile()))
+        _LIVE.add(private)
+    return PARAMS[name].parse(private, rospy.get_param_cached(private))
+
+
+def _follow_again(what):
+    """After a roscore restart (its parameter server starts empty): the followed
+    parameters' values back on it, and their subscriptions with it."""
+    if what != 'restarted':
+        return
+    master = rosgraph.Master(rospy.get_name())
+    for private in sorted(_LIVE):
+        value = rospy.get_param_cached(private)          # this node's cache: no call
+        rospy.set_param(private, value)
+        master.subscribeParam(rospy.core.get_node_uri(), rospy.resolve_name(private))
+
+
+def quiet_logging():
+    """rospy's log handler asks for ``/rosout_disable_topics_generation`` at every log line
+    through its parameter cache, which keeps nothing while the parameter is unset: each
+    line would be a ``subscribeParam`` call to the master. Set it (to its default, False)
+    if unset, so that the cache holds it after the first line."""
+    if not rospy.has_param(ROSOUT_TOPICS):
+        rospy.set_param(ROSOUT_TOPICS, False)
 
 
 def profile():
@@ -78,12 +116,18 @@ def run(node_name, node_class, argv=None):
 
     A ParamError becomes one ``logfatal`` line and exit status 2, so that a launch file
     with a bad ``<arg>`` fails loudly instead of running half-configured. Every node
-    registers again with a restarted roscore (:class:`MasterWatch`, ``~master_check``).
+    registers again with a restarted roscore (:class:`MasterWatch`): a node whose class
+    says ``MASTER_WATCHER`` (the manager) checks every ``~master_watch`` s and tells the
+    others on ``master_pid``, which check every ``~master_check`` s by themselves.
     """
     rospy.init_node(node_name, argv=argv)
+    quiet_logging()
     try:
         node = node_class()
-        watch = MasterWatch(param('master_check'))
+        watcher = getattr(node_class, 'MASTER_WATCHER', False)
+        watch = MasterWatch(param('master_watch' if watcher else 'master_check'),
+                            on_change=_follow_again, watcher=watcher,
+                            topic=fleet(names.MASTER_PID_TOPIC))
     except ParamError as error:
         rospy.logfatal('invalid parameter: %s', error)
         rospy.signal_shutdown('invalid parameter')
