@@ -9,12 +9,13 @@ new master knows, through the node's own ``publisherUpdate`` API.
 
 So that a fleet of many nodes does not ask the master all the time, one node (the
 manager) is the *watcher*: it checks often and publishes the master's pid, latched, on
-``topic`` (``master_pid``); every other node checks rarely (``~master_check``, jittered) and at once
-when it hears a pid it does not know. The watcher's connections to the others do not need
-the master, so they carry the news of a restart.
+``topic`` (``master_pid``); every other node checks rarely (``~master_check``, jittered)
+and at once when it hears a pid it does not know. The watcher's connections to the others
+do not need the master, so they carry the news of a restart.
 """
 
 import random
+import threading
 import xmlrpc.client
 
 import rosgraph
@@ -26,7 +27,7 @@ from std_msgs.msg import UInt32
 class MasterWatch(object):
     """Re-registers this node with a restarted master, checking every ``period`` s (a
     ``watcher`` also publishes the pid it sees; another node jitters its period by
-    +-20 %% and checks at once on news of another pid). ``on_change(what)`` hears
+    +-20 % and checks at once on news of another pid). ``on_change(what)`` hears
     ``'lost'``, ``'back'`` and ``'restarted'``."""
 
     def __init__(self, period, on_change=None, watcher=False, topic=None):
@@ -39,6 +40,7 @@ class MasterWatch(object):
         self.restarts = 0
         self.topic = topic         # where the watcher tells the pid (None: nowhere)
         self.timer = self.pub = self.sub = None
+        self._checking = threading.Lock()
 
     def start(self):
         if self.topic is not None and self.watcher:
@@ -54,6 +56,15 @@ class MasterWatch(object):
             self.check()
 
     def check(self, _event=None):
+        """One check (from the timer, or on the watcher's news; one at a time)."""
+        if not self._checking.acquire(blocking=False):
+            return          # one is under way: it will see what this one would
+        try:
+            self._check()
+        finally:
+            self._checking.release()
+
+    def _check(self):
         try:
             pid = self.master.getPid()
         except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
