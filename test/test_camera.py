@@ -4,7 +4,8 @@
 This node is the cameras: the astronaut photograph at 4 fps on /camera1/image_raw
 (sensor_msgs/Image) and JPEG-compressed on /camera2/image_raw/compressed. Robot 1 sends its
 frames compressed, robot 2 raw; both must find the face where it is, get their annotated
-frame back in the transport they used, and send each camera frame at most once.
+frame back in the transport they used, send each camera frame at most once, and the
+results and detections must carry the camera frame's stamp and frame_id.
 """
 
 import sys
@@ -45,6 +46,7 @@ class CameraTest(unittest.TestCase):
                     rospy.Publisher('/camera2/image_raw/compressed', CompressedImage,
                                     queue_size=1))
         cls.published = 0
+        cls.stamps = {1: set(), 2: set()}      # of the frames each camera published
 
     @classmethod
     def keep(cls, msg, key):
@@ -58,8 +60,10 @@ class CameraTest(unittest.TestCase):
     def test_frames_from_camera_topics_are_searched_in_either_transport(self):
         stop = time.monotonic() + 20.0
         while time.monotonic() < stop and not rospy.is_shutdown():
-            for pub, msg in zip(self.pubs, (self.raw, self.packed)):
+            for camera, pub, msg in zip((1, 2), self.pubs, (self.raw, self.packed)):
                 msg.header.stamp = rospy.Time.now()
+                msg.header.frame_id = 'camera%d_optical' % camera
+                self.stamps[camera].add(msg.header.stamp)
                 pub.publish(msg)
             self.published += 1
             if all(len([r for r in self.of('reports', robot) if r.ok]) >= 10 for robot in (1, 2)):
@@ -77,6 +81,12 @@ class CameraTest(unittest.TestCase):
             self.assertTrue(all(bool(r.compressed.data) == (transport == 'compressed')
                                 and bool(r.image.width) == (transport == 'raw')
                                 for r in results))
+            # the camera frame's own header goes through: stamp and frame_id
+            headers = [r.compressed.header if transport == 'compressed' else r.image.header
+                       for r in results] + [m.header for m in self.of('detections', robot)]
+            self.assertTrue(headers)
+            self.assertEqual(set(h.frame_id for h in headers), {'camera%d_optical' % robot})
+            self.assertLessEqual(set(h.stamp for h in headers), self.stamps[robot])
             found = [d for m in self.of('detections', robot) for d in m.detections]
             self.assertTrue(found, 'robot %d: no face found' % robot)
             for d in found:

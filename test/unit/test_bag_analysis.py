@@ -1,6 +1,6 @@
 import pytest
 
-from server_select.testbed.bag_analysis import (Flag, Report, compare, mode_summary,
+from server_select.testbed.bag_analysis import (Flag, Report, compare, mode_summary, verdict,
                                                 oracle_changes, reaction_times, switches, table)
 from server_select.testbed.scenario import Scenario
 
@@ -62,3 +62,20 @@ def test_mode_summary_compare_and_table():
     text = table(summaries)
     assert '| select | 2 | 0 | 15.00 | 15.00 |' in text
     assert '+98.5 %' in text and '| fixed | 2 | 1 | 1015.00 |' in text
+
+
+def test_the_verdict_says_what_selection_achieved_in_plain_words():
+    summaries = {'select': {'tasks': 120, 'failed': 0, 'vs_fixed_pct': 50.8,
+                            'gap_to_oracle_pct': 19.1},
+                 'fixed': {'tasks': 120, 'failed': 3, 'vs_fixed_pct': 0.0,
+                           'gap_to_oracle_pct': 142.0}}
+    assert verdict(summaries) == (
+        'select was 51 % faster than a fixed server and 19 % slower than the oracle that '
+        'knows the network (mean task round trip); 0 of 120 tasks failed.')
+    worse = {'select': {'tasks': 10, 'failed': 1, 'vs_fixed_pct': -5.0,
+                        'gap_to_oracle_pct': None}}
+    assert verdict(worse) == ('select was 5 % slower than a fixed server (mean task round '
+                              'trip); 1 of 10 tasks failed.')
+    alone = {'select': {'tasks': 4, 'failed': 0}}
+    assert verdict(alone) == 'select: nothing to compare with; 0 of 4 tasks failed.'
+    assert verdict({}) == 'no select run to judge'

@@ -31,6 +31,11 @@ def test_run_report_counts_switches_and_tasks():
     assert s['rtt']['max'] == 2.0 and s['rtt']['median'] == pytest.approx(1.002)
     assert ('| R1 | S1 | S1 1.00, S2 2.00 | 1 | 2 | 1 | 1 | 1002.00 | 1900.20 | 1980.04 '
             '| 2000.00 | 2 (1) | 0.50 | 0.50 |') in table
+    r.add_task(2, True, 0.003, 1, '')
+    assert r.verdict() == ('2 robots sent 3 tasks, 1 failed, median task round trip 4.00 ms; '
+                           'selected now: R1 -> S1, R2 -> none; switches in all: 1')
+    assert RunReport().verdict() == ('0 robots sent 0 tasks, 0 failed; selected now: none; '
+                                     'switches in all: 0')
 
 
 def test_median_and_range_of_repeated_runs():

@@ -72,6 +72,22 @@ class RunReport(object):
              'failed', 'task RTT median ms', 'p95', 'p99', 'max', 'probes (failed)',
              'probe RTT median ms', 'p99'), rows)
 
+    def verdict(self):
+        """One line of what the run found: tasks, failures, round trip, the selection."""
+        summaries = self.summaries()
+        tasks = sum(s['tasks'] for s in summaries)
+        failed = sum(s['failed'] for s in summaries)
+        rtt = summarize([t[1] if t[0] else self.timeout
+                         for r in sorted(self.tasks) for t in self.tasks[r]])
+        selected = ', '.join(
+            'R%d -> %s' % (s['robot'], 'S%d' % s['selected']
+                           if s['selected'] not in (None, NO_SERVER) else 'none')
+            for s in summaries)
+        return ('%d robots sent %d tasks, %d failed%s; selected now: %s; switches in all: %d'
+                % (len(summaries), tasks, failed,
+                   ', median task round trip %.2f ms' % (rtt['median'] * 1e3) if rtt['n']
+                   else '', selected or 'none', sum(s['switches'] for s in summaries)))
+
 
 def _ms(summary, keys):
     return ['%.2f' % (summary[k] * 1e3) if summary['n'] else '-' for k in keys]

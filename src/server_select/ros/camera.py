@@ -25,6 +25,7 @@ class TopicSource(object):
         self._lock = threading.Lock()
         self._newest = None
         self.received = self.used = 0
+        self.last_header = None     # the camera's header of the frame given last
         self.sub = None
 
     def start(self):
@@ -42,7 +43,8 @@ class TopicSource(object):
 
     def frame(self, _t):
         """The newest frame not used yet, as an array (SourceError when there is none, or
-        it is of another type; ImageError when it does not decode)."""
+        it is of another type; ImageError when it does not decode); its camera header
+        (stamp, frame_id) is then :attr:`last_header`."""
         with self._lock:
             msg, self._newest = self._newest, None
         if msg is None:
@@ -57,6 +59,7 @@ class TopicSource(object):
                 .deserialize(msg._buff)
         except genpy.DeserializationError as error:
             raise SourceError('%s: a frame that does not deserialize: %s' % (self.topic, error))
+        self.last_header = image.header
         if kind.endswith('CompressedImage'):
             return image_codec.decode(image.format, image.data, self.max_pixels), None
         return image_codec.task_frame(

@@ -31,6 +31,7 @@ class TaskPlugin(object):
     """
 
     kind = None                          # the name in task reports and of the settings
+    input = 'its input'                  # what ready() waits for (for the log)
     # True: only the newest task is worth anything (a camera frame): a late one is not
     # sent again while a newer one waits
     newest_wins = False

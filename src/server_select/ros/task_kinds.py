@@ -43,7 +43,8 @@ def image_kind(robot_id, mode, param):
     return Frames(robot_id, {
         'encoding': param('image_encoding'), 'transport': param('image_transport'),
         'quality': param('jpeg_quality'), 'max_pixels': param('max_image_pixels'),
-        'start': param('sweep_start')}, source=source, search=search,
+        'start': param('sweep_start'),
+        'input': param('image_topic') or param('image_source')}, source=source, search=search,
         detectors=_detectors(param, 1) if mode == 'local' else ())
 
 

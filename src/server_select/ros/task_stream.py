@@ -41,6 +41,7 @@ class TaskStream(object):
         self.senders = SenderGate('robot %d' % robot_id, 'server {key}',
                                   lookup=expected_publisher)
         self.started = False
+        self._no_input_since = None
         self.flow = TaskFlow(kind.kind, make=kind.make, publish=self._publish_task,
                              check=kind.check, report=self._report, run_local=kind.run_local,
                              clock=time.monotonic, **flow_args)
@@ -72,10 +73,17 @@ class TaskStream(object):
         if rospy.is_shutdown() or (self.limit and self.flow.sent >= self.limit):
             return
         if not self.kind.ready():
-            source = getattr(getattr(self.kind, 'source', None), 'topic', 'their source')
-            rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for input from %s'
-                                   % (self.robot_id, self.flow.kind, source))
+            # a camera slower than the task rate leaves some ticks without a frame: only
+            # a wait of two periods (at least 1 s) is worth a line
+            now = time.monotonic()
+            self._no_input_since = self._no_input_since or now
+            if now - self._no_input_since > max(1.0, 2.0 / self.rate):
+                rospy.loginfo_throttle(5.0, 'robot %d: no input for %s tasks from %s for '
+                                       '%.1f s' % (self.robot_id, self.flow.kind,
+                                                   self.kind.input,
+                                                   now - self._no_input_since))
             return
+        self._no_input_since = None
         if not self.started:
             if not (self.ready() and self.wired()):
                 rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for a server'

@@ -34,10 +34,12 @@ class Frames(TaskPlugin):
     result_topic, result_type = names.IMAGE_RESULT_TOPIC, ImageResult
 
     def __init__(self, robot_id, settings, source=None, search=None, detectors=()):
-        """``source``: a robot's frames (``frame(t)`` -> ``(array, where)``); ``search``: its
-        SearchParticipant (or None); ``detectors``: the server's, one per worker (a robot in
-        mode local has one too)."""
+        """``source``: a robot's frames (``frame(t)`` -> ``(array, where)``; a camera topic's
+        also has ``last_header``, the camera's stamp and frame_id of that frame); ``search``:
+        its SearchParticipant (or None); ``detectors``: the server's, one per worker (a robot
+        in mode local has one too)."""
         super(Frames, self).__init__(robot_id, settings)
+        self.input = settings.get('input', 'the frame source')
         self.encoding = settings.get('encoding', 'bgr8')
         self.transport = settings.get('transport', 'raw')
         self.quality = int(settings.get('quality', 80))
@@ -66,7 +68,11 @@ class Frames(TaskPlugin):
 
     def make(self, task_id, stamp):
         frame = self.capture(task_id)
-        header = Header(stamp=stamp, frame_id='robot%d_camera' % self.robot_id)
+        # the frame's own header: a camera's stamp and frame_id, which the server's result
+        # and detections keep; a synthetic source's frame is taken now, by the robot
+        camera = getattr(self.source, 'last_header', None)
+        header = Header(stamp=camera.stamp, frame_id=camera.frame_id) if camera is not None \
+            else Header(stamp=stamp, frame_id='robot%d_camera' % self.robot_id)
         task = ImageTask(header=Header(stamp=stamp), robot_id=self.robot_id, task_id=task_id)
         if self.transport == 'compressed':
             fmt, data = image_codec.encode(frame, self.quality)

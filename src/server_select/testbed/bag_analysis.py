@@ -165,6 +165,24 @@ def table(summaries):
          'vs fixed', 'gap to oracle', 'switches', 'reaction mean / max s (missed)'), rows)
 
 
+def verdict(summaries, mode='select'):
+    """One line of what ``mode`` achieved against the fixed server and the oracle (by mean
+    task round trip, failed tasks counted at the timeout), and how many tasks failed."""
+    s = summaries.get(mode)
+    if s is None:
+        return 'no %s run to judge' % mode
+    parts = []
+    if s.get('vs_fixed_pct') is not None:
+        parts.append('%.0f %% %s than a fixed server' % (
+            abs(s['vs_fixed_pct']), 'faster' if s['vs_fixed_pct'] >= 0 else 'slower'))
+    if s.get('gap_to_oracle_pct') is not None:
+        parts.append('%.0f %% %s than the oracle that knows the network' % (
+            abs(s['gap_to_oracle_pct']), 'slower' if s['gap_to_oracle_pct'] >= 0 else 'faster'))
+    judged = ('%s was %s (mean task round trip); ' % (mode, ' and '.join(parts))) if parts \
+        else '%s: nothing to compare with; ' % mode
+    return judged + '%d of %d tasks failed.' % (s['failed'], s['tasks'])
+
+
 def summarize_runs(runs, scenario=None, duration=None):
     """:func:`mode_summary` of each run (``{name: Run}``), compared; with a scenario, the
     reactions to its changes of the truly nearest server (fixed mode has none). Failed

@@ -95,4 +95,9 @@ def main(argv=None):
     from server_select.testbed import bag_analysis
     report = bag_analysis.analyze(out, modes)
     print(report)
+    with open(os.path.join(out, 'summary.json')) as stream:
+        summaries = json.load(stream)
+    print('report: %s (plots beside it: task_rtt.png, latency_<mode>.png)'
+          % os.path.join(out, 'report.md'))
+    print('verdict: %s' % bag_analysis.verdict(summaries))
     return 0
