@@ -49,8 +49,8 @@ def ranked(rec, robot, server, since):
 
 
 def answered(rec, robot, since, tasks, by=None):
-    """Whether ``tasks`` of ``robot``'s tasks were answered since ``since`` (by a server
-    other than ``by``'s negation: ``by`` None for any, else a test of the server)."""
+    """Whether ``tasks`` of ``robot``'s tasks were answered since ``since``: by any server
+    (``by`` None), or by the servers ``by(server)`` accepts."""
     return sum(1 for r in rec.of(rec.reports, robot, since)
                if r.msg.ok and (by is None or by(r.msg.answered_by))) >= tasks
 
