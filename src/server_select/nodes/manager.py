@@ -137,7 +137,7 @@ class ManagerNode(object):
 
     def on_sample(self, sample, pair):
         """One sample on the topic of ``pair`` (paper layout)."""
-        if not self.senders.admits(sample, 'a sample on %s' % names.sample_topic(*pair),
+        if not self.senders.admits(sample, lambda: 'a sample on %s' % names.sample_topic(*pair),
                                    pair[0]):
             return
         why = self.refuse(sample, pair[0], pair)
@@ -160,7 +160,7 @@ class ManagerNode(object):
         if self.group is not None and self.rankings.robot_refusal(robot):
             return      # a robot of another group: not ours to rank
         count = len(batch.server_id)
-        if not self.senders.admits(batch, 'samples on %s' % topic, robot):
+        if not self.senders.admits(batch, lambda: 'samples on %s' % topic, robot):
             return
         why = self.refuse(batch, robot)
         waits = batch.wait or [0.0] * count     # load-aware robots: rank by rtt + wait

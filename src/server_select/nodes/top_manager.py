@@ -55,7 +55,7 @@ class TopManagerNode(object):
 
     def on_batch(self, batch):
         robot = batch.robot_id
-        if not self.senders.admits(batch, 'samples of robot %d' % robot, robot):
+        if not self.senders.admits(batch, lambda: 'samples of robot %d' % robot, robot):
             return
         now = rospy.get_time()
         for server, ok, rtt in zip(batch.server_id, batch.ok, batch.rtt):

@@ -26,7 +26,9 @@ class SenderGate(object):
         self.rule.expected = expected
 
     def admits(self, msg, what, key=None):
-        """Whether ``msg`` (``what`` it is, for the warning) counts."""
+        """Whether ``msg`` counts. ``what`` it is, for the warning: a string, or a function
+        making it (then only made for a refused message: results and samples are a hot
+        path)."""
         sender = publisher_of(msg)
         expected = self.rule.refusal(sender, key)
         if expected is None:
@@ -34,6 +36,7 @@ class SenderGate(object):
         self.refused += 1
         due, held = self.throttle.due()
         if due:
+            what = what() if callable(what) else what
             rospy.logwarn('%s: ignored %s published by %s (%s is %s%s)%s' % (
                 self.who, what, sender, self.role.format(key=key), expected,
                 ' or a node in its namespace' if self.rule.within else '',

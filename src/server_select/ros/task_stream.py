@@ -104,8 +104,9 @@ class TaskStream(object):
     def on_result(self, result):
         if result.robot_id != self.robot_id:
             return
-        if not self.senders.admits(result, 'a %s result for task %d claiming server %d' % (
-                self.flow.kind, result.task_id, result.server_id), result.server_id):
+        if not self.senders.admits(result, lambda: 'a %s result for task %d claiming server '
+                                   '%d' % (self.flow.kind, result.task_id, result.server_id),
+                                   result.server_id):
             return
         busy = bool(getattr(result, 'busy', False))
         status = self.flow.resolve(result.task_id, result.server_id, result.ok, result.error,
