@@ -19,7 +19,6 @@ class SenderGate(object):
         self.who, self.role = who, role
         self.rule = ExpectedSender(expected, lookup, within)
         self.throttle = Throttle(period)
-        self.refused = 0
 
     def expect(self, expected):
         """From now on messages count from ``expected`` (a resolved name; None: any)."""
@@ -33,7 +32,6 @@ class SenderGate(object):
         expected = self.rule.refusal(sender, key)
         if expected is None:
             return True
-        self.refused += 1
         due, held = self.throttle.due()
         if due:
             what = what() if callable(what) else what
