@@ -97,11 +97,16 @@ class BusyServerTest(unittest.TestCase):
         for dt, m in busy:
             print('  busy answer to task %d after %.1f ms: %s' % (m.task_id, 1e3 * dt, m.error))
         self.assertEqual([r for r in reports if not r.ok], [])
-        self.assertGreaterEqual(len(moved), 4, reports)
         self.assertTrue(all(r.ok and r.attempts == 2 for r in moved), moved)
         self.assertEqual(len(answers), len(busy) + len(done), answers)   # nothing else
-        self.assertGreaterEqual(len(busy), len(moved))
-        self.assertLess(after[-1], 0.2, 'a busy answer must come at once')
+        # moved because server 1 said busy (a task it took may also be moved by the
+        # robot's attempt deadline, when its work overruns: that is failover, not this)
+        refused = set(m.task_id for _, m in busy)
+        self.assertGreaterEqual(len([r for r in moved if r.task_id in refused]), 4, reports)
+        # a task refused on arrival is answered at once; one shed from the queue (its
+        # deadline passed while it waited) is answered when a worker takes it
+        at_once = sorted(dt for dt, m in busy if 'in the queue' not in m.error)
+        self.assertTrue(at_once and at_once[-1] < 0.2, 'a busy answer must come at once')
         # not ejected: the robot keeps coming back to server 1 (probes and flags say it
         # is up), each time its load says a task could be done again
         times = sorted(r.header.stamp.to_sec() for r in moved)
