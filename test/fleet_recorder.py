@@ -14,6 +14,20 @@ from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask
 Received = collections.namedtuple('Received', 'time msg')
 
 
+def until_answered(send, answered, timeout=20.0, period=0.5):
+    """Call ``send()`` every ``period`` s until ``answered()`` (True) or ``timeout`` (False).
+
+    A test's first task: connected both ways is not yet wired both ways (a rospy
+    publisher adds a subscriber's connection after the subscriber sees it), so a message
+    published at once may reach nobody."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and not rospy.is_shutdown():
+        send()
+        if wait_until(answered, period, period=0.02):
+            return True
+    return False
+
+
 class FleetRecorder(object):
     """Every flag, task, result and task report (and the probe samples of ``probe_pairs``),
     with its (monotonic) receive time.

@@ -28,6 +28,8 @@ from server_select.msg import Detections, FoundTarget, ImageResult, ImageTask
 from server_select.vision.search import sample_image
 from server_select.srv import KnownTargets
 
+from fleet_recorder import until_answered
+
 FACE = (177, 66, 95, 95)
 ROBOT = 99
 
@@ -63,7 +65,7 @@ class ImageTest(unittest.TestCase):
     def wait(condition, timeout):
         return wait_until(condition, timeout, period=0.01)
 
-    def send(self, task_id, fields):
+    def publish(self, task_id, fields):
         encoding, height, width, step, data = fields
         # a camera frame's own header: its stamp and frame, which the outputs keep
         frame = Header(stamp=rospy.Time(1000 + task_id, 5), frame_id='camera_%d' % task_id)
@@ -72,6 +74,9 @@ class ImageTest(unittest.TestCase):
                                      encoding=encoding, step=step, data=data))
         task.header.stamp = rospy.Time.now()
         self.pub.publish(task)
+
+    def send(self, task_id, fields):
+        self.publish(task_id, fields)
         self.assertTrue(self.wait(lambda: task_id in self.results, 10.0), 'no result %d' % task_id)
         return self.results[task_id], self.detections.get(task_id)
 
@@ -79,6 +84,9 @@ class ImageTest(unittest.TestCase):
         self.assertTrue(self.wait(lambda: self.pub.get_num_connections() >= 2
                                   and self.subs[0].get_num_connections() >= 2, 20.0))
         astronaut = sample_image('astronaut.png')
+        self.assertTrue(until_answered(lambda: self.publish(0, from_array(astronaut, 'bgr8')),
+                                       lambda: 0 in self.results and 0 in self.detections),
+                        'server 2 never answered')
         gray = cv2.cvtColor(astronaut, cv2.COLOR_BGR2GRAY)
         boxes = {}
         for task_id, (name, fields) in enumerate([
