@@ -51,6 +51,24 @@ def test_the_backlog_counts_the_work_left_of_tasks_in_service_over_the_workers()
     assert q.load().backlog == 0.0                   # one queued, a worker free: no wait
 
 
+def test_a_robot_is_told_the_backlog_of_the_others_tasks_not_of_its_own():
+    q, clock = queue_with(1.0)
+    assert q.offer('image', 'mine', owner=7) is None
+    mine = q.take()
+    clock.now += 0.25
+    # one worker busy with robot 7's task: another robot waits for it, robot 7 does not
+    # (it keeps one task out: its next comes when this one is done)
+    assert q.load().backlog == pytest.approx(0.75)
+    assert q.load(excluding=7).backlog == 0.0
+    assert q.load(excluding=3).backlog == pytest.approx(0.75)
+    assert q.offer('image', 'theirs', owner=3) is None
+    assert q.load(excluding=7).backlog == pytest.approx(1.0)     # robot 3's task waits
+    assert q.load(excluding=3).backlog == pytest.approx(0.75)
+    assert q.load(excluding=7).queued == 1            # the counts are of every task
+    q.done(mine, 1.0)
+    assert q.load(excluding=3).backlog == 0.0
+
+
 def test_a_full_queue_answers_busy_at_once():
     q, _ = queue_with(0.0, max_queue=2)
     assert q.offer('sort', 1) is None and q.offer('sort', 2) is None

@@ -55,11 +55,13 @@ class ServiceTimes(object):
 
 
 class Job(object):
-    """A task in a :class:`WorkQueue`: what the worker needs, its kind and deadline."""
-    __slots__ = ('kind', 'item', 'deadline', 'queued_at', 'started')
+    """A task in a :class:`WorkQueue`: what the worker needs, its kind, deadline and
+    owner (who sent it: a robot's id, or None)."""
+    __slots__ = ('kind', 'item', 'deadline', 'queued_at', 'started', 'owner')
 
-    def __init__(self, kind, item, deadline, queued_at):
+    def __init__(self, kind, item, deadline, queued_at, owner=None):
         self.kind, self.item, self.deadline, self.queued_at = kind, item, deadline, queued_at
+        self.owner = owner
         self.started = None
 
 
@@ -86,18 +88,20 @@ class WorkQueue(object):
         self._closed = False
         self.refused = self.shed = self.finished = 0
 
-    def _backlog(self, now):
-        """Seconds until a worker is free for one more task (call with the lock held)."""
-        if len(self._running) + len(self._queue) < self.workers:
+    def _backlog(self, now, excluding=None):
+        """Seconds until a worker is free for one more task (call with the lock held),
+        leaving out the tasks of owner ``excluding`` (None: counting every task)."""
+        queued = [job for job in self._queue if excluding is None or job.owner != excluding]
+        running = [job for job in self._running if excluding is None or job.owner != excluding]
+        if len(running) + len(queued) < self.workers:
             return 0.0
-        work = sum(self.times.get(job.kind) for job in self._queue)
-        work += sum(max(0.0, self.times.get(job.kind) - (now - job.started))
-                    for job in self._running)
+        work = sum(self.times.get(job.kind) for job in queued)
+        work += sum(max(0.0, self.times.get(job.kind) - (now - job.started)) for job in running)
         return work / self.workers
 
-    def offer(self, kind, item, deadline=None):
-        """Queue ``item`` (a task of ``kind`` wanted by ``deadline``, None: whenever).
-        Returns None when queued, else why it is refused (it was not queued)."""
+    def offer(self, kind, item, deadline=None, owner=None):
+        """Queue ``item`` (a task of ``kind`` wanted by ``deadline``, None: whenever, sent
+        by ``owner``). Returns None when queued, else why it is refused (it was not queued)."""
         with self._cond:
             now = self._clock()
             if self._closed:
@@ -114,7 +118,7 @@ class WorkQueue(object):
             if why is not None:
                 self.refused += 1
                 return why
-            self._queue.append(Job(kind, item, deadline, now))
+            self._queue.append(Job(kind, item, deadline, now, owner))
             self._cond.notify()
             return None
 
@@ -153,12 +157,15 @@ class WorkQueue(object):
         if seconds is not None:
             self.times.add(job.kind, seconds)
 
-    def load(self):
-        """The :class:`Load` now."""
+    def load(self, excluding=None):
+        """The :class:`Load` now; its backlog without the tasks of owner ``excluding``
+        (what a robot's next task waits for when the robot's own tasks are done by then:
+        a robot that keeps one task out would otherwise see its own task as load on its
+        server and none on the others, and move for nothing)."""
         with self._cond:
             now = self._clock()
             return Load(len(self._queue), len(self._running), self.workers,
-                        self._backlog(now), self.times.snapshot())
+                        self._backlog(now, excluding), self.times.snapshot())
 
     def close(self):
         """Wake every worker with None; what is still queued is dropped (returned)."""

@@ -122,7 +122,7 @@ class ServerNode(object):
         if self.direct and req.robot_id not in self._known_robots:
             self._known_robots.add(req.robot_id)   # its result publishers, off this path
             self._pool.submit(self._prepare, req.robot_id)
-        load = self.work.load()
+        load = self.work.load(req.robot_id)
         return LatencyProbeResponse(
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),
             queued=load.queued, in_service=load.in_service, workers=load.workers,

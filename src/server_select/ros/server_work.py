@@ -30,7 +30,8 @@ class ServerWork(object):
         """A task addressed here (from a subscriber's thread: never blocks)."""
         budget = getattr(task, 'budget', 0.0)
         deadline = time.monotonic() + budget if budget > 0 else None
-        why = self.queue.offer(endpoint.kind_name, (endpoint, task, direct), deadline)
+        why = self.queue.offer(endpoint.kind_name, (endpoint, task, direct), deadline,
+                               owner=task.robot_id)
         if why is not None:
             self._busy(endpoint, task, direct, why)
 
@@ -67,8 +68,9 @@ class ServerWork(object):
             % (self.server_id, endpoint.kind_name, task.task_id, task.robot_id, why, count))
         endpoint.reply(task, direct, endpoint.error_result(task, why, busy=True))
 
-    def load(self):
-        return self.queue.load()
+    def load(self, robot=None):
+        """The load as ``robot`` sees it (its own tasks left out of the backlog)."""
+        return self.queue.load(excluding=robot)
 
     def summary(self):
         queue = self.queue
