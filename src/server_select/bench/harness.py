@@ -102,6 +102,21 @@ class ReportListener(object):
         with self.lock:
             self.reports.append((time.monotonic(), msg))
 
+    def wait_for_answer(self, kind, timeout=40.0):
+        """Wait until a task of ``kind`` is answered (ok) after this call: the fleet has
+        selected, and the server has loaded what its work needs. False after ``timeout``."""
+        since = time.monotonic()
+
+        def answered():
+            with self.lock:
+                for t, m in reversed(self.reports):
+                    if t < since:
+                        return False
+                    if m.kind == kind and m.ok:
+                        return True
+            return False
+        return wait_until(answered, timeout, period=0.05)
+
     def between(self, start, end, kind):
         with self.lock:
             return [m for t, m in self.reports if start <= t < end and m.kind == kind]

@@ -71,7 +71,14 @@ def bench_probe_vs_echo(tiny, log):
 
 # -- Table 1: robot CPU with and without offloading ---------------------------------------
 
-def bench_table1(tiny, log, area):
+def started(listener, kind, log):
+    """Wait for the fleet's first answered task of ``kind`` (selection made, the work's
+    files loaded): figures are of the steady state."""
+    if not listener.wait_for_answer(kind):
+        raise RuntimeError('the bench fleet answered no %s task (see %s)' % (kind, log))
+
+
+def bench_table1(tiny, log, listener, area):
     """CPU% and RSS of robot and server while the robot handles 640x480 frames at 5 fps."""
     window, repeats = (3.0, 1) if tiny else (20.0, 3)
     result = {'frame_rate': 5, 'window_s': window, 'repeats': repeats}
@@ -80,7 +87,7 @@ def bench_table1(tiny, log, area):
         for _ in range(repeats):
             with fleet(log, mode=mode, sort_tasks='false', image_source='search:' + area,
                        frame_rate='5'):
-                time.sleep(4.0)   # first frames: selection, cascade loading
+                started(listener, 'image', log)
                 pids = {'robot': node_pid('/robot1'), 'server': node_pid('/server1')}
                 usage = measure(list(pids.values()), window)
             samples.append(dict((k, usage[pid]) for k, pid in pids.items()))
@@ -96,20 +103,19 @@ def bench_table1(tiny, log, area):
 def offered_load(log, listener, kind, unit, rates, window, **fleet_args):
     """For each offered rate: achieved completions/s, failures and round trips of ``kind``.
 
-    Each rate runs in a fresh fleet; the window starts 4 s in (selection, start-up) and
-    reports of tasks resolved in it are counted; a failed task counts in the round trips
-    at the task timeout.
+    Each rate runs in a fresh fleet; the window starts at its first answer (selection,
+    start-up) and the reports received in it are counted; a failed task counts in the
+    round trips at the task timeout.
     """
     timeout = float(fleet_args.get('task_timeout', default('task_timeout')))
     rows = []
     for rate in rates:
         rate_arg = {'hz': 'task_rate', 'fps': 'frame_rate'}[unit]
         with fleet(log, **dict(fleet_args, **{rate_arg: str(rate)})):
-            time.sleep(4.0)
+            started(listener, kind, log)
             start = time.monotonic()
             time.sleep(window)
             end = time.monotonic()
-            time.sleep(1.0)
         reports = listener.between(start, end, kind)
         rtts = summarize([r.rtt if r.ok else timeout for r in reports])
         rows.append({'offered_' + unit: rate,
@@ -168,11 +174,10 @@ def bench_sort_breakdown(tiny, log, listener):
         }
         rate = 20 if size <= 1000 else 1
         with fleet(log, task_rate=str(rate), task_size=str(size), task_timeout='10'):
-            time.sleep(5.0)
+            started(listener, 'sort', log)
             start = time.monotonic()
             time.sleep(2.0 if tiny else 10.0)
             end = time.monotonic()
-            time.sleep(2.0 if size > 1000 else 0.5)
         ok = [r.rtt for r in listener.between(start, end, 'sort') if r.ok]
         rtt = statistics.median(ok) if ok else float('nan')
         rows.append({'size': size, 'bytes': len(wire), 'tasks': len(ok),

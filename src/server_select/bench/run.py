@@ -26,7 +26,7 @@ BENCHMARKS = collections.OrderedDict([
     ('probe', ('probe_vs_echo', lambda tiny, log, listener, area:
                measure.bench_probe_vs_echo(tiny, log))),
     ('table1', ('table1', lambda tiny, log, listener, area:
-                measure.bench_table1(tiny, log, area))),
+                measure.bench_table1(tiny, log, listener, area))),
     ('sort', ('sort_throughput', lambda tiny, log, listener, area:
               measure.bench_sort_throughput(tiny, log, listener))),
     ('image', ('image_throughput', lambda tiny, log, listener, area:

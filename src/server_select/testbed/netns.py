@@ -103,8 +103,11 @@ def leftovers(prefix):
                            universal_newlines=True, check=False).stdout
     found += [x.split(':')[1].strip() for x in links.splitlines()
               if x.split(':')[1].strip().startswith(prefix)] + cpu.leftovers(prefix)
-    if os.path.exists(os.path.join(STATE_DIR, prefix + '.json')):
-        found.append('state file')
+    try:
+        found += ['state file %s' % f for f in os.listdir(STATE_DIR)
+                  if f.startswith(prefix) and f.endswith('.json')]
+    except OSError:
+        pass
     return found
 
 
