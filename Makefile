@@ -22,8 +22,27 @@ ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
   bench-scale bench-routing bench-hedging bench-capacity bench-master \
-  test check unit-test testbed-test fault-test catkin-test rostest lint clean
+  test check unit-test testbed-test fault-test catkin-test rostest lint docs help clean
 all: build
+
+help:
+	@echo 'make demo            the main job: the testbed experiment (root, TUN) or the loopback demo'
+	@echo 'make test            every test (lint, unit, testbed, bench smoke, faults, catkin workspace)'
+	@echo 'make check           lint and unit tests: no build, no master (15 s)'
+	@echo 'make build           Debian packages, the venv, the devel space in build/devel'
+	@echo 'make demo-loopback   manager + 3 servers + 2 robots on this host (DEMO_DURATION, DEMO_PORT)'
+	@echo 'make search-demo     the cooperative search: 2 robots, 2 servers, hidden people'
+	@echo 'make evaluate        the paper experiment on the testbed (SCENARIO=config/...yaml)'
+	@echo 'make evaluate-suite  every scenario, every variant, side by side (about 45 min)'
+	@echo 'make bench           the papers tables and throughput (bench-scale, bench-routing,'
+	@echo '                     bench-hedging, bench-capacity, bench-master, bench-memory, bench-emulator)'
+	@echo 'make unit-test, testbed-test, fault-test, catkin-test, rostest T=x.test, lint: parts of make test'
+	@echo 'make docs            docs/parameters.md from the parameter table and the launch files'
+	@echo 'make clean           remove build/ and .venv'
+
+# docs/parameters.md, made from the parameter table and the launch files (make test checks it).
+docs: deps
+	@cd $(TOP)/src && env -u PYTHONPATH ROS_PACKAGE_PATH=$(TOP) $(PY) -m server_select.paramdoc --write
 
 $(BUILD)/.apt-stamp: Makefile
 	@mkdir -p $(BUILD)

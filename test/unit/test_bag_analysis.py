@@ -1,7 +1,8 @@
 import pytest
 
-from server_select.testbed.bag_analysis import (Flag, Report, compare, mode_summary, verdict,
-                                                oracle_changes, reaction_times, switches, table)
+from server_select.testbed.bag_analysis import (Flag, Report, compare, legend, mode_summary,
+                                                oracle_changes, reaction_times, switches, table,
+                                                verdict)
 from server_select.testbed.scenario import Scenario
 
 
@@ -79,3 +80,16 @@ def test_the_verdict_says_what_selection_achieved_in_plain_words():
     alone = {'select': {'tasks': 4, 'failed': 0}}
     assert verdict(alone) == 'select: nothing to compare with; 0 of 4 tasks failed.'
     assert verdict({}) == 'no select run to judge'
+
+
+def test_the_legend_says_each_column_once_and_why_a_column_is_empty():
+    full = {'select': {'vs_fixed_pct': 10.0, 'gap_to_oracle_pct': 5.0, 'reactions': [0.5]},
+            'fixed': {'vs_fixed_pct': 0.0, 'gap_to_oracle_pct': 20.0}}
+    text = legend(full)
+    for column in ('tasks, failed', 'mean ... max ms', 'vs fixed', 'gap to oracle',
+                   'switches', 'reaction'):
+        assert sum(line.startswith(column + ':') for line in text.splitlines()) == 1, column
+    assert '(+: faster)' in text and '(+: slower)' in text
+    assert '"-"' not in text
+    plain = legend({'select': {'vs_fixed_pct': None, 'gap_to_oracle_pct': None}})
+    assert 'no fixed run' in plain and 'no oracle run' in plain and 'without a scenario' in plain

@@ -1,4 +1,4 @@
-"""Graph names shared by every node (README, "Nodes").
+"""Graph names shared by every node (docs/design.md, "Nodes").
 
 All names are relative so that they follow the node's namespace and can be remapped.
 """

@@ -102,7 +102,7 @@ PARAMS = {
     'hysteresis': Param(0.0, parse_non_negative, 'keep the current server while within this '
                         'of the best (s); 0: the paper'),
     'policy': Param('mean', one_of(*POLICIES), 'which ranked server a robot gets: mean (the '
-                    'paper), hysteresis, bound or peak_ewma (README "Policies")'),
+                    'paper), hysteresis, bound or peak_ewma (docs/design.md, "Policies")'),
     'statistic': Param('mean', one_of('mean', 'median', 'trimmed', 'peak_ewma'), 'what the '
                        'window ranks by (policies mean, hysteresis, bound)'),
     'dwell': Param(0.0, parse_non_negative, 'policy hysteresis: no move within this long of '
@@ -162,11 +162,11 @@ PROFILES = {
     'paper': {},
     'fleet': {'routing': 'direct', 'sample_stream': 'robot', 'discover': True,
               'robots': [], 'servers': [],
-              # the scenario suite's winner (README, "The scenario suite")
+              # the scenario suite's winner (docs/evaluation.md, "The scenario suite")
               'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
               'window': 1.5, 'probe_rate': 4.0, 'passive': True, 'task_memory': 5.0,
               'fail_fast': 2, 'hedge': True,
-              # capacity: README, "Capacity and overload"
+              # capacity: docs/design.md, "Capacity and overload"
               'load_aware': True, 'max_in_flight': 1, 'spread': True},
 }
 

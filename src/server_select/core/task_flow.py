@@ -17,7 +17,7 @@ after that quantile of its server's recent round trips is also sent to the next 
 without blaming the first ("The Tail at Scale"'s hedged request). Every task yields
 exactly one :class:`Outcome`.
 
-Under overload (README, "Capacity and overload") a *busy* answer blames nobody; extra
+Under overload (docs/design.md, "Capacity and overload") a *busy* answer blames nobody; extra
 sends are paid from a ``budget``; at most ``max_in_flight`` tasks are out at once, and with
 ``newest_wins`` a late task gives way to a newer one that is held back.
 """

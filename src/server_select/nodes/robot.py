@@ -40,7 +40,7 @@ class RobotNode(object):
     error result, or a timeout after ``~task_timeout``. With camera frames, it takes part
     in the cooperative search (targets shared through ``found_targets``).
 
-    :ROS Parameters: (all, with defaults: README "Nodes" and ``core/settings.py``)
+    :ROS Parameters: (all, with defaults: docs/parameters.md, made from ``core/settings.py``)
         - ``~robot_id``; ``~servers`` (may be empty with ``~discover`` or
           ``~top_manager_node``); ``~profile``, ``~routing``, ``~sample_stream``
         - ``~mode``, ``~fixed_server``, ``~probe_rate``, ``~probe_timeout``, the task

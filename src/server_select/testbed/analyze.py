@@ -47,7 +47,9 @@ def main(argv=None):
     if args.out:
         bag_analysis.write_report(runs, summaries, args.out, 'Analysis of %d bag(s)' % len(runs),
                                   'Bags: %s.' % ', '.join('`%s`' % b for b in args.bags))
-    print(bag_analysis.table(summaries))
+    print('%s\n\n%s' % (bag_analysis.table(summaries), bag_analysis.legend(summaries)))
+    if args.out:
+        print('report: %s (plots beside it)' % os.path.join(args.out, 'report.md'))
     return 0
 
 

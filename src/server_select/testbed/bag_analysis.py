@@ -165,6 +165,32 @@ def table(summaries):
          'vs fixed', 'gap to oracle', 'switches', 'reaction mean / max s (missed)'), rows)
 
 
+LEGEND = (
+    ('tasks, failed', "the robots' task reports, and those that got no right answer in time"),
+    ('mean ... max ms', 'task round trip, each failed task counted at the task timeout'),
+    ('vs fixed', "how much lower the mean is than the fixed server's (+: faster)"),
+    ('gap to oracle', "how much higher the mean is than that of the oracle, which follows "
+     'the truly nearest server of the scenario (+: slower)'),
+    ('switches', 'changes of the server a robot sent its tasks to'),
+    ('reaction', 'seconds from a change of the truly nearest server to the flag selecting it, '
+     'mean / max (changes never followed)'),
+)
+
+
+def legend(summaries):
+    """What the columns of :func:`table` mean, one line each; columns that are "-" in
+    every row are said to be so, and why."""
+    lines = ['%s: %s' % pair for pair in LEGEND]
+    if all(s.get('vs_fixed_pct') is None for s in summaries.values()):
+        lines.append('(vs fixed is "-": no fixed run to compare with)')
+    if all(s.get('gap_to_oracle_pct') is None for s in summaries.values()):
+        lines.append('(gap to oracle is "-": no oracle run to compare with)')
+    if not any(s.get('reactions') for s in summaries.values()):
+        lines.append('(reaction: "-" without a scenario, which says when the nearest server '
+                     'changes)')
+    return '\n'.join(lines)
+
+
 def verdict(summaries, mode='select'):
     """One line of what ``mode`` achieved against the fixed server and the oracle (by mean
     task round trip, failed tasks counted at the timeout), and how many tasks failed."""

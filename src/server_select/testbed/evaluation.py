@@ -14,17 +14,15 @@ analysis (:mod:`server_select.testbed.bag_analysis`).
 """
 
 import argparse
-import concurrent.futures
 import copy
 import json
-import multiprocessing
 import os
 import sys
 
 from server_select.core.settings import default
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.netns import Testbed
-from server_select.testbed.runner import HostRun, RunOptions, guarded
+from server_select.testbed.runner import HostRun, RunOptions, at_once, guarded
 from server_select.testbed.scenario import Scenario, ScenarioError
 
 MODES = ('select', 'fixed', 'oracle')
@@ -74,14 +72,12 @@ def run_modes(scenario_path, modes, out_dir, options=None, side_by_side=False, l
     if not side_by_side or len(modes) < 2:
         return [run_mode(scenario_path, mode, out_dir, options, log) for mode in modes]
     base = options.prefix or 'ssb%d' % os.getpid()
-    context = multiprocessing.get_context('spawn')    # a fresh interpreter: no parent's threads
-    with concurrent.futures.ProcessPoolExecutor(len(modes), mp_context=context) as pool:
-        futures = []
-        for mode in modes:
-            own = copy.copy(options)
-            own.prefix = '%s-%s' % (base, mode[0])
-            futures.append(pool.submit(run_mode, scenario_path, mode, out_dir, own, log))
-        return [future.result() for future in futures]
+    calls = []
+    for mode in modes:
+        own = copy.copy(options)
+        own.prefix = '%s-%s' % (base, mode[0])
+        calls.append((run_mode, (scenario_path, mode, out_dir, own, log)))
+    return at_once(calls)
 
 
 def main(argv=None):
@@ -121,10 +117,10 @@ def main(argv=None):
     if status:
         return status
     from server_select.testbed import bag_analysis
-    report = bag_analysis.analyze(out, modes)
-    print(report)
+    bag_analysis.analyze(out, modes)
     with open(os.path.join(out, 'summary.json')) as stream:
         summaries = json.load(stream)
+    print('\n%s\n\n%s\n' % (bag_analysis.table(summaries), bag_analysis.legend(summaries)))
     print('report: %s (plots beside it: task_rtt.png, latency_<mode>.png)'
           % os.path.join(out, 'report.md'))
     print('verdict: %s' % bag_analysis.verdict(summaries))

@@ -4,6 +4,8 @@ errors and Ctrl-C into an exit status. Used by the experiment
 (:mod:`~server_select.testbed.evaluation`), the scenario suite
 (:mod:`~server_select.testbed.suite`) and the benchmarks on the testbed."""
 
+import concurrent.futures
+import multiprocessing
 import os
 import signal
 import sys
@@ -131,6 +133,16 @@ class HostRun(object):
         if server.stop is not None:
             self.tb.sleep_until(server.stop)
             proc.send_signal(signal.SIGINT)
+
+
+def at_once(calls):
+    """Run each ``(function, args)`` of ``calls`` at once, each in a process of its own (a
+    fresh interpreter, whose main thread a :class:`Testbed` may set signal handlers in);
+    their results in order (an exception of one is raised here)."""
+    context = multiprocessing.get_context('spawn')
+    with concurrent.futures.ProcessPoolExecutor(len(calls), mp_context=context) as pool:
+        futures = [pool.submit(function, *args) for function, args in calls]
+        return [future.result() for future in futures]
 
 
 def guarded(prog, work):

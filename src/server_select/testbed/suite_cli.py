@@ -18,7 +18,7 @@ def parse(argv):
     parser = argparse.ArgumentParser(
         prog='evaluate --suite',
         description='Run every variant side by side on each scenario of the suite, '
-                    'repeatedly, and compare them (README, "The scenario suite").')
+                    'repeatedly, and compare them (docs/evaluation.md, "The scenario suite").')
     parser.add_argument('--suite', action='store_true', help=argparse.SUPPRESS)
     parser.add_argument('--scenarios', default=','.join(SCENARIOS),
                         help='comma-separated names, or scenario files (.yaml) '

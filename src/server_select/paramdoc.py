@@ -1,0 +1,175 @@
+"""``docs/parameters.md``, made from the parameter table and the launch files (no rospy).
+
+The table (:data:`server_select.core.settings.PARAMS` with the profiles' defaults) says
+what each parameter means and what it defaults to; each role's launch file says which
+parameters its node takes, under which launch argument. :func:`problems` lists where the
+two disagree (a launch file setting a parameter the table does not have, an argument
+that reaches nothing, a parameter no launch file or node list names); :func:`render` is
+the document. ``python3 -m server_select.paramdoc --check`` fails when the document in
+the repository is not what :func:`render` makes now (``--write`` makes it).
+"""
+
+import argparse
+import os
+import re
+import sys
+import xml.etree.ElementTree as ET
+
+from server_select.core.settings import PARAMS, PROFILES, REQUIRED
+from server_select.ros.paths import package_file
+
+TOP = package_file()       # the package's folder (the source tree: docs/ is not installed)
+DOC = os.path.join('docs', 'parameters.md')
+
+# The launch files of the roles, in the document's order.
+ROLE_FILES = ('server.launch', 'robot.launch', 'manager.launch', 'top_manager.launch',
+              'oracle.launch')
+# Nodes started without a role launch file of their own, and the parameters they read.
+OTHER_NODES = {
+    'report': ('duration', 'output', 'end_launch'),
+    'search_monitor': ('area', 'radius', 'timeout', 'output', 'end_launch'),
+    'usage': ('nodes', 'delay', 'duration', 'output'),
+}
+# Launch arguments that are not node parameters.
+LAUNCH_ONLY = {
+    'output': 'where the node logs: screen or log',
+    'machine': 'roslaunch machine to run on (empty: this host)',
+    'name': "the node's name",
+    'settings': 'a YAML file of more private parameters (e.g. a plug-in\'s settings), '
+                'loaded with find and arg substitution',
+}
+ARG = re.compile(r'^\$\(arg ([A-Za-z_][A-Za-z0-9_]*)\)$')
+
+
+def launch_path(name, top=TOP):
+    return os.path.join(top, 'launch', name)
+
+
+def read_launch(path):
+    """``(args, params)``: the declared arguments ``{name: (default, doc)}`` and, for the
+    package's node in the file, ``{parameter: argument}`` (None: a literal value), plus
+    the arguments a ``<rosparam>`` or the node's attributes use (as parameter None)."""
+    root = ET.parse(path).getroot()
+    args = dict((a.get('name'), (a.get('default', a.get('value')), a.get('doc') or ''))
+                for a in root.iter('arg'))
+    params = {}
+    for node in root.iter('node'):
+        if node.get('pkg') != 'server_select':
+            continue
+        for param in node.iter('param'):
+            match = ARG.match(param.get('value', ''))
+            params[param.get('name')] = match.group(1) if match else None
+        used = [node.get(k, '') for k in ('name', 'output', 'machine')]
+        used += [r.get('file', '') for r in node.iter('rosparam')]
+        for text in used:
+            for arg in re.findall(r'\$\(arg ([A-Za-z_][A-Za-z0-9_]*)\)', text):
+                params.setdefault(None, set()).add(arg)
+    return args, params
+
+
+def problems(top=TOP):
+    """Where the table and the launch files disagree (empty: they agree)."""
+    found, named = [], set()
+    for name in ROLE_FILES:
+        args, params = read_launch(launch_path(name, top))
+        used = set(params.pop(None, set()))
+        for param, arg in sorted(params.items()):
+            named.add(param)
+            if param not in PARAMS:
+                found.append('%s: parameter %r is not in the table (core/settings.py)'
+                             % (name, param))
+            if arg is not None:
+                used.add(arg)
+                if arg not in args:
+                    found.append('%s: parameter %r takes argument %r, which is not declared'
+                                 % (name, param, arg))
+        for arg in sorted(set(args) - used):
+            found.append('%s: argument %r reaches no parameter of the node' % (name, arg))
+    for params in OTHER_NODES.values():
+        named.update(params)
+        found += ['node list: %r is not in the table' % p for p in params if p not in PARAMS]
+    found += ['table: %r is set by no launch file and read by no listed node' % p
+              for p in sorted(set(PARAMS) - named)]
+    return found
+
+
+def value(v):
+    if v is REQUIRED:
+        return 'required'
+    if v is None:
+        return '(see meaning)'
+    if isinstance(v, bool):
+        return '`%s`' % str(v).lower()
+    if v == '':
+        return "`''`"
+    if isinstance(v, list):
+        return '`[]`' if not v else '`%s`' % v
+    return '`%s`' % (v,)
+
+
+def row(param, arg=None):
+    spec = PARAMS[param]
+    fleet = PROFILES['fleet'].get(param, spec.default)
+    cells = ['`~%s`' % param, value(spec.default),
+             'same' if fleet == spec.default else value(fleet), spec.doc.replace('|', '\\|')]
+    if arg is not None:
+        cells.insert(0, '`%s`' % arg)
+    return '| %s |' % ' | '.join(cells)
+
+
+def render(top=TOP):
+    """The document."""
+    out = ['# Parameters', '',
+           'Made by `python3 -m server_select.paramdoc --write` from the parameter table '
+           '(`src/server_select/core/settings.py`) and the launch files; `make test` checks '
+           'that it is current and that the two agree. Every parameter is private (`~name`). '
+           'A launch argument left empty (the default of all but ids) leaves the node\'s '
+           'default, the `paper` column or, with `profile:=fleet`, the `fleet` column; a '
+           'parameter set explicitly always wins. Id lists are YAML lists or strings: '
+           '`[1, 2, 3]`, `"1,2,3"`, `"1 2 3"`. An invalid value stops the node with one '
+           '`invalid parameter` line and exit status 2.', '']
+    for name in ROLE_FILES:
+        args, params = read_launch(launch_path(name, top))
+        params.pop(None, None)
+        node = os.path.splitext(name)[0]
+        out += ['## `%s` (`roslaunch server_select %s`)' % (node, name), '',
+                '| launch argument | parameter | paper | fleet | meaning |',
+                '|---|---|---|---|---|']
+        out += [row(param, arg or '(fixed)') for param, arg in params.items()]
+        others = [a for a in args if a not in params.values()]
+        out += ['| `%s` | – | %s | same | %s |' % (a, '`%s`' % args[a][0] if args[a][0]
+                                                   else '(none)',
+                                                   LAUNCH_ONLY.get(a) or args[a][1])
+                for a in others]
+        out.append('')
+    out += ['## Other nodes', '', '| node | parameter | paper | fleet | meaning |',
+            '|---|---|---|---|---|']
+    for node, params in OTHER_NODES.items():
+        out += [row(p).replace('| ', '| `%s` | ' % node, 1) for p in params]
+    return '\n'.join(out) + '\n'
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    group = parser.add_mutually_exclusive_group(required=True)
+    group.add_argument('--write', action='store_true', help='write %s' % DOC)
+    group.add_argument('--check', action='store_true', help='fail unless it is current')
+    args = parser.parse_args(argv)
+    found = problems()
+    for line in found:
+        print('paramdoc: %s' % line, file=sys.stderr)
+    path = os.path.join(TOP, DOC)
+    text = render()
+    if args.write:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, 'w') as stream:
+            stream.write(text)
+    elif not os.path.exists(path) or open(path).read() != text:
+        print('paramdoc: %s is not current: run python3 -m server_select.paramdoc --write'
+              % DOC, file=sys.stderr)
+        return 1
+    return 1 if found else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
