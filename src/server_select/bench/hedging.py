@@ -1,13 +1,13 @@
 """Hedged tasks on lossy links (testbed, root): tail round trip vs extra requests.
 
-One robot sends sort tasks at ``--rate`` to two servers over links of ``--delay`` ms one
-way with ``--loss`` packet loss (a lost packet costs a TCP retransmission, 200 ms or
-more: the tail "The Tail at Scale" hedges against), the manager selecting. Each run is
-made with ``hedge:=false`` and ``hedge:=true`` (a copy to the next server once a task is
-past its server's p95 round trip), ``--runs`` times, interleaved. Printed per setting:
-tasks, failed (counted at the task timeout), round trip p50 / p99 / p99.9 / max, the
-share of tasks answered by a second server, and the extra requests per task (every
-attempt after the first: hedges and re-sends). Median of the runs, (min-max).
+Two robots send sort tasks at ``--rate`` each to two servers over links of ``--delay`` ms
+one way with ``--loss`` packet loss (a lost packet costs a TCP retransmission, 200 ms or
+more: the tail "The Tail at Scale" hedges against), the manager selecting: robot 1 with
+``hedge:=false``, robot 2 with ``hedge:=true`` (a copy to the next server once a task is
+past its server's p95 round trip), side by side on links alike, ``--runs`` times. Printed
+per setting: tasks, failed (counted at the task timeout), round trip p50 / p99 / p99.9 /
+max, the share of tasks answered by a second server, and the extra requests per task
+(every attempt after the first: hedges and re-sends). Median of the runs, (min-max).
 """
 
 import sys
@@ -23,28 +23,22 @@ from server_select.testbed import bag_analysis
 TIMEOUT = 2.0
 
 
+ROBOTS = {'off': 1, 'on': 2}       # the setting each robot runs with
+
+
 def scenario(delay, loss, seconds):
-    return {'name': 'hedging', 'duration': seconds + 12,
-            'hosts': {'manager': {'role': 'manager'}, 'server1': {'role': 'server', 'id': 1},
-                      'server2': {'role': 'server', 'id': 2},
-                      'robot1': {'role': 'robot', 'id': 1}},
-            'default': {'delay': 0.5},
-            'links': {'robot1 server1': [{'at': 0, 'delay': delay, 'loss': loss}],
-                      'robot1 server2': [{'at': 0, 'delay': delay * 1.5, 'loss': loss}]}}
+    links = {}
+    for robot in ROBOTS.values():
+        links['robot%d server1' % robot] = [{'at': 0, 'delay': delay, 'loss': loss}]
+        links['robot%d server2' % robot] = [{'at': 0, 'delay': delay * 1.5, 'loss': loss}]
+    hosts = {'manager': {'role': 'manager'}, 'server1': {'role': 'server', 'id': 1},
+             'server2': {'role': 'server', 'id': 2}}
+    hosts.update(('robot%d' % r, {'role': 'robot', 'id': r}) for r in ROBOTS.values())
+    return {'name': 'hedging', 'duration': seconds + 12, 'hosts': hosts,
+            'default': {'delay': 0.5}, 'links': links}
 
 
-def run_once(hedge, args, work, index):
-    data = scenario(args.delay, args.loss, args.seconds)
-    name = '%s-%d' % ('hedge' if hedge else 'plain', index)
-    with scenario_run(data, work, name, 'sshd') as (run, bag):
-        run.launch('manager', 'manager.launch', 'robots:=1', 'servers:=1,2')
-        for server in (1, 2):
-            run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server)
-        run.launch('robot1', 'robot.launch', 'robot_id:=1', 'servers:=1,2',
-                   'task_rate:=%g' % args.rate, 'task_timeout:=%g' % TIMEOUT,
-                   'start_delay:=3', 'hedge:=%s' % ('true' if hedge else 'false'))
-    start = data['duration'] - args.seconds            # the last --seconds of the run
-    reports = [r for r in bag_analysis.load(bag).reports if r.t > start]
+def figures(reports):
     rtts = np.array([r.rtt if r.ok else TIMEOUT for r in reports])
     attempts = [max(1, r.attempts) for r in reports]
     p50, p99, p999 = np.percentile(rtts, [50, 99, 99.9]) if len(rtts) else (0, 0, 0)
@@ -52,6 +46,24 @@ def run_once(hedge, args, work, index):
             'p50': p50, 'p99': p99, 'p999': p999, 'max': float(rtts.max()) if len(rtts) else 0,
             'second': sum(1 for r in reports if r.ok and r.answered_by != r.server) /
             max(1, len(reports)), 'extra': (sum(attempts) - len(attempts)) / max(1, len(reports))}
+
+
+def run_once(args, work, index):
+    """One run, both settings side by side: ``{setting: figures}``."""
+    data = scenario(args.delay, args.loss, args.seconds)
+    with scenario_run(data, work, 'hedging-%d' % index, 'sshd') as (run, bag):
+        run.launch('manager', 'manager.launch', 'robots:=1,2', 'servers:=1,2')
+        for server in (1, 2):
+            run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server)
+        for setting, robot in ROBOTS.items():
+            run.launch('robot%d' % robot, 'robot.launch', 'robot_id:=%d' % robot,
+                       'servers:=1,2', 'task_rate:=%g' % args.rate,
+                       'task_timeout:=%g' % TIMEOUT, 'start_delay:=3',
+                       'hedge:=%s' % ('true' if setting == 'on' else 'false'))
+    start = data['duration'] - args.seconds            # the last --seconds of the run
+    reports = [r for r in bag_analysis.load(bag).reports if r.t > start]
+    return dict((setting, figures([r for r in reports if r.robot == robot]))
+                for setting, robot in ROBOTS.items())
 
 
 def table(results):
@@ -79,12 +91,12 @@ def main(argv=None):
     results = {'off': [], 'on': []}
     with tempfile.TemporaryDirectory(prefix='bench_hedging') as work:
         for index in range(args.runs):
-            for setting in ('off', 'on'):
-                results[setting].append(run_once(setting == 'on', args, work, index))
-                print(table({setting: results[setting][-1:]}).splitlines()[-1],
-                      file=sys.stderr, flush=True)
+            for setting, row in run_once(args, work, index).items():
+                results[setting].append(row)
+                print(table({setting: [row]}).splitlines()[-1], file=sys.stderr,
+                      flush=True)
     cli.write(args.out, 'hedging.json', results)
-    print('\nSort tasks at %g/s over %g ms one way (server 2: %g ms), %g %% loss each way; '
+    print('\nSort tasks at %g/s a robot over %g ms one way (server 2: %g ms), %g %% loss each way; '
           'failed tasks counted at %g s; median (min-max) of %d runs\n\n%s\n'
           % (args.rate, args.delay, args.delay * 1.5, 100 * args.loss, TIMEOUT, args.runs,
              table(results)))

@@ -1,7 +1,8 @@
 """Bytes on the wire per task: broadcast (paper) vs direct (fleet) routing (testbed, root).
 
 Two robots send tasks to server 1 (``mode:=fixed``) while 2, 4 or 8 servers run, each host
-in a network namespace of its own behind the link emulator, which counts every byte. With
+in a network namespace of its own behind the link emulator, which counts every byte; the
+two layouts run at once, each in a testbed of its own (bytes do not depend on timing). With
 ``routing:=broadcast`` each task goes to every server and each result to every robot;
 with ``direct`` a task goes to the addressed server only and a result to its robot only.
 Printed per layout, task kind and number of servers: tasks answered by robot 1, and the
@@ -17,6 +18,7 @@ from server_select.bench.harness import link_bytes, scenario_run
 from server_select.ros.paths import package_file
 from server_select.core.tables import markdown_table
 from server_select.testbed import bag_analysis
+from server_select.testbed.runner import at_once
 
 KINDS = {
     'sort': ['task_rate:=2'],
@@ -37,7 +39,7 @@ def run_once(routing, kind, servers, seconds, work):
     data = scenario(servers, seconds)
     name = '%s-%s-%d' % (routing, kind, servers)
     ids = ','.join(str(s) for s in range(1, servers + 1))
-    with scenario_run(data, work, name, 'ssrb') as (run, bag):
+    with scenario_run(data, work, name, 'ssrb-' + routing[0]) as (run, bag):
         for server in range(1, servers + 1):
             run.launch('server%d' % server, 'server.launch', 'server_id:=%d' % server,
                        'routing:=%s' % routing)
@@ -71,10 +73,11 @@ def main(argv=None):
     rows = []
     with tempfile.TemporaryDirectory(prefix='bench_routing') as work:
         for kind in args.kinds.split(','):
-            for servers in map(int, args.servers.split(',')):
-                for routing in ('broadcast', 'direct'):
-                    rows.append(run_once(routing, kind, servers, args.seconds, work))
-                    print(table(rows[-1:]).splitlines()[-1], file=sys.stderr, flush=True)
+            for servers in map(int, args.servers.split(',')):   # the two at once
+                rows += at_once([(run_once, (routing, kind, servers, args.seconds, work))
+                                 for routing in ('broadcast', 'direct')])
+                print('\n'.join(table(rows[-2:]).splitlines()[-2:]), file=sys.stderr,
+                      flush=True)
     cli.write(args.out, 'routing_bytes.json', rows)
     print('\nTwo robots, tasks to server 1; bytes counted by the link emulator\n\n%s\n'
           % table(rows))
