@@ -178,3 +178,22 @@ def test_fail_fast_leaves_a_server_after_failed_samples_in_a_row():
     assert (fast.selected, fast.excluded) == (2, [1])
     w.add(1, 1, 6.0, True, 0.002)                            # answers again: back at once
     assert rank_servers(w.robot_stats(1, [1, 2], 6.0), fail_fast=2).selected == 1
+
+
+def test_equal_servers_whose_queues_are_mostly_empty_do_not_warrant_moves():
+    """Load-aware samples of two servers alike (robots there send a frame now and then):
+    the waits are 0 most of the time; the hysteresis policy must not read the differences
+    of their means as real (it did with standard errors from the median absolute
+    deviation alone: a warranted move at 18-40 % of the rankings)."""
+    rng = random.Random(3)
+    policy = Policy('hysteresis', margin=0.0003, z=3.0, dwell=3.0)
+    w = LatencyWindow(1.5, policy.statistic('mean'), robust=policy.robust)
+    chooser = Chooser(policy)
+    chosen = []
+    for i in range(int(600 * 4)):              # 10 minutes at 4 Hz
+        t = i / 4.0
+        for s in (1, 2):
+            wait = rng.uniform(0.0, 0.77) if rng.random() < 0.3 else 0.0
+            w.add(1, s, t, True, 0.001 + rng.gauss(0, 0.0001) + wait, wait)
+        chosen.append((t, chooser.choose(rank_servers(w.robot_stats(1, (1, 2), t)), t)))
+    assert switches(chosen) <= 3, switches(chosen)

@@ -97,3 +97,31 @@ def test_round_trips_beyond_an_hour_are_refused_so_sums_cannot_overflow():
             w.add(1, 1, 0.0, True, 1.7e308)
     w.add(1, 1, 0.0, True, MAX_RTT)
     assert w.stats(1, 1, 0.0).mean == MAX_RTT
+
+
+def test_robust_errors_keep_the_spread_of_a_queue_that_is_empty_most_of_the_time():
+    # a load-aware sample is the network's round trip + the server's wait, which is 0
+    # most of the time and most of a second now and then
+    w = LatencyWindow(10.0, robust=True)
+    waits = [0.0, 0.0, 0.6, 0.0, 0.0, 0.3]
+    for t, wait in enumerate(waits):
+        w.add(1, 1, float(t), True, 0.001 + wait, wait)
+    n = len(waits)
+    mean = sum(waits) / n
+    plain = (sum((x - mean) ** 2 for x in waits) / (n - 1) / n) ** 0.5
+    stats = w.stats(1, 1, 5.0)
+    assert stats.mean == pytest.approx(0.001 + mean)
+    assert stats.se == pytest.approx(plain)     # the network part has no spread here
+    # the same values given without their wait part: the median absolute deviation
+    # calls them no spread at all
+    blind = LatencyWindow(10.0, robust=True)
+    for t, wait in enumerate(waits):
+        blind.add(1, 1, float(t), True, 0.001 + wait)
+    assert blind.stats(1, 1, 5.0).se == pytest.approx(0.0)
+
+
+def test_a_step_in_the_network_still_does_not_widen_robust_errors_when_waits_are_known():
+    w = LatencyWindow(10.0, robust=True)
+    for t, rtt in enumerate([0.005, 0.005, 0.005, 0.005, 0.030, 0.030]):
+        w.add(1, 1, float(t), True, rtt + 0.1, 0.1)      # a steady wait of 0.1 s
+    assert w.stats(1, 1, 5.0).se == pytest.approx(0.0)

@@ -64,13 +64,13 @@ class FleetRankings(object):
             return 'server %d is not one of ~servers %s' % (server, self.fixed_servers)
         return None
 
-    def add(self, robot, server, now, ok, rtt, probe=True):
+    def add(self, robot, server, now, ok, rtt, probe=True, wait=0.0):
         """Record a sample, a probe's or (``probe`` False) an answered task's (ValueError
-        for an impossible round trip); True when ``robot``'s flag may change because of
-        it."""
+        for an impossible round trip; ``wait``: the part of ``rtt`` that is the server's
+        wait); True when ``robot``'s flag may change because of it."""
         if self.cost is not None:
             rtt = self.cost.enter((robot, server), now, ok, rtt, probe)
-        had_mean, stats = self.window.add(robot, server, now, ok, rtt)
+        had_mean, stats = self.window.add(robot, server, now, ok, rtt, wait)
         with self._lock:
             newest = self._last_good.get((robot, server)) if ok else None
             if ok and newest is None:       # (again) in the window: due when this leaves

@@ -84,7 +84,7 @@ class Selection(object):
             with self._lock:
                 self._chooser.note_wait(server, wait)
         value = rtt if self.cost is None else self.cost.enter(server, now, ok, rtt, probe)
-        self.window.add(self.robot_id, server, now, ok, value)
+        self.window.add(self.robot_id, server, now, ok, value, wait or 0.0)
         if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
 

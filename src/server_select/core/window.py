@@ -19,15 +19,18 @@ from statistics import median
 
 STATISTICS = ('mean', 'median', 'trimmed', 'peak_ewma')
 
-Sample = collections.namedtuple('Sample', 'time ok rtt')
+Sample = collections.namedtuple('Sample', 'time ok rtt wait')
 PairStats = collections.namedtuple('PairStats',
                                    'mean ok_count failed_count value se failed_run')
 PairStats.__new__.__defaults__ = (None, None, 0)
 PairStats.__doc__ = """A pair's window: ``mean`` of the successful samples (None: none),
 their count, the failed count, ``value`` the window's statistic (None: no successful
 sample), ``se`` the standard error of the mean (0 with fewer than two samples; with
-``robust``, from the median absolute deviation, which a step in the latency does not
-inflate) and ``failed_run`` how many of the newest samples failed in a row."""
+``robust``, that of the network part from the median absolute deviation, which a step in
+the latency does not inflate, and that of the *wait* part, a server's queue, from the
+plain variance: waits are zero most of the time and seconds now and then, which the
+median absolute deviation would call no spread at all) and ``failed_run`` how many of
+the newest samples failed in a row."""
 
 EMPTY = PairStats(None, 0, 0, None, None, 0)
 
@@ -54,14 +57,24 @@ def trimmed_mean(values):
     return sum(kept) / len(kept)
 
 
+def variance_of(values):
+    """The sample variance of ``values`` (0 for fewer than two)."""
+    n = len(values)
+    if n < 2:
+        return 0.0
+    mean = sum(values) / n
+    return sum((v - mean) ** 2 for v in values) / (n - 1)
+
+
 class _Pair(object):
     """One pair's samples and their running sums (O(1) amortised per sample for the mean
     and the peak EWMA; the median and trimmed mean cost O(n log n) of the window's n)."""
     __slots__ = ('samples', 'rtt_sum', 'sq_sum', 'ok_count', 'ewma', 'ewma_time',
-                 'failed_run')
+                 'failed_run', 'waits')
 
     def __init__(self):
         self.samples, self.rtt_sum, self.sq_sum, self.ok_count = collections.deque(), 0.0, 0.0, 0
+        self.waits = 0          # successful samples with a wait part
         self.ewma = self.ewma_time = None
         self.failed_run = 0
 
@@ -72,6 +85,7 @@ class _Pair(object):
             self.rtt_sum += sample.rtt
             self.sq_sum += sample.rtt * sample.rtt
             self.ok_count += 1
+            self.waits += sample.wait > 0
             if self.ewma is None or sample.rtt >= self.ewma:
                 self.ewma = sample.rtt
             else:
@@ -87,6 +101,7 @@ class _Pair(object):
                 self.ok_count -= 1
                 self.rtt_sum -= old.rtt
                 self.sq_sum -= old.rtt * old.rtt
+                self.waits -= old.wait > 0
         if not self.ok_count:
             self.rtt_sum = self.sq_sum = 0.0     # no rounding residue survives an empty window
             self.ewma = self.ewma_time = None    # a pair back from silence starts afresh
@@ -107,8 +122,13 @@ class _Pair(object):
         else:
             value = median(ok) if statistic == 'median' else trimmed_mean(ok)
         if robust and n > 1:
+            if self.waits:      # the network part robust, the queue's plain
+                waits = [s.wait for s in self.samples if s.ok]
+                ok = [v - w for v, w in zip(ok, waits)]
             middle = median(ok)
             variance = (1.4826 * median([abs(v - middle) for v in ok])) ** 2
+            if self.waits:
+                variance += variance_of(waits)
         return PairStats(mean, n, failed, value, math.sqrt(variance / n),
                          self.failed_run)
 
@@ -137,9 +157,11 @@ class LatencyWindow(object):
         self._lock = threading.Lock()
         self._pairs = {}
 
-    def add(self, robot_id, server_id, now, ok, rtt):
-        """Record one sample; failed samples carry no latency. A successful sample whose
-        ``rtt`` is not :data:`RTT_RANGE` raises ValueError (and is not recorded).
+    def add(self, robot_id, server_id, now, ok, rtt, wait=0.0):
+        """Record one sample; failed samples carry no latency. ``wait``: the part of
+        ``rtt`` that is the server's wait (a load-aware probe's), not the network's. A
+        successful sample whose ``rtt`` is not :data:`RTT_RANGE` raises ValueError (and is
+        not recorded).
         Returns whether the pair had a value before, and its :class:`PairStats` after
         (with plain standard errors, which cost nothing: :meth:`stats` gives the robust
         ones)."""
@@ -151,7 +173,8 @@ class LatencyWindow(object):
                 pair = self._pairs[(robot_id, server_id)] = _Pair()
             pair.prune(now - self.window)
             had_value = pair.ok_count > 0
-            pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan')), self.tau)
+            pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan'),
+                               min(float(wait), float(rtt)) if ok else 0.0), self.tau)
             return had_value, pair.stats(self.statistic)
 
     def stats(self, robot_id, server_id, now, errors=True):
