@@ -125,6 +125,13 @@ class TaskCost(object):
             kept[0].append(sample - probe[0])
             kept[1] = now
 
+    def above_probes(self, key, sample):
+        """How much a task sample of ``key`` lies above the pair's probe latency (s, >= 0;
+        0 while no probe is known): the part of it that is queueing and work, not network."""
+        with self._lock:
+            probe = self._probe.get(key)
+            return max(0.0, sample - probe[0]) if probe is not None else 0.0
+
     def penalty(self, key, now):
         """What a probe of ``key`` has added to it now (s, >= 0)."""
         with self._lock:

@@ -70,6 +70,8 @@ class FleetRankings(object):
         wait); True when ``robot``'s flag may change because of it."""
         if self.cost is not None:
             rtt = self.cost.enter((robot, server), now, ok, rtt, probe)
+            if ok and not probe:    # a task's queueing and work: no network spread
+                wait = self.cost.above_probes((robot, server), rtt)
         had_mean, stats = self.window.add(robot, server, now, ok, rtt, wait)
         with self._lock:
             newest = self._last_good.get((robot, server)) if ok else None

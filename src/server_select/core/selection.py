@@ -84,6 +84,8 @@ class Selection(object):
             with self._lock:
                 self._chooser.note_wait(server, wait)
         value = rtt if self.cost is None else self.cost.enter(server, now, ok, rtt, probe)
+        if ok and not probe and self.cost is not None:   # a task's queueing and work
+            wait = self.cost.above_probes(server, value)
         self.window.add(self.robot_id, server, now, ok, value, wait or 0.0)
         if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
