@@ -197,8 +197,9 @@ def test_task_memory_of_a_server_that_left_is_dropped():
 
 
 def test_task_samples_count_their_queueing_as_spread_not_as_a_difference():
-    """A robot's probes see two equal servers; its tasks (one every 3.5 s, a third of them
-    queued behind another robot's for 0.1-0.7 s) go to the server it selects. A task
+    """A load-aware robot's probes see two equal servers; its tasks (one every 3.5 s, a
+    third of them queued behind another robot's for 0.1-0.7 s) go to the server it
+    selects. A task
     sample's part above the probes is queueing and work: it must widen the margin, not
     prove the selected server slower. With errors from the median absolute deviation
     alone, the robot moved 70 times in these 10 minutes (to the other server, which then
@@ -211,7 +212,8 @@ def test_task_samples_count_their_queueing_as_spread_not_as_a_difference():
     for i in range(4 * 600):
         t = i / 4.0
         for server in (1, 2):
-            rankings.add(1, server, t, True, 0.001 + rng.gauss(0, 0.0001))
+            probe = 0.001 + rng.gauss(0, 0.0001)
+            rankings.add(1, server, t, True, probe, wait=0.0)
         if i % 14 == 0:
             queued = rng.uniform(0.1, 0.7) if rng.random() < 0.33 else 0.0
             rankings.add(1, current, t, True, 0.001 + queued, probe=False)

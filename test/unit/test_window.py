@@ -125,3 +125,18 @@ def test_a_step_in_the_network_still_does_not_widen_robust_errors_when_waits_are
     for t, rtt in enumerate([0.005, 0.005, 0.005, 0.005, 0.030, 0.030]):
         w.add(1, 1, float(t), True, rtt + 0.1, 0.1)      # a steady wait of 0.1 s
     assert w.stats(1, 1, 5.0).se == pytest.approx(0.0)
+
+
+def test_load_aware_samples_rank_by_the_networks_median_plus_the_mean_wait():
+    w = LatencyWindow(10.0)
+    # a CPU-capped server answers some probes late (its quota spent); waits of its queue
+    for t, (rtt, wait) in enumerate([(0.002, 0.0), (0.060, 0.0), (0.002, 0.5),
+                                     (0.003, 0.0), (0.080, 0.3), (0.002, 0.0)]):
+        w.add(1, 1, float(t), True, rtt + wait, wait)
+    stats = w.stats(1, 1, 5.0)
+    assert stats.value == pytest.approx(0.0025 + 0.8 / 6)   # median 2.5 ms + mean wait
+    assert stats.mean == pytest.approx((0.149 + 0.8) / 6)     # the plain mean, as before
+    plain = LatencyWindow(10.0)                                # wait not said: the paper's
+    plain.add(1, 1, 0.0, True, 0.060)
+    plain.add(1, 1, 1.0, True, 0.002)
+    assert plain.stats(1, 1, 1.0).value == pytest.approx(0.031)

@@ -122,8 +122,10 @@ def run_once(variant, kind, rate, args, work, name):
     data = scenario(shares, args.robots, args.seconds, args.delays, late)
     profile = 'fleet' if variant == 'fleet' else 'paper'
     fixed = static_assignment(shares, args.robots)
+    # the flags and probe samples too: what a robot's moves can be read from
     with scenario_run(data, work, name, 'sscap', record=(
-            '/task_report', '/detections')) as (run, bag):
+            '/task_report', '/detections', '/server_select_flag',
+            '/latency_samples')) as (run, bag):
         t0 = run.tb.t0
         if variant != 'static':
             run.launch('manager', 'manager.launch', 'profile:=%s' % profile,

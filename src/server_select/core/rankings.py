@@ -38,6 +38,7 @@ class FleetRankings(object):
         self._lock = threading.Lock()
         self._servers = {}                        # robot -> set of servers heard for it
         self._selected = {}                       # robot -> server its last flag selected
+        self._aware = set()                       # robots whose samples say their wait
         self._last_good = {}                      # (robot, server) -> its newest good sample
         self._due = []      # heap: (when that sample leaves the window, robot, server)
 
@@ -64,13 +65,16 @@ class FleetRankings(object):
             return 'server %d is not one of ~servers %s' % (server, self.fixed_servers)
         return None
 
-    def add(self, robot, server, now, ok, rtt, probe=True, wait=0.0):
+    def add(self, robot, server, now, ok, rtt, probe=True, wait=None):
         """Record a sample, a probe's or (``probe`` False) an answered task's (ValueError
         for an impossible round trip; ``wait``: the part of ``rtt`` that is the server's
-        wait); True when ``robot``'s flag may change because of it."""
+        wait, from a load-aware robot); True when ``robot``'s flag may change because of
+        it."""
+        if wait is not None:
+            self._aware.add(robot)
         if self.cost is not None:
             rtt = self.cost.enter((robot, server), now, ok, rtt, probe)
-            if ok and not probe:    # a task's queueing and work: no network spread
+            if ok and not probe and robot in self._aware:   # a task's queueing and work
                 wait = self.cost.above_probes((robot, server), rtt)
         had_mean, stats = self.window.add(robot, server, now, ok, rtt, wait)
         with self._lock:

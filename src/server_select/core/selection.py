@@ -29,6 +29,7 @@ class Selection(object):
             raise ValueError('unknown mode %r' % (mode,))
         self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
         self.fixed_server = fixed_server
+        self._aware = False         # its probes say the servers' waits (load-aware)
         self.health = health
         policy = policy or Policy()
         self.manager_timeout = manager_timeout
@@ -83,10 +84,12 @@ class Selection(object):
         if wait is not None:
             with self._lock:
                 self._chooser.note_wait(server, wait)
+        if wait is not None:
+            self._aware = True
         value = rtt if self.cost is None else self.cost.enter(server, now, ok, rtt, probe)
-        if ok and not probe and self.cost is not None:   # a task's queueing and work
-            wait = self.cost.above_probes(server, value)
-        self.window.add(self.robot_id, server, now, ok, value, wait or 0.0)
+        if ok and not probe and self.cost is not None and self._aware:
+            wait = self.cost.above_probes(server, value)    # a task's queueing and work
+        self.window.add(self.robot_id, server, now, ok, value, wait)
         if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
 

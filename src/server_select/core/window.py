@@ -25,12 +25,15 @@ PairStats = collections.namedtuple('PairStats',
 PairStats.__new__.__defaults__ = (None, None, 0)
 PairStats.__doc__ = """A pair's window: ``mean`` of the successful samples (None: none),
 their count, the failed count, ``value`` the window's statistic (None: no successful
-sample), ``se`` the standard error of the mean (0 with fewer than two samples; with
-``robust``, that of the network part from the median absolute deviation, which a step in
-the latency does not inflate, and that of the *wait* part, a server's queue, from the
-plain variance: waits are zero most of the time and seconds now and then, which the
-median absolute deviation would call no spread at all) and ``failed_run`` how many of
-the newest samples failed in a row."""
+sample; of samples that say their *wait* part, load-aware ones, the statistic of the
+network part plus the mean wait, the ``mean`` statistic taking the network part's median:
+a server short of CPU answers probes late whenever its quota is spent, spikes its tasks
+pay in their work already), ``se`` the standard error of the mean (0 with fewer than two
+samples; with ``robust``, that of the network part from the median absolute deviation,
+which a step in the latency does not inflate, and that of the wait part from the plain
+variance: waits are zero most of the time and seconds now and then, which the median
+absolute deviation would call no spread at all) and ``failed_run`` how many of the newest
+samples failed in a row."""
 
 EMPTY = PairStats(None, 0, 0, None, None, 0)
 
@@ -70,11 +73,11 @@ class _Pair(object):
     """One pair's samples and their running sums (O(1) amortised per sample for the mean
     and the peak EWMA; the median and trimmed mean cost O(n log n) of the window's n)."""
     __slots__ = ('samples', 'rtt_sum', 'sq_sum', 'ok_count', 'ewma', 'ewma_time',
-                 'failed_run', 'waits')
+                 'failed_run', 'aware')
 
     def __init__(self):
         self.samples, self.rtt_sum, self.sq_sum, self.ok_count = collections.deque(), 0.0, 0.0, 0
-        self.waits = 0          # successful samples with a wait part
+        self.aware = 0          # successful samples that say their wait part
         self.ewma = self.ewma_time = None
         self.failed_run = 0
 
@@ -85,7 +88,7 @@ class _Pair(object):
             self.rtt_sum += sample.rtt
             self.sq_sum += sample.rtt * sample.rtt
             self.ok_count += 1
-            self.waits += sample.wait > 0
+            self.aware += sample.wait is not None
             if self.ewma is None or sample.rtt >= self.ewma:
                 self.ewma = sample.rtt
             else:
@@ -101,7 +104,7 @@ class _Pair(object):
                 self.ok_count -= 1
                 self.rtt_sum -= old.rtt
                 self.sq_sum -= old.rtt * old.rtt
-                self.waits -= old.wait > 0
+                self.aware -= old.wait is not None
         if not self.ok_count:
             self.rtt_sum = self.sq_sum = 0.0     # no rounding residue survives an empty window
             self.ewma = self.ewma_time = None    # a pair back from silence starts afresh
@@ -113,21 +116,25 @@ class _Pair(object):
             return PairStats(None, 0, failed, None, None, self.failed_run)
         mean = max(0.0, self.rtt_sum / n)
         variance = max(0.0, self.sq_sum / n - mean * mean) * n / (n - 1) if n > 1 else 0.0
-        ok = [s.rtt for s in self.samples if s.ok] if robust or statistic in (
+        ok = [s.rtt for s in self.samples if s.ok] if robust or self.aware or statistic in (
             'median', 'trimmed') else None
+        if self.aware:          # load-aware samples: the network part and the wait apart
+            waits = [s.wait or 0.0 for s in self.samples if s.ok]
+            ok = [v - w for v, w in zip(ok, waits)]
         if statistic == 'mean':
-            value = mean
+            # the network's median (a CPU-capped server answers a probe late whenever
+            # its quota is spent: spikes the tasks pay in their work already) + the
+            # mean wait
+            value = median(ok) + sum(waits) / n if self.aware else mean
         elif statistic == 'peak_ewma':
             value = self.ewma
         else:
             value = median(ok) if statistic == 'median' else trimmed_mean(ok)
-        if robust and n > 1:
-            if self.waits:      # the network part robust, the queue's plain
-                waits = [s.wait for s in self.samples if s.ok]
-                ok = [v - w for v, w in zip(ok, waits)]
+            value += sum(waits) / n if self.aware else 0.0
+        if robust and n > 1:    # the network part robust, the queue's plain
             middle = median(ok)
             variance = (1.4826 * median([abs(v - middle) for v in ok])) ** 2
-            if self.waits:
+            if self.aware:
                 variance += variance_of(waits)
         return PairStats(mean, n, failed, value, math.sqrt(variance / n),
                          self.failed_run)
@@ -157,9 +164,9 @@ class LatencyWindow(object):
         self._lock = threading.Lock()
         self._pairs = {}
 
-    def add(self, robot_id, server_id, now, ok, rtt, wait=0.0):
+    def add(self, robot_id, server_id, now, ok, rtt, wait=None):
         """Record one sample; failed samples carry no latency. ``wait``: the part of
-        ``rtt`` that is the server's wait (a load-aware probe's), not the network's. A
+        ``rtt`` that is the server's wait (a load-aware sample's; None: not said). A
         successful sample whose ``rtt`` is not :data:`RTT_RANGE` raises ValueError (and is
         not recorded).
         Returns whether the pair had a value before, and its :class:`PairStats` after
@@ -174,7 +181,8 @@ class LatencyWindow(object):
             pair.prune(now - self.window)
             had_value = pair.ok_count > 0
             pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan'),
-                               min(float(wait), float(rtt)) if ok else 0.0), self.tau)
+                               min(float(wait), float(rtt)) if ok and wait is not None
+                               else None), self.tau)
             return had_value, pair.stats(self.statistic)
 
     def stats(self, robot_id, server_id, now, errors=True):

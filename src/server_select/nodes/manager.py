@@ -185,7 +185,8 @@ class ManagerNode(object):
             if ok and batch.wait:     # what spread needs to tell load from distance
                 self._chooser(robot).note_wait(server, wait)
             if self.rankings.add(robot, server, now, ok, rtt + wait,
-                                 probe=topic != names.TASK_SAMPLES_TOPIC, wait=wait):
+                                 probe=topic != names.TASK_SAMPLES_TOPIC,
+                                 wait=wait if batch.wait else None):
                 changed = True
         if changed:     # one ranking per batch: O(1) per sample
             self.update(robot, only_on_change=True)
