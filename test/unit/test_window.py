@@ -140,3 +140,16 @@ def test_load_aware_samples_rank_by_the_networks_median_plus_the_mean_wait():
     plain.add(1, 1, 0.0, True, 0.060)
     plain.add(1, 1, 1.0, True, 0.002)
     assert plain.stats(1, 1, 1.0).value == pytest.approx(0.031)
+
+
+def test_the_median_of_the_network_part_has_the_larger_error_of_a_median():
+    rtts = [0.010, 0.012, 0.009, 0.011, 0.013, 0.010]
+    aware, blind = LatencyWindow(10.0, robust=True), LatencyWindow(10.0, robust=True)
+    for t, rtt in enumerate(rtts):
+        aware.add(1, 1, float(t), True, rtt, 0.0)
+        blind.add(1, 1, float(t), True, rtt)
+    # ranked by the median: its standard error is sqrt(pi / 2) x the mean's
+    assert aware.stats(1, 1, 5.0).se == pytest.approx(
+        blind.stats(1, 1, 5.0).se * (3.141592653589793 / 2) ** 0.5)
+    assert aware.stats(1, 1, 5.0).value == pytest.approx(0.0105)
+    assert blind.stats(1, 1, 5.0).value == pytest.approx(sum(rtts) / 6)

@@ -135,6 +135,8 @@ class _Pair(object):
             middle = median(ok)
             variance = (1.4826 * median([abs(v - middle) for v in ok])) ** 2
             if self.aware:
+                if statistic in ('mean', 'median'):   # ranked by the network's median,
+                    variance *= math.pi / 2           # whose error is 1.25 x the mean's
                 variance += variance_of(waits)
         return PairStats(mean, n, failed, value, math.sqrt(variance / n),
                          self.failed_run)
