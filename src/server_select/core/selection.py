@@ -82,10 +82,9 @@ class Selection(object):
         load-aware probe's ``rtt`` that is the server's wait."""
         now = self._clock()
         if wait is not None:
+            self._aware = True
             with self._lock:
                 self._chooser.note_wait(server, wait)
-        if wait is not None:
-            self._aware = True
         value = rtt if self.cost is None else self.cost.enter(server, now, ok, rtt, probe)
         if ok and not probe and self.cost is not None and self._aware:
             wait = self.cost.above_probes(server, value)    # a task's queueing and work
