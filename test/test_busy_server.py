@@ -9,6 +9,7 @@ without doing it, and the robot must send it to server 2, which answers it; no t
 server 1 is not ejected for being busy, and it still does the work that has time.
 """
 
+import itertools
 import sys
 import threading
 import time
@@ -20,6 +21,8 @@ import rostest
 
 from server_select.core.procs import wait_until
 from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
+
+from fleet_recorder import until_answered
 
 OWN = 99           # the robot id of this node's own tasks
 
@@ -63,14 +66,12 @@ class BusyServerTest(unittest.TestCase):
         # server 1 learns what a sort task takes (0.6 s); its subscription to /data and
         # its result's way back to this node come up in their own time, so the first task
         # is sent again until one is answered
-        own, answered = 1, False
-        for _ in range(15):
-            self.occupy(own)
-            own += 1
-            answered = wait_until(lambda: self.of('results', lambda m: m.robot_id == OWN), 2.0)
-            if answered:
-                break
-        self.assertTrue(answered, 'server 1 did not answer this node')
+        ids = itertools.count(1)
+        self.assertTrue(until_answered(lambda: self.occupy(next(ids)),
+                                       lambda: self.of('results', lambda m: m.robot_id == OWN),
+                                       timeout=30.0, period=2.0),
+                        'server 1 did not answer this node')
+        own = next(ids)
         stop, next_occupy = time.monotonic() + 12.0, 0.0
         while time.monotonic() < stop and not rospy.is_shutdown():
             self.flags.publish(SelectionFlag(robot_id=1, server_id=1, ranking=[1, 2]))
