@@ -38,7 +38,7 @@ LAUNCH_ONLY = {
     'settings': 'a YAML file of more private parameters (e.g. a plug-in\'s settings), '
                 'loaded with find and arg substitution',
 }
-ARG = re.compile(r'^\$\(arg ([A-Za-z_][A-Za-z0-9_]*)\)$')
+ARG = re.compile(r'\$\(arg ([A-Za-z_][A-Za-z0-9_]*)\)')
 
 
 def launch_path(name, top=TOP):
@@ -46,33 +46,30 @@ def launch_path(name, top=TOP):
 
 
 def read_launch(path):
-    """``(args, params)``: the declared arguments ``{name: (default, doc)}`` and, for the
-    package's node in the file, ``{parameter: argument}`` (None: a literal value), plus
-    the arguments a ``<rosparam>`` or the node's attributes use (as parameter None)."""
+    """``(args, params, used)``: the declared arguments ``{name: (default, doc)}``; for the
+    package's node in the file, ``{parameter: argument}`` (None: not a plain
+    ``$(arg ...)``); and the arguments its attributes and ``<rosparam>`` files use."""
     root = ET.parse(path).getroot()
     args = dict((a.get('name'), (a.get('default', a.get('value')), a.get('doc') or ''))
                 for a in root.iter('arg'))
-    params = {}
+    params, used = {}, set()
     for node in root.iter('node'):
         if node.get('pkg') != 'server_select':
             continue
         for param in node.iter('param'):
-            match = ARG.match(param.get('value', ''))
+            match = ARG.fullmatch(param.get('value', ''))
             params[param.get('name')] = match.group(1) if match else None
-        used = [node.get(k, '') for k in ('name', 'output', 'machine')]
-        used += [r.get('file', '') for r in node.iter('rosparam')]
-        for text in used:
-            for arg in re.findall(r'\$\(arg ([A-Za-z_][A-Za-z0-9_]*)\)', text):
-                params.setdefault(None, set()).add(arg)
-    return args, params
+        texts = [node.get(k, '') for k in ('name', 'output', 'machine')]
+        texts += [r.get('file', '') for r in node.iter('rosparam')]
+        used.update(arg for text in texts for arg in ARG.findall(text))
+    return args, params, used
 
 
 def problems(top=TOP):
     """Where the table and the launch files disagree (empty: they agree)."""
     found, named = [], set()
     for name in ROLE_FILES:
-        args, params = read_launch(launch_path(name, top))
-        used = set(params.pop(None, set()))
+        args, params, used = read_launch(launch_path(name, top))
         for param, arg in sorted(params.items()):
             named.add(param)
             if param not in PARAMS:
@@ -129,8 +126,7 @@ def render(top=TOP):
            '`[1, 2, 3]`, `"1,2,3"`, `"1 2 3"`. An invalid value stops the node with one '
            '`invalid parameter` line and exit status 2.', '']
     for name in ROLE_FILES:
-        args, params = read_launch(launch_path(name, top))
-        params.pop(None, None)
+        args, params, _ = read_launch(launch_path(name, top))
         node = os.path.splitext(name)[0]
         out += ['## `%s` (`roslaunch server_select %s`)' % (node, name), '',
                 '| launch argument | parameter | paper | fleet | meaning |',
