@@ -2,6 +2,7 @@
 """Bad input: invalid parameters stop a node with one clear line; bad tasks get error
 results and the server keeps serving."""
 
+import concurrent.futures
 import subprocess
 import sys
 import threading
@@ -40,16 +41,17 @@ class BadInputTest(unittest.TestCase):
         cls.pub = rospy.Publisher(names.SORT_TASK_TOPIC, numpy_msg(SortTask), queue_size=10)
 
     def test_invalid_parameters_exit_with_one_clear_line(self):
-        for i, (node, args, message) in enumerate(BAD_PARAMS):
-            proc = subprocess.run(
-                ['rosrun', 'server_select', node, '__name:=bad_%s_%d' % (node, i)] + args,
-                stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
-                timeout=30)
-            lines = [x for x in proc.stderr.splitlines() if 'invalid parameter' in x]
-            self.assertEqual(proc.returncode, 2, (node, args, proc.stderr))
-            self.assertEqual(len(lines), 1, proc.stderr)
+        procs = [subprocess.Popen(
+            ['rosrun', 'server_select', node, '__name:=bad_%s_%d' % (node, i)] + args,
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+            for i, (node, args, _) in enumerate(BAD_PARAMS)]     # at once: each starts cold
+        for proc, (node, args, message) in zip(procs, BAD_PARAMS):
+            _, stderr = proc.communicate(timeout=60)
+            lines = [x for x in stderr.splitlines() if 'invalid parameter' in x]
+            self.assertEqual(proc.returncode, 2, (node, args, stderr))
+            self.assertEqual(len(lines), 1, stderr)
             self.assertIn(message, lines[0])
-            self.assertNotIn('Traceback', proc.stderr)
+            self.assertNotIn('Traceback', stderr)
 
     def roslaunch(self, until, *args):
         """Output of ``roslaunch server_select robot.launch ARGS`` until a line contains
@@ -72,11 +74,15 @@ class BadInputTest(unittest.TestCase):
         return ''.join(lines)
 
     def test_launch_arguments_are_checked_by_the_node(self):
-        # select mode with servers that do not include the (old) default fixed server 1
-        out = self.roslaunch('probing servers', 'robot_id:=5', 'servers:=2,3')
+        with concurrent.futures.ThreadPoolExecutor(2) as launches:     # at once, as above
+            # select mode with servers that do not include the (old) default fixed server 1
+            good = launches.submit(self.roslaunch, 'probing servers', 'robot_id:=5',
+                                   'servers:=2,3')
+            bad = launches.submit(self.roslaunch, 'exit code', 'robot_id:=6', 'task_rate:=fast')
+        out = good.result()
         self.assertNotIn('invalid parameter', out)
         self.assertIn('robot 5: mode select, probing servers [2, 3]', out)
-        out = self.roslaunch('exit code', 'robot_id:=6', 'task_rate:=fast')
+        out = bad.result()
         lines = [x for x in out.splitlines() if 'invalid parameter' in x]
         self.assertEqual(len(lines), 1, out)
         self.assertIn('~task_rate: expected a positive number', lines[0])

@@ -18,6 +18,7 @@ asserted.
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -28,7 +29,7 @@ import psutil
 from server_select.bench import cli
 from server_select.bench.harness import PY, Roscore, node_pid
 from server_select.bench.scale_sim import group_table
-from server_select.core.procs import measure, stop_group, wait_until
+from server_select.core.procs import measure, stop_groups, wait_until
 from server_select.core.stats import summarize
 from server_select.core.tables import fmt as _fmt, markdown_table
 
@@ -63,8 +64,9 @@ def _managers(layout, robots, servers, groups, log, profile='paper'):
 
 
 def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0):
+    """The simulated robots' processes: {node name: (process, its result file)}."""
     per = -(-robots // sims)
-    procs, outs = [], []
+    started = {}
     for first in range(1, robots + 1, per):
         out = os.path.join(tmp, 'sim%d.json' % first)
         cmd = PY + ['server_select.bench.scale_sim', '--first', str(first), '--count',
@@ -72,10 +74,9 @@ def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0):
                     '--layout', layout, '--until', repr(until), '--out', out,
                     '--groups', str(groups), '--rate', repr(rate)]
         with open(log, 'a') as stream:
-            procs.append(subprocess.Popen(cmd, stdout=stream, stderr=subprocess.STDOUT,
-                                          start_new_session=True))
-        outs.append(out)
-    return procs, outs
+            started['/scale_sim_%d' % first] = (subprocess.Popen(
+                cmd, stdout=stream, stderr=subprocess.STDOUT, start_new_session=True), out)
+    return started
 
 
 def _usage(pid):
@@ -85,12 +86,16 @@ def _usage(pid):
                 'rss_mb': proc.memory_info().rss / 2.0 ** 20}
 
 
-def _ranked_in(outs):
-    """Latest first-full-ranking time over every robot (None if one never got one)."""
+def _progress(outs):
+    """(latest first-full-ranking time over every robot, or None while one has none yet;
+    the sample-to-flag delays) from the simulated robots' result files so far."""
     ranked, robots, delays = [], 0, []
     for out in outs:
-        with open(out) as stream:
-            data = json.load(stream)
+        try:
+            with open(out) as stream:
+                data = json.load(stream)
+        except FileNotFoundError:          # not written yet
+            return None, delays
         ranked += list(data['ranked'].values())
         robots += data['robots']
         delays += data['delays']
@@ -99,21 +104,26 @@ def _ranked_in(outs):
 
 def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, profile='paper',
             rate=1.0):
+    """One size: the simulated robots registered, the manager(s) started; once every robot
+    is ranked (at most ``limit`` s) the managers measured for ``measure_s`` s, then (at most
+    ``limit`` s more) until a flag change was timed; the row of figures."""
     log = os.path.join(tmp, 'scale.log')
-    until = time.time() + 8.0 + limit + measure_s
-    sim_procs, outs = _sims(tmp, robots, servers, sims, layout, until, log, groups, rate)
-    time.sleep(5.0)                    # the simulated robots registered and publishing
-    started = time.time()
-    managers = _managers(layout, robots, servers, groups, log, profile)
+    # the latest the simulated robots run, should this process die without stopping them
+    until = time.time() + 120.0 + 2 * limit + measure_s
+    started_sims = _sims(tmp, robots, servers, sims, layout, until, log, groups, rate)
+    outs = [out for _, out in started_sims.values()]
     row = {'robots': robots, 'servers': servers, 'layout': layout, 'groups': groups,
            'profile': profile, 'rate': rate}
+    managers = {}
     try:
-        if not wait_until(lambda: all(_pid(n) for n in managers), 60.0, period=0.5):
-            with open(log) as stream:
-                raise RuntimeError('a manager did not register:\n' + stream.read()[-3000:])
+        _registered(started_sims, log, 'a simulated robot')
+        started = time.time()
+        managers = _managers(layout, robots, servers, groups, log, profile)
+        _registered(managers, log, 'a manager')
         pids = [_pid(n) for n in managers]
         master = _master_pid()
-        time.sleep(max(0.0, started + limit - time.time()))
+        wait_until(lambda: _progress(outs)[0] is not None,
+                   max(0.0, started + limit - time.time()), period=0.2)
         usage = measure(pids + [master], measure_s)
         totals = [_usage(p) for p in pids]
         for key in ('threads', 'fds', 'rss_mb'):
@@ -121,18 +131,25 @@ def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, prof
         cpu = [usage.get(p, {}).get('cpu_percent', 0.0) for p in pids]
         row['manager_cpu'], row['manager_cpu_max'] = sum(cpu), max(cpu)
         row['master_cpu'] = usage.get(master, {}).get('cpu_percent')
+        if _progress(outs)[0] is not None:
+            wait_until(lambda: _progress(outs)[1], limit, period=0.2)
     finally:
-        for proc in sim_procs:
-            proc.wait(timeout=limit + measure_s + 60)
-        for proc in managers.values():
-            stop_group(proc)
-    last, delays = _ranked_in(outs)
+        stop_groups([proc for proc, _ in started_sims.values()], signal.SIGTERM)
+        stop_groups(managers.values())
+    last, delays = _progress(outs)
     row['ranked_s'] = None if last is None else last - started
     summary = summarize(delays)
     row['delay_p50_ms'] = summary['median'] * 1e3 if delays else None
     row['delay_p99_ms'] = summary['p99'] * 1e3 if delays else None
     row['changes'] = len(delays)
     return row
+
+
+def _registered(nodes, log, what):
+    """Wait until every node of ``nodes`` (names) is registered with the master."""
+    if not wait_until(lambda: all(_pid(n) for n in nodes), 60.0, period=0.2):
+        with open(log) as stream:
+            raise RuntimeError('%s did not register:\n%s' % (what, stream.read()[-3000:]))
 
 
 def _pid(node):

@@ -7,7 +7,8 @@ different, well separated nearest server. Once every robot of this process has a
 ranking all servers, one robot every ``--change-every`` s gets a 10 s round trip for the
 server its flag selects, which must move its flag elsewhere: the time from that sample's
 publication to the flag that shows the move is the sample-to-flag delay. Results go to
-``--out`` as JSON.
+``--out`` as JSON, rewritten every half second while it runs (so the benchmark can wait for
+"every robot ranked" and "a change measured"); it runs until SIGINT / SIGTERM or ``--until``.
 
 ``--layout grouped``: the servers form ``--groups`` equal groups; each robot follows the
 top manager's ``group_assignments`` and sends batches for its group's servers plus every
@@ -17,7 +18,9 @@ group's servers, from its group's manager.
 
 import argparse
 import json
+import os
 import random
+import signal
 import threading
 import time
 
@@ -153,11 +156,18 @@ class SimulatedRobots(object):
                 self.triggers[robot] = (time.time(), slow)
         self.send(robot, slow, sending)
 
-    def run(self, until, rate=1.0):
+    def run(self, until, rate=1.0, stop=None, out=None):
+        """Probe rounds until ``until`` (epoch s) or ``stop`` (an Event) is set; the result
+        written to ``out`` every 0.5 s and at the end."""
+        stop = stop or threading.Event()
         period = 1.0 / (rate * len(self.robots))
         next_change = None
         index = 0
-        while time.time() < until and not rospy.is_shutdown():
+        written = 0.0
+        while time.time() < until and not stop.is_set() and not rospy.is_shutdown():
+            if out and time.time() - written >= 0.5:
+                self.write(out)
+                written = time.time()
             robot = self.robots[index % len(self.robots)]
             index += 1
             self.send(robot)
@@ -168,10 +178,19 @@ class SimulatedRobots(object):
                 next_change += self.change_every
             time.sleep(period)
 
+        if out:
+            self.write(out)
+
     def result(self):
         with self.lock:
-            return {'ranked': self.ranked, 'delays': self.delays, 'flags': self.flags,
-                    'robots': len(self.robots)}
+            return {'ranked': dict(self.ranked), 'delays': list(self.delays),
+                    'flags': self.flags, 'robots': len(self.robots)}
+
+    def write(self, out):
+        """The result so far, replacing ``out`` at once (a reader sees whole files only)."""
+        with open(out + '.tmp', 'w') as stream:
+            json.dump(self.result(), stream)
+        os.replace(out + '.tmp', out)
 
 
 def main(argv=None):
@@ -187,11 +206,12 @@ def main(argv=None):
     parser.add_argument('--out', required=True)
     args = parser.parse_args(argv)
     rospy.init_node('scale_sim_%d' % args.first, disable_signals=True)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
     sim = SimulatedRobots(list(range(args.first, args.first + args.count)), args.servers,
                           args.layout, args.change_every, args.groups)
-    sim.run(args.until, args.rate)
-    with open(args.out, 'w') as stream:
-        json.dump(sim.result(), stream)
+    sim.run(args.until, args.rate, stop, args.out)
     rospy.signal_shutdown('done')
 
 
