@@ -7,14 +7,7 @@ BUILD := $(TOP)/build
 DEVEL := $(BUILD)/devel
 VENV := $(TOP)/.venv
 PY := $(VENV)/bin/python
-APT_PACKAGES := python3-venv python3-rospy python3-rostest python3-roslaunch python3-rosbag \
-  python3-rosservice python3-rostopic python3-rosnode python3-rosmsg python3-roslib \
-  catkin catkin-lint ros-message-generation libstd-msgs-dev libsensor-msgs-dev ros-base-dev \
-  python3-std-msgs python3-sensor-msgs python3-geometry-msgs \
-  rosbash procps cmake g++ make iproute2 flake8 python3-hypothesis python3-paramiko \
-  python3-rosgraph-msgs \
-  python3-numpy python3-opencv opencv-data python3-yaml python3-psutil python3-matplotlib \
-  python3-skimage python3-rospkg
+APT_PACKAGES := $(shell grep -v '^\#' $(TOP)/debian-packages.txt)
 DEMO_DURATION ?= 30
 # Runs a command with the workspace sourced and the venv's python first on PATH (the
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
@@ -44,7 +37,7 @@ help:
 docs: deps
 	@cd $(TOP)/src && env -u PYTHONPATH ROS_PACKAGE_PATH=$(TOP) $(PY) -m server_select.paramdoc --write
 
-$(BUILD)/.apt-stamp: Makefile
+$(BUILD)/.apt-stamp: debian-packages.txt
 	@mkdir -p $(BUILD)
 	@missing=$$(for p in $(APT_PACKAGES); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null \
 	    | grep -q 'install ok installed' || echo $$p; done); \
@@ -165,15 +158,16 @@ check: deps
 	@cd $(TOP) && $(LINT) && env -u PYTHONPATH ROS_PACKAGE_PATH=$(TOP) \
 	  $(PY) -m pytest -q -p no:cacheprovider test/unit
 
-# Lint first, then the unit tests, the ROS-side tests that need the build but no master,
-# the testbed tests (root and TUN; reported as skipped elsewhere), the benchmarks' smoke
-# run, the fault tests (a roscore of their own, real signals; they print their counts),
-# then the package in a fresh catkin workspace: `catkin_make run_tests` runs every
-# launch-level rostest once, then the demo and a bag. The slowest tests are listed.
+# Lint first. Then two streams at once (test/alongside.sh): the package in a fresh catkin
+# workspace in the background (`catkin_make run_tests` runs every launch-level rostest
+# once, then the demo and a bag; its output comes last), and in the foreground the unit
+# tests, the ROS-side tests that need the build but no master, the testbed tests (root and
+# TUN; reported as skipped elsewhere), the benchmarks' smoke run, then the fault tests (a
+# roscore of their own, real signals; they print their counts). The slowest are listed.
 test: build
-	@$(ROSENV) cd $(TOP) && $(LINT) \
-	  && $(PY) -m pytest -q -rs --durations=20 test/unit test/ros test/testbed test/bench \
-	  && $(FAULT_TEST) && bash test/catkin_workspace.sh
+	@$(ROSENV) cd $(TOP) && $(LINT) && bash test/alongside.sh test/catkin_workspace.sh \
+	  bash -c '$(PY) -m pytest -q -rs --durations=20 test/unit test/ros test/testbed test/bench \
+	  && $(FAULT_TEST)'
 
 # The package in a fresh catkin workspace with Debian's packages only: catkin_make,
 # catkin_make run_tests, the timed demo.

@@ -11,6 +11,7 @@ set -u
 repo=$(cd "$(dirname "$0")/.." && pwd)
 ws=$(mktemp -d /tmp/server_select_ws.XXXXXX)
 trap '[ -n "${KEEP_WS:-}" ] || rm -rf "$ws"' EXIT
+trap 'exit 130' INT TERM         # stopped: the EXIT trap still removes the workspace
 mkdir -p "$ws/src/server_select"
 tar -C "$repo" --exclude=./build --exclude=./.venv --exclude=./results --exclude=./.git \
   -cf - . | tar -C "$ws/src/server_select" -xf -

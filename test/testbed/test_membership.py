@@ -1,7 +1,7 @@
 """Servers that join and leave a running fleet (fleet profile), on the testbed.
 
-server3 is launched at 12 s on its own host, nearer to the robot than any other; server2
-(selected until then) is stopped cleanly at 30 s. Nothing is restarted: the manager finds
+server3 is launched at 20 s on its own host, nearer to the robot than any other; server2
+(selected until then) is stopped cleanly at 38 s. Nothing is restarted: the manager finds
 server3 in the master, the robot probes it, and the flag follows. Needs root and TUN, as
 the other testbed tests (reported as skipped elsewhere).
 """
@@ -16,7 +16,7 @@ from server_select.testbed.netns import available, leftovers
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENARIO = os.path.join(HERE, 'join_leave.yaml')
-JOIN, LEAVE = 12.0, 30.0
+JOIN, LEAVE = 20.0, 38.0
 
 ok, why = available()
 pytestmark = pytest.mark.skipif(not ok, reason=why)
