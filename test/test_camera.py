@@ -17,7 +17,8 @@ import rospy
 import rostest
 from sensor_msgs.msg import CompressedImage, Image
 
-from server_select.msg import Detections, ImageResult, ImageTask, TaskReport
+from server_select.core.procs import wait_until
+from server_select.msg import Detections, ImageResult, ImageTask, SelectionFlag, TaskReport
 from server_select.vision.detection import iou
 from server_select.vision.image_codec import encode, from_array
 from server_select.vision.search import sample_image
@@ -31,8 +32,9 @@ class CameraTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node('test_camera')
         cls.lock = threading.Lock()
-        cls.got = {'tasks': [], 'results': [], 'detections': [], 'reports': []}
-        for topic, kind, key in (('/task_image', ImageTask, 'tasks'),
+        cls.got = {'tasks': [], 'results': [], 'detections': [], 'reports': [], 'flags': []}
+        for topic, kind, key in (('/server_select_flag', SelectionFlag, 'flags'),
+                                 ('/task_image', ImageTask, 'tasks'),
                                  ('/processed_image', ImageResult, 'results'),
                                  ('/detections', Detections, 'detections'),
                                  ('/task_report', TaskReport, 'reports')):
@@ -58,6 +60,11 @@ class CameraTest(unittest.TestCase):
             return [m for m in self.got[key] if m.robot_id == robot]
 
     def test_frames_from_camera_topics_are_searched_in_either_transport(self):
+        # a frame before the robot's first flag is reported failed (no server selected):
+        # the cameras start once the manager has flagged both robots
+        def flagged():
+            return all(any(f.server_id == 1 for f in self.of('flags', robot)) for robot in (1, 2))
+        self.assertTrue(wait_until(flagged, 30.0), 'no flag selecting server 1 for the robots')
         stop = time.monotonic() + 20.0
         while time.monotonic() < stop and not rospy.is_shutdown():
             for camera, pub, msg in zip((1, 2), self.pubs, (self.raw, self.packed)):
