@@ -14,7 +14,7 @@ DEMO_DURATION ?= 30
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
-  bench-scale bench-routing bench-hedging bench-capacity bench-master \
+  bench-scale bench-routing bench-hedging bench-capacity bench-master bench-seal \
   test check unit-test testbed-test fault-test catkin-test rostest lint docs help clean
 all: build
 
@@ -28,7 +28,8 @@ help:
 	@echo 'make evaluate        the paper experiment on the testbed (SCENARIO=config/...yaml)'
 	@echo 'make evaluate-suite  every scenario, every variant, side by side (about 45 min)'
 	@echo 'make bench           the papers tables and throughput (bench-scale, bench-routing,'
-	@echo '                     bench-hedging, bench-capacity, bench-master, bench-memory, bench-emulator)'
+	@echo '                     bench-hedging, bench-capacity, bench-master, bench-memory, bench-emulator,'
+	@echo '                     bench-seal)'
 	@echo 'make unit-test, testbed-test, fault-test, catkin-test, rostest T=x.test, lint: parts of make test'
 	@echo 'make docs            docs/parameters.md from the parameter table and the launch files'
 	@echo 'make clean           remove build/ and .venv'
@@ -134,6 +135,10 @@ bench-capacity: build
 # (20 robots, 5 servers, the manager on this host; ~4 min).
 bench-master: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.master_calls --out results/bench
+
+# Signed fleet messages: us to seal and check a flag, a batch, a result (no master).
+bench-seal: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.seal_cost --out results/bench
 
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build

@@ -42,13 +42,15 @@ def test_the_scale_benchmark_runs_and_reports(tmp_path):
     """`make bench-scale` in a tiny configuration: flat per robot and grouped."""
     proc = subprocess.run([sys.executable, '-m', 'server_select.bench.scale', '--sizes', '3x4',
                            '--layouts', 'robot,pair', '--grouped-sizes', '4x4:2', '--limit',
-                           '6', '--measure', '2', '--out', str(tmp_path)],
+                           '6', '--measure', '2', '--signed', 'on', '--out', str(tmp_path)],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                           universal_newlines=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:]
     rows = json.loads((tmp_path / 'scale.json').read_text())
     assert [r['layout'] for r in rows] == ['robot', 'pair', 'grouped']
-    for row in rows:        # every robot ranked, flags moved by the slow samples
+    assert all(r['signed'] for r in rows)
+    # signed samples (a fleet key): every robot ranked, flags moved by the slow samples
+    for row in rows:
         assert finite(row['ranked_s']) and row['changes'] > 0, row
         assert finite(row['manager_cpu']) and row['threads'] > 0, row
 
@@ -67,3 +69,16 @@ def test_the_master_call_benchmark_counts_calls(tmp_path):
     assert any(c['method'] == 'getPid' and c['caller'] == '/manager' and c['count'] > 0
                for c in run['calls']), run['calls']
     assert 'per node' in proc.stdout
+
+
+def test_the_seal_benchmark_runs_and_reports(tmp_path):
+    """`make bench-seal` in a tiny configuration: every message sealed and checked."""
+    proc = subprocess.run([sys.executable, '-m', 'server_select.bench.seal_cost', '--count',
+                           '20', '--repeats', '2', '--out', str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:]
+    rows = json.loads((tmp_path / 'seal_cost.json').read_text())
+    assert len(rows) == 8 and all(len(r['seal_us']) == 2 and all(
+        finite(v) and v > 0 for v in r['seal_us'] + r['check_us']) for r in rows), rows
+    assert '(seal + check) / serialize' in proc.stdout

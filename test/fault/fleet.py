@@ -126,7 +126,8 @@ class Fleet(object):
     def restart_manager(self):
         return self.start('rosrun', 'server_select', 'manager', '_robots:=1,2',
                           '_servers:=1,2,3', '__name:=manager',
-                          '_hysteresis:=%s' % self.args.get('hysteresis', 0.0))
+                          '_hysteresis:=%s' % self.args.get('hysteresis', 0.0),
+                          '_fleet_key:=%s' % self.args.get('fleet_key', ''))
 
 
 def kill(fleet, node):

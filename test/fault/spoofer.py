@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """A careless (or hostile) node: fake samples, flags and results for robot 1.
 
-    spoofer.py SERVER SECONDS
+    spoofer.py SERVER SECONDS [NAME]
 
-publishes at 20 Hz a 0.1 us round trip for robot 1 / SERVER on latency_R1S<SERVER>, a flag
+registers as node NAME (default spoofer; ``manager`` takes the manager's name, and the
+master shuts the real one down), publishes at 20 Hz a 0.1 us round trip for robot 1 / SERVER on latency_R1S<SERVER>, a flag
 sending robot 1 to SERVER, and, for every sort task robot 1 sends, a "result" claiming the
 addressed server with wrong data; prints what it sent as one line of JSON.
 """
@@ -22,7 +23,7 @@ from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask
 
 def main():
     server, seconds = int(sys.argv[1]), float(sys.argv[2])
-    rospy.init_node('spoofer', disable_signals=True)
+    rospy.init_node(sys.argv[3] if len(sys.argv) > 3 else 'spoofer', disable_signals=True)
     sent = {'samples': 0, 'flags': 0, 'results': 0}
     samples = rospy.Publisher(names.sample_topic(1, server), LatencySample, queue_size=10)
     flags = rospy.Publisher(names.SELECTION_TOPIC, SelectionFlag, queue_size=10)

@@ -6,15 +6,19 @@ The cases are written as ``rosrun`` arguments and read the way rosrun reads them
 value as YAML), so that a case here is what an operator would type.
 """
 
+import os
+
 import pytest
 import rospy
 import yaml
+from std_msgs.msg import Empty
 
 from server_select.core.params import ParamError
+from server_select.core.seal import make_key
 from server_select.nodes.manager import ManagerNode
 from server_select.nodes.robot import RobotNode
 from server_select.nodes.server import ServerNode
-from server_select.ros import node
+from server_select.ros import node, seal
 
 NODES = {'robot': RobotNode, 'manager': ManagerNode, 'server': ServerNode}
 ROBOT_OK = ['_robot_id:=1', '_servers:=1,2,3']
@@ -75,6 +79,7 @@ def param_server(monkeypatch):
     monkeypatch.setattr(rospy, 'has_param', lambda name: name in table)
     monkeypatch.setattr(node, '_PROFILE', None)
     monkeypatch.setattr(node, '_FLEET_NS', None)
+    monkeypatch.setattr(seal, '_STATE', {})
     return table
 
 
@@ -101,3 +106,38 @@ def test_good_parameters_are_accepted(param_server, kind, args):
     (their wiring to the graph starts only in ``start()``)."""
     param_server.update(private_params(args))
     assert NODES[kind]() is not None
+
+
+def test_a_fleet_key_that_cannot_be_used_ends_the_node_by_name(param_server, tmp_path):
+    """``node.run`` reads the key before it builds the node (seal.enabled())."""
+    path = str(tmp_path / 'fleet.key')
+    make_key(path)
+    os.chmod(path, 0o644)
+    param_server['~fleet_key'] = path
+    with pytest.raises(ParamError, match='~fleet_key: fleet key %s can be read or written by '
+                       'others .*chmod 600' % path):
+        seal.enabled()
+    param_server['~fleet_key'] = str(tmp_path / 'missing.key')
+    with pytest.raises(ParamError, match='~fleet_key: cannot read fleet key'):
+        seal.enabled()
+
+
+def test_a_second_key_without_a_first_is_refused(param_server, tmp_path):
+    path = str(tmp_path / 'next.key')
+    make_key(path)
+    param_server['~fleet_key_next'] = path
+    with pytest.raises(ParamError, match='~fleet_key_next: set ~fleet_key too'):
+        seal.enabled()
+
+
+def test_with_a_key_a_plug_in_whose_result_cannot_carry_a_seal_is_refused(param_server,
+                                                                          tmp_path):
+    path = str(tmp_path / 'fleet.key')
+    make_key(path)
+    param_server.update(private_params(ROBOT_OK))
+    param_server['~fleet_key'] = path
+    assert seal.enabled()
+    assert NODES['robot']() is not None          # the built-in task types carry one
+    with pytest.raises(ParamError, match="~fleet_key: the result of task type 'x' "
+                       r'\(std_msgs/Empty\) has no seal field'):
+        seal.require_sealable(Empty, "the result of task type 'x'")

@@ -16,6 +16,7 @@ simulated probe rounds per robot and second (the fleet probes at 4 Hz). Nothing 
 asserted.
 """
 
+import itertools
 import json
 import os
 import signal
@@ -30,6 +31,7 @@ from server_select.bench import cli
 from server_select.bench.harness import PY, Roscore, node_pid
 from server_select.bench.scale_sim import group_table
 from server_select.core.procs import measure, stop_groups, wait_until
+from server_select.core.seal import make_key
 from server_select.core.stats import summarize
 from server_select.core.tables import fmt as _fmt, markdown_table
 
@@ -44,10 +46,11 @@ def _node(module, args, log):
                                 start_new_session=True)
 
 
-def _managers(layout, robots, servers, groups, log, profile='paper'):
+def _managers(layout, robots, servers, groups, log, profile='paper', key=None):
     """The nodes under test: {node name: process}."""
     ids = ','.join(map(str, range(1, servers + 1)))
-    common = ["_robot_node:='*'", '_discover:=false', '_profile:=%s' % profile]
+    common = ["_robot_node:='*'", '_discover:=false', '_profile:=%s' % profile] + \
+        (['_fleet_key:=%s' % key] if key else [])
     if layout != 'grouped':
         return {'/manager': _node('manager', common + [
             '_robots:=%s' % ','.join(map(str, range(1, robots + 1))), '_servers:=%s' % ids,
@@ -63,7 +66,7 @@ def _managers(layout, robots, servers, groups, log, profile='paper'):
     return nodes
 
 
-def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0):
+def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0, key=None):
     """The simulated robots' processes: {node name: (process, its result file)}."""
     per = -(-robots // sims)
     started = {}
@@ -72,7 +75,8 @@ def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0):
         cmd = PY + ['server_select.bench.scale_sim', '--first', str(first), '--count',
                     str(min(per, robots - first + 1)), '--servers', str(servers),
                     '--layout', layout, '--until', repr(until), '--out', out,
-                    '--groups', str(groups), '--rate', repr(rate)]
+                    '--groups', str(groups), '--rate', repr(rate)] + \
+            (['--fleet-key', key] if key else [])
         with open(log, 'a') as stream:
             started['/scale_sim_%d' % first] = (subprocess.Popen(
                 cmd, stdout=stream, stderr=subprocess.STDOUT, start_new_session=True), out)
@@ -103,22 +107,22 @@ def _progress(outs):
 
 
 def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, profile='paper',
-            rate=1.0):
+            rate=1.0, key=None):
     """One size: the simulated robots registered, the manager(s) started; once every robot
     is ranked (at most ``limit`` s) the managers measured for ``measure_s`` s, then (at most
     ``limit`` s more) until a flag change was timed; the row of figures."""
     log = os.path.join(tmp, 'scale.log')
     # the latest the simulated robots run, should this process die without stopping them
     until = time.time() + 120.0 + 2 * limit + measure_s
-    started_sims = _sims(tmp, robots, servers, sims, layout, until, log, groups, rate)
+    started_sims = _sims(tmp, robots, servers, sims, layout, until, log, groups, rate, key)
     outs = [out for _, out in started_sims.values()]
     row = {'robots': robots, 'servers': servers, 'layout': layout, 'groups': groups,
-           'profile': profile, 'rate': rate}
+           'profile': profile, 'rate': rate, 'signed': bool(key)}
     managers = {}
     try:
         _registered(started_sims, log, 'a simulated robot')
         started = time.time()
-        managers = _managers(layout, robots, servers, groups, log, profile)
+        managers = _managers(layout, robots, servers, groups, log, profile, key)
         _registered(managers, log, 'a manager')
         pids = [_pid(n) for n in managers]
         master = _master_pid()
@@ -180,7 +184,7 @@ def _layout(row):
     profile, rate = row.get('profile', 'paper'), row.get('rate', 1.0)
     if (profile, rate) != ('paper', 1.0):
         text += ' (%s profile, %g Hz)' % (profile, rate)
-    return text
+    return text + (', signed' if row.get('signed') else '')
 
 
 def table(rows):
@@ -213,6 +217,9 @@ def main(argv=None):
                         help="the manager's profile (default %(default)s)")
     parser.add_argument('--rate', type=float, default=1.0,
                         help='probe rounds per simulated robot and second (default 1)')
+    parser.add_argument('--signed', default='off', help='off, on or off,on: the samples and '
+                        "flags unsigned and / or signed with a fleet key (each size both ways "
+                        'with off,on)')
     args = parser.parse_args(argv)
     runs = []
     for size in args.sizes.split(','):
@@ -224,11 +231,16 @@ def main(argv=None):
         robots, servers = map(int, shape.lower().split('x'))
         runs.append((robots, servers, 'grouped', int(groups)))
     rows = []
-    for robots, servers, layout, groups in runs:
+    for (robots, servers, layout, groups), signed in itertools.product(
+            runs, args.signed.split(',')):
         with tempfile.TemporaryDirectory(prefix='bench_scale') as tmp, Roscore(tmp):
-            print('scale: %d x %d %s' % (robots, servers, layout), file=sys.stderr, flush=True)
+            print('scale: %d x %d %s%s' % (robots, servers, layout, ' signed' * (signed == 'on')),
+                  file=sys.stderr, flush=True)
+            key = os.path.join(tmp, 'fleet.key') if signed == 'on' else None
+            if key:
+                make_key(key)
             row = run_one(robots, servers, layout, min(args.sims, robots), args.limit,
-                          args.measure, tmp, groups, args.profile, args.rate)
+                          args.measure, tmp, groups, args.profile, args.rate, key)
             row['limit'] = args.limit
             rows.append(row)
             print(table([row]).splitlines()[-1], file=sys.stderr, flush=True)

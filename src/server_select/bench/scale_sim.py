@@ -28,7 +28,9 @@ import rospy
 
 from server_select.core import names
 from server_select.core.groups import probe_set
+from server_select.core.seal import Sealer, load_key
 from server_select.msg import GroupAssignments, LatencySample, LatencySamples, SelectionFlag
+from server_select.ros.seal import sealed
 
 SLOW = 10.0
 QUIET = 7.0       # s between two triggers of one robot: its slow sample leaves the window
@@ -54,8 +56,9 @@ def group_table(servers, groups):
 
 
 class SimulatedRobots(object):
-    def __init__(self, robots, servers, layout, change_every, groups=1):
+    def __init__(self, robots, servers, layout, change_every, groups=1, sealer=None):
         self.robots, self.servers, self.layout = robots, servers, layout
+        self.sealer = sealer         # a fleet key's Sealer: samples leave signed
         self.change_every, self.groups = change_every, groups
         self.table = group_table(servers, groups)
         self.probed = dict((r, sorted(probe_set(self.table, None))) for r in robots) \
@@ -129,13 +132,13 @@ class SimulatedRobots(object):
                                  rtt=rtts)
             msg.header.stamp = rospy.Time.now()
             sending()
-            self.pub.publish(msg)
+            self.pub.publish(sealed(msg, self.sealer))
             return
         for server, rtt in zip(servers, rtts):
             if server == slow:
                 sending()
-            self.pubs[(robot, server)].publish(LatencySample(robot_id=robot, server_id=server,
-                                                             ok=True, rtt=rtt))
+            self.pubs[(robot, server)].publish(sealed(LatencySample(
+                robot_id=robot, server_id=server, ok=True, rtt=rtt), self.sealer))
 
     def all_ranked(self):
         with self.lock:
@@ -204,13 +207,15 @@ def main(argv=None):
     parser.add_argument('--change-every', type=float, default=0.5)
     parser.add_argument('--rate', type=float, default=1.0, help='probe rounds per robot and s')
     parser.add_argument('--out', required=True)
+    parser.add_argument('--fleet-key', help='sign the samples with this key file')
     args = parser.parse_args(argv)
     rospy.init_node('scale_sim_%d' % args.first, disable_signals=True)
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
+    sealer = Sealer(load_key(args.fleet_key), rospy.get_name()) if args.fleet_key else None
     sim = SimulatedRobots(list(range(args.first, args.first + args.count)), args.servers,
-                          args.layout, args.change_every, args.groups)
+                          args.layout, args.change_every, args.groups, sealer)
     sim.run(args.until, args.rate, stop, args.out)
     rospy.signal_shutdown('done')
 

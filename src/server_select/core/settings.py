@@ -139,6 +139,11 @@ PARAMS = {
                         'this node (*: from any)'),
     'task_plugins': Param('', parse_plugins, 'task types added by plug-in (module:Class ...)'),
     'fleet_ns': Param('/', parse_text, 'namespace of the fleet-level topics and services'),
+    'fleet_key': Param('', parse_text, 'key file (make_key): fleet messages leave signed and '
+                       'only signed ones count (empty: off)'),
+    'fleet_key_next': Param('', parse_text, 'a second key file also accepted (rotation)'),
+    'fleet_key_max_age': Param(30.0, parse_positive, 'a signed message older or newer than '
+                               'this by our clock is refused (s)'),
     'master_check': Param(60.0, parse_positive, 'period of a node\'s own check for a restarted '
                           'roscore (s, +-20 %); it checks at once when the watcher says so'),
     'master_watch': Param(1.0, parse_positive, 'the watcher\'s (the manager\'s) period of the '

@@ -1,6 +1,7 @@
 """Top manager of a grouped deployment: assigns each robot to a group of servers."""
 
 import threading
+import time
 
 import rospy
 
@@ -10,7 +11,11 @@ from server_select.core.window import valid_rtt
 from server_select.msg import GroupAssignments, LatencySamples, ServerGroup
 from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet, param, run
+from server_select.ros import seal
+from server_select.ros.seal import SealedPublisher
 from server_select.ros.senders import SenderGate, node_pattern
+
+RESEAL = 5.0      # s between two copies of the unchanged table, with a fleet key
 
 
 class TopManagerNode(object):
@@ -42,10 +47,11 @@ class TopManagerNode(object):
         self.senders = SenderGate('top manager', 'robot {key}', within=True,
                                   lookup=node_pattern(pattern) if pattern else None)
         self._dirty = threading.Event()
+        self._published = time.monotonic()
         self.pub = self.sub = self.timer = None
 
     def start(self):
-        self.pub = rospy.Publisher(fleet(names.GROUPS_TOPIC), GroupAssignments, queue_size=1,
+        self.pub = SealedPublisher(fleet(names.GROUPS_TOPIC), GroupAssignments, queue_size=1,
                                    latch=True)
         self.sub = rospy.Subscriber(fleet(names.SAMPLES_TOPIC), LatencySamples, self.on_batch,
                                     queue_size=1000, tcp_nodelay=True)
@@ -68,7 +74,10 @@ class TopManagerNode(object):
             self._dirty.set()
 
     def on_timer(self, _event):
-        if self._dirty.is_set():
+        # with a fleet key, the table again every RESEAL s: a latched copy older than
+        # ~fleet_key_max_age would be refused by a robot that connects late
+        if self._dirty.is_set() or (seal.enabled() and
+                                    time.monotonic() - self._published > RESEAL):
             self._dirty.clear()
             self.publish()
 
@@ -79,6 +88,7 @@ class TopManagerNode(object):
             robot_id=[r for r, _ in table], group_id=[g for _, g in table])
         msg.header.stamp = rospy.Time.now()
         self.pub.publish(msg)
+        self._published = time.monotonic()
 
 
 def main():

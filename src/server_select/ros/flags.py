@@ -7,6 +7,7 @@ import rospy
 from server_select.core import names
 from server_select.msg import SelectionFlag
 from server_select.ros.node import fleet
+from server_select.ros.seal import SealedPublisher
 
 
 class FlagPublisher(object):
@@ -20,7 +21,7 @@ class FlagPublisher(object):
         self.source = source     # 'manager', 'oracle': for the log
         self._lock = threading.Lock()
         self._published = {}     # robot -> (selected, frozenset of ranked servers)
-        self.pub = rospy.Publisher(fleet(names.SELECTION_TOPIC), SelectionFlag,
+        self.pub = SealedPublisher(fleet(names.SELECTION_TOPIC), SelectionFlag,
                                    queue_size=queue_size)
 
     def offer(self, robot, ranking, only_on_change, choose=None):

@@ -19,6 +19,8 @@ from server_select.core.groups import probe_set
 from server_select.msg import FleetServers, GroupAssignments
 from server_select.ros.senders import SenderGate
 from server_select.ros.node import fleet
+from server_select.ros import seal
+from server_select.ros.seal import SealedPublisher
 
 
 class ServerDiscovery(object):
@@ -32,7 +34,7 @@ class ServerDiscovery(object):
         self.pub = self.timer = None
 
     def start(self):
-        self.pub = rospy.Publisher(fleet(names.SERVERS_TOPIC), FleetServers, queue_size=1,
+        self.pub = SealedPublisher(fleet(names.SERVERS_TOPIC), FleetServers, queue_size=1,
                                    latch=True)
         self.look()
         self.timer = rospy.Timer(rospy.Duration(self.period), self.look)
@@ -53,9 +55,13 @@ class ServerDiscovery(object):
                               found, sorted(set(found) - set(self.servers)),
                               sorted(set(self.servers) - set(found)))
             self.servers = found
-            msg = FleetServers(servers=found)
-            msg.header.stamp = rospy.Time.now()
-            self.pub.publish(msg)
+        elif not seal.enabled():
+            return
+        # with a fleet key, the list again at every look: a latched copy older than
+        # ~fleet_key_max_age would be refused by a robot that connects late
+        msg = FleetServers(servers=found)
+        msg.header.stamp = rospy.Time.now()
+        self.pub.publish(msg)
 
     def shutdown(self):
         if self.timer is not None:

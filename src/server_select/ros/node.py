@@ -120,9 +120,11 @@ def run(node_name, node_class, argv=None):
     says ``MASTER_WATCHER`` (the manager) checks every ``~master_watch`` s and tells the
     others on ``master_pid``, which check every ``~master_check`` s by themselves.
     """
+    from server_select.ros import seal     # (it reads parameters through this module)
     rospy.init_node(node_name, argv=argv)
     quiet_logging()
     try:
+        seal.enabled()          # a fleet key file that cannot be used ends the node here
         node = node_class()
         watcher = getattr(node_class, 'MASTER_WATCHER', False)
         watch = MasterWatch(param('master_watch' if watcher else 'master_check'),

@@ -9,6 +9,7 @@ from server_select.core import names
 from server_select.core.passive import TaskBaseline
 from server_select.msg import LatencySamples
 from server_select.ros.node import fleet
+from server_select.ros.seal import SealedPublisher
 
 
 class TaskSamples(object):
@@ -23,7 +24,7 @@ class TaskSamples(object):
     def __init__(self, robot_id, selection, baseline=True):
         self.robot_id, self.selection = robot_id, selection
         self.baseline, self._lock = TaskBaseline() if baseline else None, threading.Lock()
-        self.pub = rospy.Publisher(fleet(names.TASK_SAMPLES_TOPIC), LatencySamples,
+        self.pub = SealedPublisher(fleet(names.TASK_SAMPLES_TOPIC), LatencySamples,
                                    queue_size=100, tcp_nodelay=True)
         self.count = 0
 

@@ -17,6 +17,7 @@ import rospy
 
 from server_select.core.params import ParamError
 from server_select.ros.graph import publisher_of
+from server_select.ros import seal
 from server_select.ros.routing import ServerEndpoint
 
 
@@ -79,6 +80,7 @@ def load(spec, robot_id, name='~task_plugins'):
         raise ParamError('%s: cannot load %r (module:Class): %s' % (name, spec, error))
     if not (isinstance(cls, type) and issubclass(cls, TaskPlugin)):
         raise ParamError('%s: %r is not a TaskPlugin' % (name, spec))
+    seal.require_sealable(cls.result_type, "the result of task type '%s'" % cls.kind)
     settings = rospy.get_param('~' + cls.kind, {})
     if not isinstance(settings, dict):
         raise ParamError('~%s: expected a mapping of settings, got %r' % (cls.kind, settings))

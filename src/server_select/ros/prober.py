@@ -10,6 +10,7 @@ from server_select.core import names
 from server_select.msg import LatencySample, LatencySamples
 from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
+from server_select.ros.seal import SealedPublisher
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
 
@@ -59,7 +60,7 @@ class Prober(object):
         self._lock = threading.Lock()
         self._inflight = {}
         self._pubs, self._proxies = {}, {}
-        self._batch_pub = rospy.Publisher(fleet(names.SAMPLES_TOPIC), LatencySamples,
+        self._batch_pub = SealedPublisher(fleet(names.SAMPLES_TOPIC), LatencySamples,
                                           queue_size=10) if stream == 'robot' else None
         self._pool = concurrent.futures.ThreadPoolExecutor(
             max_workers=max(16, len(servers)), thread_name_prefix='probe')
@@ -77,7 +78,7 @@ class Prober(object):
             if server in self._proxies:
                 return
             if self.stream == 'pair':
-                self._pubs[server] = rospy.Publisher(
+                self._pubs[server] = SealedPublisher(
                     fleet(names.sample_topic(self.robot_id, server)), LatencySample,
                     queue_size=10)
             self._proxies[server] = TimedServiceProxy(fleet(names.probe_service(server)),

@@ -16,6 +16,7 @@ import rospy
 from server_select.core import names
 from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet
+from server_select.ros.seal import SealedPublisher
 
 
 class BroadcastRoute(object):
@@ -132,7 +133,7 @@ class ResultRoutes(object):
             if pub is None and len(self.pubs) >= self.most:
                 return None
             if pub is None:
-                pub = self.pubs[robot] = rospy.Publisher(
+                pub = self.pubs[robot] = SealedPublisher(
                     fleet(names.robot_topic(robot, self.topic)), self.msg_type, queue_size=100)
             return pub
 
@@ -173,7 +174,7 @@ class ServerEndpoint(object):
 
     def start(self):
         kind, queue = self.kind, self.queue_size
-        self.pub = rospy.Publisher(fleet(kind.result_topic), kind.result_type, queue_size=queue)
+        self.pub = SealedPublisher(fleet(kind.result_topic), kind.result_type, queue_size=queue)
         topics = [(fleet(kind.task_topic), False)]
         if self.direct is not None:
             topics.append((fleet(names.server_topic(self.server_id, kind.task_topic)), True))

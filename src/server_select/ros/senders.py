@@ -3,6 +3,7 @@
 import rospy
 
 from server_select.core.senders import ExpectedSender, Throttle
+from server_select.ros import seal
 from server_select.ros.graph import publisher_of
 
 
@@ -25,21 +26,29 @@ class SenderGate(object):
         self.rule.expected = expected
 
     def admits(self, msg, what, key=None):
-        """Whether ``msg`` counts. ``what`` it is, for the warning: a string, or a function
-        making it (then only made for a refused message: results and samples are a hot
-        path)."""
+        """Whether ``msg`` counts: from the expected node and, with a fleet key, sealed
+        with it (:func:`server_select.ros.seal.refusal`). ``what`` it is, for the warning:
+        a string, or a function making it (then only made for a refused message: results
+        and samples are a hot path)."""
         sender = publisher_of(msg)
         expected = self.rule.refusal(sender, key)
-        if expected is None:
-            return True
+        if expected is not None:
+            self._warn(what, sender, '%s is %s%s' % (
+                self.role.format(key=key), expected,
+                ' or a node in its namespace' if self.rule.within else ''))
+            return False
+        unsealed = seal.refusal(msg, sender)
+        if unsealed is not None:
+            self._warn(what, sender, '%s, by the fleet key' % unsealed)
+            return False
+        return True
+
+    def _warn(self, what, sender, why):
         due, held = self.throttle.due()
         if due:
             what = what() if callable(what) else what
-            rospy.logwarn('%s: ignored %s published by %s (%s is %s%s)%s' % (
-                self.who, what, sender, self.role.format(key=key), expected,
-                ' or a node in its namespace' if self.rule.within else '',
-                '; %d more ignored before' % held if held else ''))
-        return False
+            rospy.logwarn('%s: ignored %s published by %s (%s)%s' % (
+                self.who, what, sender, why, '; %d more ignored before' % held if held else ''))
 
 
 def node_pattern(pattern):

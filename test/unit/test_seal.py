@@ -1,0 +1,133 @@
+"""Signed fleet messages: key files, seals, replay and rotation (server_select.core.seal)."""
+
+import os
+import stat
+
+import pytest
+from hypothesis import given, strategies as st
+
+from server_select.core import seal
+
+KEY, NEXT, OTHER = b'k' * 32, b'n' * 32, b'o' * 32
+
+
+class Clock(object):
+    def __init__(self, now=10 ** 18):
+        self.now = now
+
+    def __call__(self):
+        return self.now
+
+
+def signed(key, sender, payload, clock):
+    sealer = seal.Sealer(key, sender, clock)
+    seq = sealer.next_seq()
+    return seq, sealer.mac(seq, payload)
+
+
+def test_a_message_sealed_with_the_key_counts_once():
+    clock = Clock()
+    verifier = seal.Verifier([KEY], max_age=30.0, clock=clock)
+    seq, mac = signed(KEY, '/manager', b'flag', clock)
+    assert verifier.refusal('/manager', seq, mac, b'flag') is None
+    assert 'replayed' in verifier.refusal('/manager', seq, mac, b'flag')
+
+
+def test_unsigned_wrong_key_other_content_or_other_name_are_refused():
+    clock = Clock()
+    verifier = seal.Verifier([KEY], clock=clock)
+    seq, mac = signed(KEY, '/manager', b'flag', clock)
+    assert verifier.refusal('/manager', seq, b'', b'flag') == 'not signed'
+    assert verifier.refusal('/manager', seq, mac, b'flag!') == 'wrong signature'
+    assert verifier.refusal('/impostor', seq, mac, b'flag') == 'wrong signature'
+    assert verifier.refusal('/manager', seq + 1, mac, b'flag') == 'wrong signature'
+    seq, mac = signed(OTHER, '/manager', b'flag', clock)
+    assert verifier.refusal('/manager', seq, mac, b'flag') == 'wrong signature'
+
+
+def test_a_recording_replayed_later_is_refused_even_by_a_receiver_that_never_saw_it():
+    clock = Clock()
+    seq, mac = signed(KEY, '/manager', b'flag', clock)
+    clock.now += int(31e9)
+    fresh = seal.Verifier([KEY], max_age=30.0, clock=clock)
+    why = fresh.refusal('/manager', seq, mac, b'flag')
+    assert why.startswith('signed 31.0 s before')
+    clock.now -= int(62e9)                        # a sender whose clock runs ahead
+    assert 'after' in fresh.refusal('/manager', seq, mac, b'flag')
+
+
+def test_messages_that_arrive_out_of_order_count_each_once():
+    clock = Clock()
+    sealer = seal.Sealer(KEY, '/robot1', clock)
+    sealed = [(s, sealer.mac(s, b'x')) for s in (sealer.next_seq() for _ in range(5))]
+    verifier = seal.Verifier([KEY], clock=clock)
+    for seq, mac in reversed(sealed):             # two threads may publish in either order
+        assert verifier.refusal('/robot1', seq, mac, b'x') is None
+    assert all(verifier.refusal('/robot1', s, m, b'x') for s, m in sealed)
+
+
+@given(st.lists(st.integers(min_value=-5, max_value=5), min_size=1, max_size=50))
+def test_sequence_numbers_strictly_increase_whatever_the_clock_does(steps):
+    clock = Clock()
+    sealer = seal.Sealer(KEY, '/n', clock)
+    seqs = []
+    for step in steps:
+        clock.now += step
+        seqs.append(sealer.next_seq())
+    assert all(a < b for a, b in zip(seqs, seqs[1:]))
+
+
+def test_what_is_remembered_is_bounded_by_the_age_limit():
+    clock = Clock()
+    sealer = seal.Sealer(KEY, '/robot1', clock)
+    verifier = seal.Verifier([KEY], max_age=1.0, clock=clock)
+    for _ in range(100):
+        clock.now += int(0.1e9)
+        seq = sealer.next_seq()
+        assert verifier.refusal('/robot1', seq, sealer.mac(seq, b''), b'') is None
+    assert len(verifier._seen['/robot1']) <= 11
+
+
+def test_rotation_accepts_the_next_key_and_the_current_one():
+    clock = Clock()
+    verifier = seal.Verifier([KEY, NEXT], clock=clock)
+    for key in (KEY, NEXT):
+        seq, mac = signed(key, '/manager', b'flag', clock)
+        assert verifier.refusal('/manager', seq, mac, b'flag') is None
+        clock.now += 1
+    seq, mac = signed(OTHER, '/manager', b'flag', clock)
+    assert verifier.refusal('/manager', seq, mac, b'flag') == 'wrong signature'
+
+
+def test_make_key_writes_a_private_key_that_loads_and_keeps_an_existing_file(tmp_path):
+    path = str(tmp_path / 'fleet.key')
+    seal.make_key(path)
+    assert stat.S_IMODE(os.stat(path).st_mode) == 0o600
+    key = seal.load_key(path)
+    assert len(key) == seal.KEY_BYTES
+    with pytest.raises(FileExistsError):
+        seal.make_key(path)
+    assert seal.load_key(path) == key
+    assert seal.make_key_cli([str(tmp_path / 'second.key')]) == 0
+    assert seal.load_key(str(tmp_path / 'second.key')) != key
+
+
+@pytest.mark.parametrize('mode', [0o640, 0o604, 0o620, 0o666])
+def test_a_key_others_can_read_or_write_is_refused_with_what_to_do(tmp_path, mode):
+    path = str(tmp_path / 'fleet.key')
+    seal.make_key(path)
+    os.chmod(path, mode)
+    with pytest.raises(seal.KeyFileError, match='chmod 600 %s' % path):
+        seal.load_key(path)
+
+
+@pytest.mark.parametrize('text, message', [('zz' * 32, 'not hex'), ('ab' * 8 + 'a', 'not hex'),
+                                           ('ab' * 15, 'fewer than 16')])
+def test_a_key_that_is_not_one_is_refused(tmp_path, text, message):
+    path = tmp_path / 'fleet.key'
+    path.write_text(text)
+    os.chmod(str(path), 0o600)
+    with pytest.raises(seal.KeyFileError, match=message):
+        seal.load_key(str(path))
+    with pytest.raises(seal.KeyFileError, match='cannot read'):
+        seal.load_key(str(tmp_path / 'missing.key'))
