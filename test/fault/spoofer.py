@@ -4,9 +4,10 @@
     spoofer.py SERVER SECONDS [NAME]
 
 registers as node NAME (default spoofer; ``manager`` takes the manager's name, and the
-master shuts the real one down), publishes at 20 Hz a 0.1 us round trip for robot 1 / SERVER on latency_R1S<SERVER>, a flag
-sending robot 1 to SERVER, and, for every sort task robot 1 sends, a "result" claiming the
-addressed server with wrong data; prints what it sent as one line of JSON.
+master shuts the real one down), publishes at 20 Hz a 0.1 us round trip for robot 1 /
+SERVER on latency_R1S<SERVER>, a flag sending robot 1 to SERVER, and, for every sort task
+robot 1 sends, a "result" claiming the addressed server with wrong data (all unsigned);
+prints what it sent as one line of JSON.
 """
 
 import json

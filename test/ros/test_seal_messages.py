@@ -41,6 +41,8 @@ def test_a_message_sealed_by_one_node_is_admitted_by_another_after_the_wire(msg)
     verifier = Verifier([KEY])
     sent = sealed(msg, Sealer(KEY, '/manager'))
     assert len(sent.seal.mac) == 32
+    if getattr(msg.__class__, '_has_header', False):
+        sent.header.seq = 41            # as rospy's publisher numbers it, after the seal
     plain = getattr(server_select.msg, msg._type.split('/')[1])   # not the numpy view
     received = wire(sent, plain)
     assert check(received, '/manager', verifier) is None

@@ -63,6 +63,22 @@ def test_own_ranking_uses_the_managers_policy_with_hysteresis():
     assert s.candidates() == [1, 2]
 
 
+def test_deciding_alone_starts_from_the_server_the_manager_selected():
+    """The manager's server is kept while the robot's own margin allows (no switch on the
+    manager's loss alone); a clearly better server still wins."""
+    s, clock = select(policy=Policy('mean', margin=0.002))
+    for server, rtt in ((1, 0.0050), (2, 0.0049), (3, 0.0051)):
+        s.on_sample(server, True, rtt)
+    s.on_flag(1, 3, [3, 1, 2])
+    clock.now += 3.01
+    assert s.deciding_locally() and s.target() == 3       # within 2 ms of the best
+    s.on_sample(1, True, 0.0001)                         # 1 now clearly nearest
+    s.on_sample(1, True, 0.0001)
+    assert s.target() == 1
+    s.on_sample(3, True, 0.0001)
+    assert s.target() == 1            # its own decision stands: the stale flag is not taken again
+
+
 @pytest.mark.parametrize('rtt', [math.nan, -0.001, math.inf, -math.inf])
 def test_impossible_round_trips_are_refused(rtt):
     s, clock = select()

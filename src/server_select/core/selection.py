@@ -43,6 +43,7 @@ class Selection(object):
         self._clock = clock
         self._lock = threading.Lock()
         self._flag = None          # (receive time, selected, ranking) of the last good flag
+        self._handed_over = None   # the flag whose selection the own decisions started from
 
     def on_flag(self, robot_id, server_id, ranking):
         """A flag arrived: None if it is for another robot or taken, else why it is refused."""
@@ -113,7 +114,13 @@ class Selection(object):
             servers = list(self.servers)
         ranking = rank_servers(self.window.robot_stats(self.robot_id, servers, now))
         with self._lock:
-            selected = self._chooser.choose(ranking, now)
+            # the first own decision after a flag starts from the server the manager
+            # selected, which the robot was using: the policy keeps it within its margin
+            flag, current = self._flag, None
+            if flag is not None and flag is not self._handed_over and flag[1] != NO_SERVER:
+                current = flag[1]
+            self._handed_over = flag
+            selected = self._chooser.choose(ranking, now, current)
         return [s for s in [selected] if s != NO_SERVER] + \
             [s for s in ranking.ranking if s != selected]
 

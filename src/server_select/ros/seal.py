@@ -49,8 +49,18 @@ def enabled():
 
 
 def _payload(msg):
+    """What the MAC covers: ``msg`` serialized, but for ``header.seq``, which rospy's
+    publisher numbers after the seal is made (the seal's own seq does its job)."""
+    header = msg.header if getattr(msg.__class__, '_has_header', False) else None
+    numbered = header.seq if header is not None else None
+    if header is not None:
+        header.seq = 0
     buf = io.BytesIO()
-    msg.serialize(buf)
+    try:
+        msg.serialize(buf)
+    finally:
+        if header is not None:
+            header.seq = numbered
     return buf.getvalue()
 
 
