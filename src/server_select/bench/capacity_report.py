@@ -8,7 +8,7 @@ import statistics
 
 import numpy as np
 
-from server_select.core.tables import markdown_table, median_range
+from server_select.core.tables import fmt, markdown_table, median_range
 
 COLUMNS = (('offered', 'offered /s', '%.2f', 1.0), ('sent', 'sent /s', '%.2f', 1.0),
            ('goodput', 'goodput /s', '%.2f', 1.0),
@@ -117,8 +117,8 @@ def figures(run, done, offered, start, end, timeout, capacities=None):
 def line(row):
     """One run as a line of text (printed while the benchmark runs)."""
     return '%s x%g: ' % (row['variant'], row['load']) + ', '.join(
-        '%s %s' % (title, spec % (scale * row[key])) for key, title, spec, scale in COLUMNS
-        if key in row)
+        '%s %s' % (title, fmt(None if row[key] is None else scale * row[key], spec))
+        for key, title, spec, scale in COLUMNS if key in row)
 
 
 def measured(runs):
