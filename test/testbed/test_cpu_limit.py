@@ -44,7 +44,9 @@ def test_a_host_with_a_cpu_share_gets_that_share_of_a_core(tmp_path):
           '%d of %d periods' % (shares['slow'], shares['free'], stats.get('nr_throttled', -1),
                                 stats.get('nr_periods', -1)))
     assert shares['slow'] == pytest.approx(0.2, abs=0.04)
-    assert shares['free'] > 0.5                       # the other core is not limited
+    # the other host is not limited: no group of its own, and it gets clearly more (most of
+    # a core at rest; less while make test's background stream builds the catkin workspace)
+    assert 'free' not in tb.limits and shares['free'] > 1.5 * shares['slow']
     assert stats.get('nr_throttled', 0) > 0
     assert netns.leftovers("sscpu") == [] and not os.path.exists(limit.path)
 
