@@ -4,12 +4,15 @@
 # Exit status non-zero if either failed. `make test` runs the catkin workspace stage and
 # the benchmarks' smoke runs so: they mostly wait (for nodes, for messages, for windows to
 # pass), as pytest's testbed runs and the fault tests do, and the two streams overlap on
-# 2 cores. Ctrl-C (or any exit) stops BACKGROUND with its whole process group.
+# 2 cores. BACKGROUND runs at nice 19. Ctrl-C (or any exit) stops it with its whole
+# process group.
 set -u
 background_cmd=$1
 shift
 held=$(mktemp /tmp/server_select_alongside.XXXXXX)
-setsid bash -c "$background_cmd" > "$held" 2>&1 &
+# at the lowest CPU priority: what waits in the foreground (testbed scenarios, fault
+# tests, deadlines) gets the CPU first; the background takes what is left
+setsid nice -n 19 bash -c "$background_cmd" > "$held" 2>&1 &
 background=$!
 trap 'kill -INT -- -$background 2>/dev/null; wait $background 2>/dev/null; rm -f "$held"' EXIT
 trap 'exit 130' INT TERM
