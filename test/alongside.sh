@@ -11,8 +11,11 @@ background_cmd=$1
 shift
 held=$(mktemp /tmp/server_select_alongside.XXXXXX)
 # at the lowest CPU priority: what waits in the foreground (testbed scenarios, fault
-# tests, deadlines) gets the CPU first; the background takes what is left
-setsid nice -n 19 bash -c "$background_cmd" > "$held" 2>&1 &
+# tests, deadlines) gets the CPU first; the background takes what is left. A new session
+# is a scheduling group of its own where the kernel groups by session (autogroup): there
+# nice counts only inside the group, so the group's own nice is set too.
+setsid bash -c 'if [ -w /proc/self/autogroup ]; then echo 19 > /proc/self/autogroup; fi;
+  exec nice -n 19 bash -c "$1"' alongside "$background_cmd" > "$held" 2>&1 &
 background=$!
 trap 'kill -INT -- -$background 2>/dev/null; wait $background 2>/dev/null; rm -f "$held"' EXIT
 trap 'exit 130' INT TERM
