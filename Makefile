@@ -152,8 +152,8 @@ rostest: build
 	@$(ROSENV) cd $(TOP) && bash test/run_rostests.sh $(T)
 
 # catkin_lint for the package, flake8 (Debian's, settings in setup.cfg) for the Python.
-LINT := catkin_lint -W2 --strict --ignore package_path_name $(TOP) && \
-  /usr/bin/python3 -m flake8 src test $(filter-out %.sh,$(wildcard scripts/*))
+LINT := catkin_lint -W2 --strict --ignore package_path_name $(TOP) $(TOP)/examples/wordcount_task && \
+  /usr/bin/python3 -m flake8 src test examples $(filter-out %.sh,$(wildcard scripts/*))
 lint: deps
 	@cd $(TOP) && $(LINT)
 

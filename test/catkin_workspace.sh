@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The ROS way, tested: this package copied into the src/ of a fresh catkin workspace and
+# The ROS way, tested: this package and the example task type of examples/ (a package of
+# its own, with its own messages) copied into the src/ of a fresh catkin workspace and
 # built there with Debian's packages only (no venv, no pip: PATH is the system's), then
 #   catkin_make run_tests as the first command (it must build what the tests need): every
 #   launch-level rostest, once, and catkin_test_results;
@@ -15,6 +16,7 @@ trap 'exit 130' INT TERM         # stopped: the EXIT trap still removes the work
 mkdir -p "$ws/src/server_select"
 tar -C "$repo" --exclude=./build --exclude=./.venv --exclude=./results --exclude=./.git \
   -cf - . | tar -C "$ws/src/server_select" -xf -
+cp -r "$repo/examples/wordcount_task" "$ws/src/"   # a task type from outside, as a user's
 # within SECONDS COMMAND: until COMMAND succeeds (checked every 0.2 s), at most SECONDS
 within() { timeout "$1" bash -c "until $2 > /dev/null 2>&1; do sleep 0.2; done"; }
 run() {  # a clean environment: Debian's python3 and ROS, nothing of the caller's
@@ -28,6 +30,7 @@ step() {
   echo "=== catkin workspace: $name"
   if run "$*" > "$ws/$name.log" 2>&1; then
     passed=$((passed + 1)); echo "=== $name: ok"
+    grep -a '^Summary:' "$ws/$name.log" || true      # catkin_test_results: every test counted
   else
     failed=$((failed + 1)); echo "=== $name: FAILED; last lines:"; tail -150 "$ws/$name.log"
   fi

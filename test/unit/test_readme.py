@@ -53,3 +53,12 @@ def test_every_rosrun_executable_and_linked_document_exists():
     assert 'docs/parameters.md' in links
     for link in links:
         assert os.path.exists(os.path.join(TOP, link)), link
+
+
+def test_the_example_it_points_at_is_there_with_what_it_says():
+    assert 'examples/wordcount_task' in README
+    launch = re.search(r'roslaunch wordcount_task (\S+\.launch)', README).group(1)
+    example = os.path.join(TOP, 'examples', 'wordcount_task')
+    for part in (os.path.join('launch', launch), 'package.xml', 'msg', 'config',
+                 os.path.join('test', 'wordcount.test')):
+        assert os.path.exists(os.path.join(example, part)), part
