@@ -8,7 +8,9 @@ import rospy
 from std_msgs.msg import String
 
 from server_select.msg import SelectionFlag, TaskReport
+from server_select.testbed import bag_analysis
 from server_select.testbed.analyze import main
+from server_select.testbed.plots import plot_latency, plot_task_rtt
 
 
 def write_bag(path, tasks=10, prefix=''):
@@ -17,7 +19,9 @@ def write_bag(path, tasks=10, prefix=''):
         for i in range(tasks):
             t = rospy.Time.from_sec(t0 + 0.5 * i)
             flag = SelectionFlag(robot_id=1, server_id=2, ranking=[2, 1],
-                                 mean_latency=[0.001, 0.002])
+                                 mean_latency=[0.001, 0.002]) if i < 6 else \
+                SelectionFlag(robot_id=1, server_id=1, ranking=[1, 2],
+                              mean_latency=[0.001, 0.003])
             bag.write(prefix + '/server_select_flag', flag, t)
             ok = i != 3
             bag.write(prefix + '/task_report', TaskReport(
@@ -52,3 +56,17 @@ def test_unreadable_bags_are_refused_with_one_line(tmp_path, capsys, bad):
     (tmp_path / 'not_a_bag.bag').write_text('hello')
     assert main([str(tmp_path / bad)]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_the_plots_say_what_they_show(tmp_path):
+    write_bag(tmp_path / 'plain.bag')
+    run = bag_analysis.load(str(tmp_path / 'plain.bag'))
+    (panel,) = plot_task_rtt({'plain': run}, str(tmp_path / 'task_rtt.png'))
+    assert panel['xlabel'] == 'time since the bag started (s)'
+    assert panel['ylabel'] == 'task round trip (ms, log)'
+    assert panel['legend'] == ['answered task', 'failed task', 'flag selects another server']
+    (panel,) = plot_latency(run, str(tmp_path / 'latency.png'), 'plain')
+    assert panel['xlabel'] == 'time since the bag started (s)'
+    assert panel['legend'] == ['ranked by (flags) S1', 'ranked by (flags) S2',
+                               'selection changed',
+                               'shaded: the server the flag selects (its colour)']

@@ -92,4 +92,16 @@ def test_the_legend_says_each_column_once_and_why_a_column_is_empty():
     assert '(+: faster)' in text and '(+: slower)' in text
     assert '"-"' not in text
     plain = legend({'select': {'vs_fixed_pct': None, 'gap_to_oracle_pct': None}})
-    assert 'no fixed run' in plain and 'no oracle run' in plain and 'without a scenario' in plain
+    assert '(left out: vs fixed, no fixed run to compare with; gap to oracle, no oracle run ' \
+        'to compare with; reaction, no scenario, which says when the nearest server ' \
+        'changes)' in plain
+    assert not any(plain.startswith(c + ':') or '\n%s:' % c in plain
+                   for c in ('vs fixed', 'gap to oracle', 'reaction'))
+
+
+def test_columns_that_apply_to_no_row_are_left_out_of_the_table():
+    plain = {'run': mode_summary([report(1, True, 0.010), report(2, False, float('nan'))], [])}
+    header = table(plain).splitlines()[0]
+    assert header == ('| mode | tasks | failed | mean ms | median ms | p95 ms | p99 ms | '
+                      'max ms | switches |')
+    assert table(plain).splitlines()[2].startswith('| run | 2 | 1 |')

@@ -147,8 +147,19 @@ def compare(summaries):
     return summaries
 
 
+def _applies(summaries):
+    """Which optional columns have a figure in some row: vs fixed (a fixed run), gap to
+    oracle (an oracle run), reaction (a scenario)."""
+    rows = summaries.values()
+    return {'vs fixed': any(s.get('vs_fixed_pct') is not None for s in rows),
+            'gap to oracle': any(s.get('gap_to_oracle_pct') is not None for s in rows),
+            'reaction': any(s.get('reactions') for s in rows)}
+
+
 def table(summaries):
-    """Markdown table of :func:`mode_summary` results, one row per mode."""
+    """Markdown table of :func:`mode_summary` results, one row per mode; the columns that
+    apply to no row are left out (:func:`legend` says which and why)."""
+    applies = _applies(summaries)
     rows = []
     for mode, s in summaries.items():
         r = s['rtt_ms']
@@ -158,11 +169,13 @@ def table(summaries):
                                          s['reaction_missed'])
         rows.append([mode, s['tasks'], s['failed']]
                     + [fmt(r.get(k)) for k in ('mean', 'median', 'p95', 'p99', 'max')]
-                    + [fmt(s.get('vs_fixed_pct'), '%+.1f %%'),
-                       fmt(s.get('gap_to_oracle_pct'), '%+.1f %%'), s['switches'], reaction])
-    return markdown_table(
-        ('mode', 'tasks', 'failed', 'mean ms', 'median ms', 'p95 ms', 'p99 ms', 'max ms',
-         'vs fixed', 'gap to oracle', 'switches', 'reaction mean / max s (missed)'), rows)
+                    + [fmt(s.get('vs_fixed_pct'), '%+.1f %%')] * applies['vs fixed']
+                    + [fmt(s.get('gap_to_oracle_pct'), '%+.1f %%')] * applies['gap to oracle']
+                    + [s['switches']] + [reaction] * applies['reaction'])
+    header = ['mode', 'tasks', 'failed', 'mean ms', 'median ms', 'p95 ms', 'p99 ms', 'max ms'] \
+        + ['vs fixed'] * applies['vs fixed'] + ['gap to oracle'] * applies['gap to oracle'] \
+        + ['switches'] + ['reaction mean / max s (missed)'] * applies['reaction']
+    return markdown_table(header, rows)
 
 
 LEGEND = (
@@ -175,19 +188,20 @@ LEGEND = (
     ('reaction', 'seconds from a change of the truly nearest server to the flag selecting it, '
      'mean / max (changes never followed)'),
 )
+WHY_LEFT_OUT = {'vs fixed': 'no fixed run to compare with',
+                'gap to oracle': 'no oracle run to compare with',
+                'reaction': 'no scenario, which says when the nearest server changes'}
 
 
 def legend(summaries):
-    """What the columns of :func:`table` mean, one line each; columns that are "-" in
-    every row are said to be so, and why."""
-    lines = ['%s: %s' % pair for pair in LEGEND]
-    if all(s.get('vs_fixed_pct') is None for s in summaries.values()):
-        lines.append('(vs fixed is "-": no fixed run to compare with)')
-    if all(s.get('gap_to_oracle_pct') is None for s in summaries.values()):
-        lines.append('(gap to oracle is "-": no oracle run to compare with)')
-    if not any(s.get('reactions') for s in summaries.values()):
-        lines.append('(reaction: "-" without a scenario, which says when the nearest server '
-                     'changes)')
+    """What the columns of :func:`table` mean, one line each, and which columns were left
+    out, and why."""
+    applies = _applies(summaries)
+    lines = ['%s: %s' % (name, text) for name, text in LEGEND if applies.get(name, True)]
+    left_out = [name for name in WHY_LEFT_OUT if not applies[name]]
+    if left_out:
+        lines.append('(left out: %s)' % '; '.join(
+            '%s, %s' % (name, WHY_LEFT_OUT[name]) for name in left_out))
     return '\n'.join(lines)
 
 

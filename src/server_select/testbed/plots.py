@@ -15,53 +15,111 @@ def pyplot():
     return plt
 
 
+def time_label(run):
+    """What a run's times count from: a testbed scenario's start, or the bag's."""
+    return 'scenario time (s)' if run.meta.get('scenario') else 'time since the bag started (s)'
+
+
+def _labels(axes):
+    """What each panel says (its title, axis labels and legend entries), for tests."""
+    return [{'title': ax.get_title(), 'xlabel': ax.get_xlabel(), 'ylabel': ax.get_ylabel(),
+             'legend': [t.get_text() for t in ax.get_legend().get_texts()]
+             if ax.get_legend() else []} for ax in axes]
+
+
+def _changes(flags):
+    """The flags (sorted by time) that select another server than the one before."""
+    return [f for f, before in zip(flags[1:], flags) if f.server != before.server]
+
+
+def _plain_log_ticks(ax):
+    from matplotlib.ticker import FuncFormatter
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: '%g' % v))
+    ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: ''))
+
+
 def plot_task_rtt(runs, path):
-    """Task round trip vs task index, one panel per robot, one line per mode (Fig. 8)."""
+    """Task round trip over time, one panel per robot, one line per mode (Fig. 8); failed
+    tasks marked at the top; with one run, the flag changes as vertical lines. Returns what
+    each panel says (:func:`_labels`)."""
     plt = pyplot()
     robots = sorted(set(r.robot for run in runs.values() for r in run.reports))
     fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
     for ax, robot in zip(axes[:, 0], robots):
         for mode, run in runs.items():
-            reports = sorted((r for r in run.reports if r.robot == robot), key=lambda r: r.task)
-            ax.plot([r.task for r in reports],
-                    [r.rtt * 1e3 if r.ok else float('nan') for r in reports],
-                    label=mode, linewidth=1)
+            reports = sorted((r for r in run.reports if r.robot == robot), key=lambda r: r.t)
+            line, = ax.plot([r.t for r in reports],
+                            [r.rtt * 1e3 if r.ok else float('nan') for r in reports],
+                            label=mode if len(runs) > 1 else 'answered task', linewidth=1)
+            failed = [r.t for r in reports if not r.ok]
+            if failed:
+                ax.plot(failed, [1.0] * len(failed), 'x', color=line.get_color(),
+                        transform=ax.get_xaxis_transform(), clip_on=False,
+                        label='failed task (%s)' % mode if len(runs) > 1 else 'failed task')
+        if len(runs) == 1:
+            run = next(iter(runs.values()))
+            flags = sorted((f for f in run.flags if f.robot == robot), key=lambda f: f.t)
+            for i, f in enumerate(_changes(flags)):
+                ax.axvline(f.t, color='grey', linestyle=':', linewidth=1,
+                           label='flag selects another server' if i == 0 else None)
         ax.set_title('robot %d' % robot)
-        ax.set_xlabel('task index')
-        ax.set_ylabel('round trip (ms, log)')
+        ax.set_xlabel(time_label(next(iter(runs.values()))))
+        ax.set_ylabel('task round trip (ms, log)')
         ax.set_yscale('log')
+        _plain_log_ticks(ax)
         ax.grid(True, alpha=0.3)
-        ax.legend()
+        ax.legend(fontsize='small')
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
+    return _labels(axes[:, 0])
 
 
 def plot_latency(run, path, title):
-    """Probe round trip per pair over time, the selected server overlaid, per robot."""
+    """Per robot: each server's probe round trips (dots), the statistic the manager ranked
+    it by in each flag (dashed steps), the server each flag selects (shading, up to the
+    next flag) and the moments the selection changed (vertical lines). Returns what each
+    panel says (:func:`_labels`)."""
     plt = pyplot()
+    from matplotlib.patches import Patch
     robots = sorted(set(s.robot for s in run.samples) | set(f.robot for f in run.flags))
-    servers = sorted(set(s.server for s in run.samples))
+    servers = sorted(set(s.server for s in run.samples) |
+                     set(s for f in run.flags for s in f.ranking))
     colors = dict((s, 'C%d' % i) for i, s in enumerate(servers))
     fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
     for ax, robot in zip(axes[:, 0], robots):
+        samples = [s for s in run.samples if s.robot == robot]
+        flags = sorted((f for f in run.flags if f.robot == robot), key=lambda f: f.t)
+        end = max([s.t for s in samples] + [f.t for f in flags] or [0.0])
         for server in servers:
             # a failed probe breaks the line: no round trip is drawn across an outage
-            pts = [(s.t, s.rtt * 1e3 if s.ok else float('nan')) for s in run.samples
-                   if s.robot == robot and s.server == server]
-            if any(s.ok for s in run.samples if s.robot == robot and s.server == server):
-                ax.plot(*zip(*pts), '.-', color=colors[server], markersize=3, linewidth=0.8,
-                        label='probe S%d' % server)
-        flags = sorted((f for f in run.flags if f.robot == robot), key=lambda f: f.t)
+            pts = [(s.t, s.rtt * 1e3 if s.ok else float('nan')) for s in samples
+                   if s.server == server]
+            if any(s.ok for s in samples if s.server == server):
+                ax.plot(*zip(*pts), '.', color=colors[server], markersize=3,
+                        label='probes S%d' % server)
+            ranked = [(f.t, m * 1e3) for f in flags for s, m in zip(f.ranking, f.means)
+                      if s == server]
+            if ranked:
+                ax.step(*zip(*ranked), where='post', color=colors[server], linestyle='--',
+                        linewidth=1.2, label='ranked by (flags) S%d' % server)
         for f, g in zip(flags, flags[1:] + [None]):
             if f.server in colors:
-                ax.axvspan(f.t, g.t if g else f.t + 1.0, color=colors[f.server], alpha=0.12,
+                ax.axvspan(f.t, g.t if g else end, color=colors[f.server], alpha=0.12,
                            linewidth=0)
-        ax.set_title('%s: robot %d (shading: selected server)' % (title, robot))
-        ax.set_xlabel('scenario time (s)')
-        ax.set_ylabel('probe round trip (ms)')
+        for i, f in enumerate(_changes(flags)):
+            ax.axvline(f.t, color='grey', linestyle=':', linewidth=1,
+                       label='selection changed' if i == 0 else None)
+        handles, labels = ax.get_legend_handles_labels()
+        if flags:
+            handles.append(Patch(color='grey', alpha=0.25, linewidth=0))
+            labels.append('shaded: the server the flag selects (its colour)')
+        ax.set_title('%s: robot %d' % (title, robot))
+        ax.set_xlabel(time_label(run))
+        ax.set_ylabel('round trip (ms)')
         ax.grid(True, alpha=0.3)
-        ax.legend(loc='upper left', fontsize='small')
+        ax.legend(handles, labels, loc='upper left', fontsize='small')
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
+    return _labels(axes[:, 0])
