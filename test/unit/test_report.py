@@ -43,3 +43,14 @@ def test_median_and_range_of_repeated_runs():
     assert median_range([3.0, 1.0, 2.0]) == '2.0 (1.0-3.0)'
     assert median_range([1.0, 4.0], '%.0f') == '2 (1-4)'   # 2.5 rounds to even
     assert median_range([7], '%d') == '7'
+
+
+def test_the_legend_says_what_every_column_of_the_table_means():
+    header = RunReport().table().splitlines()[0]
+    legend = RunReport.legend()
+    for column in ('selected', 'ranking', 'switches', 'tasks', 'ok', 'failed', 'task RTT',
+                   'probes (failed)', 'probe RTT'):
+        assert column in header and any(line.startswith(column) or ', %s' % column in
+                                        line.split(':')[0] for line in legend.splitlines()), \
+            column
+    assert 'counts at the task timeout' in legend

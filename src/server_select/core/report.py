@@ -72,6 +72,11 @@ class RunReport(object):
              'failed', 'task RTT median ms', 'p95', 'p99', 'max', 'probes (failed)',
              'probe RTT median ms', 'p99'), rows)
 
+    @staticmethod
+    def legend():
+        """What the columns of :meth:`table` mean, one line each."""
+        return '\n'.join('%s: %s' % pair for pair in LEGEND)
+
     def verdict(self):
         """One line of what the run found: tasks, failures, round trip, the selection."""
         summaries = self.summaries()
@@ -87,6 +92,19 @@ class RunReport(object):
                 % (len(summaries), tasks, failed,
                    ', median task round trip %.2f ms' % (rtt['median'] * 1e3) if rtt['n']
                    else '', selected or 'none', sum(s['switches'] for s in summaries)))
+
+
+LEGEND = (
+    ('selected', "the server the manager's last flag for the robot selects"),
+    ('ranking', "that flag's servers, best first, with the statistic it ranks them by "
+     '(mean probe round trip over the window, ms)'),
+    ('switches', 'changes of the selected server during the run'),
+    ('tasks, ok, failed', "the robot's task reports; failed: no right answer within the task "
+     'timeout'),
+    ('task RTT', 'send to checked result, ms; a failed task counts at the task timeout'),
+    ('probes (failed)', 'LatencyProbe calls the robot reported, and how many got no answer'),
+    ('probe RTT', 'round trip of the answered probes, ms'),
+)
 
 
 def _ms(summary, keys):

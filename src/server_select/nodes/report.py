@@ -66,8 +66,8 @@ class ReportNode(object):
     def finish(self, _event=None):
         table = self.report.table()
         print('\nserver_select run summary (a failed task counts at the task timeout, %g s)\n\n'
-              % self.report.timeout + table + '\n\nfound: ' + self.report.verdict() + '\n',
-              flush=True)
+              % self.report.timeout + table + '\n\n' + self.report.legend() + '\n\nfound: '
+              + self.report.verdict() + '\n', flush=True)
         if self.output:
             with open(self.output, 'w') as stream:
                 json.dump(self.report.summaries(), stream, indent=2)
