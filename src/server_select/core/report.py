@@ -55,10 +55,10 @@ class RunReport(object):
         robots = set(self.flags) | set(self.tasks) | set(self.probes)
         return [self.robot_summary(r) for r in sorted(robots)]
 
-    def table(self):
-        """A Markdown table, one row per robot."""
+    def table(self, summaries=None):
+        """A Markdown table, one row per robot (of ``summaries``, default: now)."""
         rows = []
-        for s in self.summaries():
+        for s in self.summaries() if summaries is None else summaries:
             ranking = ', '.join('S%d %.2f' % (srv, ms)
                                 for srv, ms in zip(s['ranking'], s['mean_latency_ms'])) or '-'
             selected = s['selected'] not in (None, NO_SERVER)
@@ -77,9 +77,10 @@ class RunReport(object):
         """What the columns of :meth:`table` mean, one line each."""
         return '\n'.join('%s: %s' % pair for pair in LEGEND)
 
-    def verdict(self):
-        """One line of what the run found: tasks, failures, round trip, the selection."""
-        summaries = self.summaries()
+    def verdict(self, summaries=None):
+        """One line of what the run found: tasks, failures, round trip, the selection (of
+        ``summaries``, default: now; give the table's, so that the two agree)."""
+        summaries = self.summaries() if summaries is None else summaries
         tasks = sum(s['tasks'] for s in summaries)
         failed = sum(s['failed'] for s in summaries)
         rtt = summarize([t[1] if t[0] else self.timeout

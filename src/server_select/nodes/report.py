@@ -64,13 +64,14 @@ class ReportNode(object):
                              report.error)
 
     def finish(self, _event=None):
-        table = self.report.table()
+        summaries = self.report.summaries()   # one moment for the table and the verdict
+        table = self.report.table(summaries)
         print('\nserver_select run summary (a failed task counts at the task timeout, %g s)\n\n'
               % self.report.timeout + table + '\n\n' + self.report.legend() + '\n\nfound: '
-              + self.report.verdict() + '\n', flush=True)
+              + self.report.verdict(summaries) + '\n', flush=True)
         if self.output:
             with open(self.output, 'w') as stream:
-                json.dump(self.report.summaries(), stream, indent=2)
+                json.dump(summaries, stream, indent=2)
             rospy.loginfo('report: summary written to %s', self.output)
         if not (self.end_launch and end_parent_launch()):
             rospy.signal_shutdown('report done')
