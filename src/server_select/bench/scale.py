@@ -130,8 +130,8 @@ def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, prof
                    max(0.0, started + limit - time.time()), period=0.2)
         usage = measure(pids + [master], measure_s)
         totals = [_usage(p) for p in pids]
-        for key in ('threads', 'fds', 'rss_mb'):
-            row[key] = sum(t[key] for t in totals)
+        for name in ('threads', 'fds', 'rss_mb'):      # (key: the fleet key's file)
+            row[name] = sum(t[name] for t in totals)
         cpu = [usage.get(p, {}).get('cpu_percent', 0.0) for p in pids]
         row['manager_cpu'], row['manager_cpu_max'] = sum(cpu), max(cpu)
         row['master_cpu'] = usage.get(master, {}).get('cpu_percent')

@@ -21,25 +21,29 @@ _STATE = {}
 
 
 def _configured():
-    """(sealer, verifier) of this node, both None without ``~fleet_key``; read once.
-    :class:`ParamError` for a key file that cannot be used."""
+    """(sealer, verifier) of this node, both None without ``~fleet_key``; read once (then
+    without the lock: every gated message asks). :class:`ParamError` for a key file that
+    cannot be used."""
+    done = _STATE.get('done')
+    if done is not None:
+        return done
     with _LOCK:
-        if 'sealer' not in _STATE:
+        if 'done' not in _STATE:
+            paths = dict((name, param(name)) for name in ('fleet_key', 'fleet_key_next'))
+            if paths['fleet_key_next'] and not paths['fleet_key']:
+                raise ParamError('~fleet_key_next: set ~fleet_key too (the key this node '
+                                 'signs with)')
             keys = []
-            for name in ('fleet_key', 'fleet_key_next'):
-                path = param(name)
+            for name, path in sorted(paths.items()):       # fleet_key first: it signs
                 if path:
                     try:
                         keys.append(core.load_key(path))
                     except core.KeyFileError as error:
                         raise ParamError('~%s: %s' % (name, error))
-            if keys and not param('fleet_key'):
-                raise ParamError('~fleet_key_next: set ~fleet_key too (the key this node '
-                                 'signs with)')
-            _STATE['sealer'] = core.Sealer(keys[0], rospy.get_name()) if keys else None
-            _STATE['verifier'] = core.Verifier(keys, param('fleet_key_max_age')) \
-                if keys else None
-        return _STATE['sealer'], _STATE['verifier']
+            _STATE['done'] = (core.Sealer(keys[0], rospy.get_name()),
+                              core.Verifier(keys, param('fleet_key_max_age'))) \
+                if keys else (None, None)
+        return _STATE['done']
 
 
 def enabled():
