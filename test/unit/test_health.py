@@ -1,11 +1,15 @@
-from server_select.core.health import EJECTED, HEALTHY, PROBATION, ServerHealth
+from server_select.core.health import DOWN, EJECTED, HEALTHY, PROBATION, ServerHealth
 
 from fake_clock import Clock
 
 
 def make(**kwargs):
+    """Servers 1, 2, 3, each of which has answered a probe."""
     clock = Clock(0.0)
-    return ServerHealth([1, 2, 3], clock=clock, **kwargs), clock
+    health = ServerHealth([1, 2, 3], clock=clock, **kwargs)
+    for server in (1, 2, 3):
+        health.probe_ok(server)
+    return health, clock
 
 
 def test_a_failure_ejects_at_once_and_only_that_server():
@@ -54,3 +58,25 @@ def test_probes_while_ejected_do_not_count_toward_probation():
     assert not h.usable(3)
     h.probe_ok(3)
     assert h.usable(3)
+
+
+def test_a_server_that_never_answered_is_down_not_ejected_for_longer_and_longer():
+    clock = Clock(0.0)
+    h = ServerHealth([1, 2], base=1.0, longest=30.0, probation_probes=2, clock=clock)
+    h.probe_ok(1)
+    assert h.failure(2, 'unavailable') == (2, 0.0, 'unavailable')   # said once ...
+    for _ in range(20):                               # ... not again, and no back-off
+        clock.now += 1.0
+        assert h.failure(2, 'unavailable') is None
+    assert h.state(2) == DOWN and h.order([2, 1]) == [1]
+    h.probe_ok(2)                                     # it came up: two good probes
+    assert not h.usable(2)
+    h.probe_ok(2)
+    assert h.order([2, 1]) == [2, 1]
+    assert h.task_ok(2) is True and h.state(2) == HEALTHY
+    assert h.failure(2, 'timeout') == (2, 1.0, 'timeout')   # it answered: ejected now
+
+
+def test_a_new_server_is_a_candidate_before_any_evidence():
+    h = ServerHealth([1], clock=Clock(0.0))
+    assert h.usable(1) and h.state(1) == HEALTHY

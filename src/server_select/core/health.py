@@ -7,6 +7,12 @@ the time is over the server is on probation: it becomes a candidate again after
 ``probation_probes`` good probes, and its first good task makes it healthy (the ejection
 time starts from ``base`` again); a failure on probation ejects it for twice as long.
 
+A server that has never answered is not failing but not up yet (a host still starting,
+a server launched later): its failures do not eject it with a growing time, which would
+keep it out for up to ``longest`` s after it came up; it is *down* until its first
+``probation_probes`` good probes make it a candidate. Once it has answered, its failures
+eject it as above.
+
 A server that answers *busy* is working, not failing: it is not ejected, but goes behind
 every server that is not busy for ``seconds`` (what its load says it needs to catch up),
 and stays a candidate for when all of them are busy.
@@ -16,17 +22,18 @@ import collections
 import threading
 import time
 
-HEALTHY, EJECTED, PROBATION = 'healthy', 'ejected', 'probation'
+HEALTHY, EJECTED, PROBATION, DOWN = 'healthy', 'ejected', 'probation', 'down'
 
 Ejection = collections.namedtuple('Ejection', 'server seconds why')
 
 
 class _Server(object):
-    __slots__ = ('state', 'until', 'ejections', 'good_probes', 'busy_until')
+    __slots__ = ('state', 'until', 'ejections', 'good_probes', 'busy_until', 'answered')
 
     def __init__(self):
         self.state, self.until, self.ejections, self.good_probes = HEALTHY, 0.0, 0, 0
         self.busy_until = 0.0
+        self.answered = False
 
 
 class ServerHealth(object):
@@ -59,12 +66,16 @@ class ServerHealth(object):
         return entry
 
     def failure(self, server, why=''):
-        """Evidence that ``server`` failed: an :class:`Ejection` if this ejects it, else None
-        (an unknown server, or one already ejected)."""
+        """Evidence that ``server`` failed: an :class:`Ejection` if this ejects it (of 0 s
+        when it makes a server that never answered *down*), else None (an unknown server,
+        or one already ejected or down)."""
         with self._lock:
             entry = self._get(server, self._clock())
             if entry is None or entry.state == EJECTED:
                 return None
+            if not entry.answered:
+                first, entry.state, entry.good_probes = entry.state != DOWN, DOWN, 0
+                return Ejection(server, 0.0, why) if first else None
             entry.ejections += 1
             seconds = min(self.longest, self.base * 2 ** (entry.ejections - 1))
             entry.state, entry.until, entry.good_probes = EJECTED, self._clock() + seconds, 0
@@ -80,14 +91,18 @@ class ServerHealth(object):
     def probe_ok(self, server):
         with self._lock:
             entry = self._get(server, self._clock())
-            if entry is not None and entry.state == PROBATION:
-                entry.good_probes += 1
+            if entry is not None:
+                entry.answered = True
+                if entry.state in (PROBATION, DOWN):
+                    entry.good_probes += 1
 
     def task_ok(self, server):
         """A good answer; True when it ends ``server``'s probation."""
         with self._lock:
             entry = self._get(server, self._clock())
-            if entry is None or entry.state != PROBATION:
+            if entry is not None:
+                entry.answered = True
+            if entry is None or entry.state not in (PROBATION, DOWN):
                 return False
             entry.state, entry.ejections = HEALTHY, 0
             return True
@@ -102,7 +117,8 @@ class ServerHealth(object):
         with self._lock:
             entry = self._get(server, self._clock())
             return entry is not None and (entry.state == HEALTHY or (
-                entry.state == PROBATION and entry.good_probes >= self.probation_probes))
+                entry.state in (PROBATION, DOWN)
+                and entry.good_probes >= self.probation_probes))
 
     def order(self, ranking):
         """``ranking`` without the servers tasks may not go to now, those that answered

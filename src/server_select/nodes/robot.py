@@ -205,9 +205,12 @@ class RobotNode(object):
 
     def on_failure(self, server, why):
         ejection = self.health.failure(server, why)
-        if ejection is not None:
+        if ejection is not None and ejection.seconds:
             rospy.logwarn('robot %d: server %d ejected for %.3g s: %s', self.robot_id,
                           server, ejection.seconds, why)
+        elif ejection is not None:
+            rospy.logwarn('robot %d: server %d has not answered yet (%s): a candidate once '
+                          'it answers', self.robot_id, server, why)
 
     def on_busy(self, kind, server):
         """``server`` refused a ``kind`` task as busy: last of the candidates for as long as
