@@ -6,7 +6,8 @@ import threading
 import pytest
 
 from server_select.core.budget import RetryBudget
-from server_select.core.load import Load, LoadBoard, ServiceTimes, WorkQueue
+from server_select.core.load import Arrivals, Load, ServiceTimes, WorkQueue
+from server_select.core.load_board import LoadBoard, queueing
 
 from fake_clock import Clock
 
@@ -45,7 +46,9 @@ def test_the_backlog_counts_the_work_left_of_tasks_in_service_over_the_workers()
     assert q.load().backlog == pytest.approx(1.5)   # 3 s of work, 2 workers
     first, second = q.take(), q.take()
     clock.now += 0.4                                 # both 0.4 s into their 1 s of work
-    assert q.load() == Load(1, 2, 2, pytest.approx((1.0 + 0.6 + 0.6) / 2), {'image': 1.0})
+    # (three arrivals at one instant: three per 10 s horizon, 1 s of work each, 2 workers)
+    assert q.load() == Load(1, 2, 2, pytest.approx((1.0 + 0.6 + 0.6) / 2), {'image': 1.0},
+                            pytest.approx(0.3 * 1.0 / 2))
     q.done(first, 1.0)
     q.done(second, 1.0)
     assert q.load().backlog == 0.0                   # one queued, a worker free: no wait
@@ -98,12 +101,83 @@ def test_close_wakes_the_workers_and_returns_what_was_queued():
     assert q.offer('image', 'late') == 'the server is shutting down'
 
 
-def test_the_wait_is_the_backlog_plus_the_robots_mix_of_work():
+def test_the_utilization_is_the_others_tasks_at_their_rates_over_the_workers():
+    q, clock = queue_with(0.6, workers=2)
+    for t in (0.0, 2.0, 4.0, 6.0):               # robot 1: a frame every 2 s
+        clock.now = t
+        assert q.offer('image', 'a', owner=1) is None
+        if t in (0.0, 4.0):                      # robot 2: every 4 s
+            assert q.offer('image', 'b', owner=2) is None
+    clock.now = 7.0
+    # robot 1: 0.5 frames/s, robot 2: 0.25 frames/s, 0.6 s of work each, on 2 workers
+    assert q.load().utilization == pytest.approx((0.5 + 0.25) * 0.6 / 2)
+    assert q.load(excluding=1).utilization == pytest.approx(0.25 * 0.6 / 2)
+    assert q.load(excluding=2).utilization == pytest.approx(0.5 * 0.6 / 2)
+
+
+def test_announced_rates_count_at_once_and_replace_the_announcers_arrivals():
+    q, clock = queue_with(0.5)
+    for t in (0.0, 2.0, 4.0):                    # robot 1 sent a frame every 2 s, robot 2
+        clock.now = t                            # one frame every 4 s
+        assert q.offer('image', 'a', owner=1) is None
+        if t != 2.0:
+            assert q.offer('image', 'b', owner=2) is None
+    clock.now = 4.5
+    assert q.load(excluding=3).utilization == pytest.approx((0.5 + 0.25) * 0.5)
+    q.announce(4, {'image': 1.0})                # robot 4 moved here: counts at once
+    q.announce(1, {'image': 0.0})                # robot 1 moved away: counts no more
+    assert q.load(excluding=3).utilization == pytest.approx((0.25 + 1.0) * 0.5)
+    assert q.load(excluding=4).utilization == pytest.approx(0.25 * 0.5)
+    clock.now = 7.0                              # robot 4's announcement is 2.5 s old ...
+    assert q.load(excluding=3).utilization == pytest.approx((0.25 + 1.0) * 0.5)
+    clock.now = 7.6                  # ... 3.1 s: it stopped probing; robot 1's did too: it
+    # counts by its arrivals again (its last one 3.6 s ago, within two of its gaps)
+    assert q.load(excluding=3).utilization == pytest.approx((0.25 + 0.5) * 0.5)
+    clock.now = 8.1                  # none from robot 1 for more than two of its gaps
+    assert q.load(excluding=3).utilization == pytest.approx(0.25 * 0.5)
+
+
+def test_a_sender_that_stopped_counts_as_none_after_two_of_its_gaps():
+    arrivals = Arrivals(horizon=10.0)
+    for t in (0.0, 2.0, 4.0):
+        arrivals.add(7, 'image', t)
+    assert arrivals.rates(5.0) == {(7, 'image'): pytest.approx(0.5)}
+    assert arrivals.rates(8.0) == {(7, 'image'): pytest.approx(0.5)}   # 4 s: two gaps
+    assert arrivals.rates(8.5) == {}                      # it went elsewhere
+    arrivals.add(7, 'image', 9.0)                         # back: one arrival in 10 s of
+    assert arrivals.rates(15.0) == {(7, 'image'): pytest.approx(0.1)}  # history counts
+    assert arrivals.rates(19.5) == {}                     # nothing left in the horizon
+    arrivals.add(3, 'sort', 20.0)
+    assert arrivals.rates(20.0) == {(3, 'sort'): pytest.approx(0.1)}
+    with pytest.raises(ValueError):
+        Arrivals(horizon=0.0)
+
+
+def test_the_mean_wait_is_m_d_c_queueing_at_the_utilization():
+    assert queueing(0.0, 0.7) == 0.0 and queueing(0.5, 0.0) == 0.0
+    assert queueing(0.5, 0.7) == pytest.approx(0.5 * 0.7 / 2 / 0.5)     # M/D/1, exact
+    assert queueing(0.8, 1.0) == pytest.approx(2.0)
+    assert queueing(2.0, 1.0) == queueing(0.95, 1.0) == pytest.approx(9.5)   # saturated
+    # more workers at the same utilization: a shorter wait
+    assert 0 < queueing(0.5, 0.7, workers=4) < queueing(0.5, 0.7, workers=2) \
+        < queueing(0.5, 0.7)
+    # the robot that leaves its own tasks out of its server's utilization sees its server
+    # ahead of an equal one that would carry its tasks too
+    one, two = 0.275 * 0.667, 2 * 0.275 * 0.667
+    assert queueing(two, 0.667) - queueing(one, 0.667) > 0.1
+
+
+def test_the_wait_is_the_mean_queueing_plus_the_robots_mix_of_work():
     clock = Clock()
     board = LoadBoard({'image': 1.0, 'sort': 3.0}, max_age=2.0, clock=clock)
     assert board.wait(1) is None
-    board.update(1, Load(2, 1, 1, 0.8, {'image': 0.4, 'sort': 0.02}))
-    assert board.wait(1) == pytest.approx(0.8 + 0.25 * 0.4 + 0.75 * 0.02)
+    board.update(1, Load(2, 1, 1, 0.8, {'image': 0.4, 'sort': 0.02}, 0.5))
+    work = 0.25 * 0.4 + 0.75 * 0.02
+    assert board.wait(1) == pytest.approx(queueing(0.5, work) + work)
+    # the backlog at the moment of the probe is not the forecast: the same utilization,
+    # the same wait
+    board.update(1, Load(0, 0, 1, 0.0, {'image': 0.4, 'sort': 0.02}, 0.5))
+    assert board.wait(1) == pytest.approx(queueing(0.5, work) + work)
     clock.now += 2.5                                  # the report is stale
     assert board.wait(1) is None and board.expected(1, 'image') is None
 

@@ -140,3 +140,25 @@ def test_without_task_memory_the_cost_leaves_with_the_window():
         s.on_sample(2, True, 0.012)
         clock.now += 0.25
     assert s.own_ranking()[0] == 1
+
+
+def test_heading_names_where_the_next_task_goes_without_deciding_anew():
+    s, clock = select(manager_timeout=3.0)
+    assert s.heading() == NO_SERVER                    # nothing decided yet
+    s.on_flag(1, 2, [3, 2, 1])
+    assert s.heading() == 2
+    s.health.probe_ok(2)
+    s.health.failure(2, 'task timeout')               # ejected: the next candidate
+    assert s.heading() == 3
+    clock.now += 3.5                                  # the flag is stale: the robot's own
+    for server, rtt in ((1, 0.004), (3, 0.009)):      # choice, once it has made one
+        s.on_sample(server, True, rtt)
+    assert s.heading() == NO_SERVER
+    assert s.target() == 1 and s.heading() == 1
+    s.on_sample(3, True, 0.001)                       # no new decision until it sends
+    assert s.heading() == 1
+
+
+def test_heading_in_fixed_mode_is_the_fixed_server():
+    s = Selection(1, [1, 2], 'fixed', fixed_server=2)
+    assert s.heading() == 2

@@ -3,9 +3,21 @@
 A task's round trip is the network, the wait for a worker and the work itself. A probe,
 answered on its own thread, measures only the first; so every probe answer carries the
 server's :class:`Load` (tasks queued and in service, workers, the *backlog*: seconds a
-task sent now would wait for a worker, and the recent work per task of each kind), and a
-robot ranks servers by round trip + backlog + work for the tasks it sends (C3's expected
-completion, NSDI '15).
+task sent now would wait for a worker, the *utilization*: the share of the workers' time
+the other robots' tasks take at the rates they arrive, and the recent work per task of
+each kind), and a robot ranks servers by round trip + expected wait + work for the tasks it
+sends (C3's expected completion, NSDI '15; :mod:`server_select.core.load_board`).
+
+The backlog is what a task sent now waits for: what an attempt's deadline follows. It is
+also a poor forecast of the next task's wait: a server that does a frame in 0.7 s for two
+robots is idle half the time and 0.7 s behind the other half, so robots that ranked by it
+chased the phase of each other's frames. The utilization moves only when a robot comes,
+goes or changes its rate. It is what the robots *announce*: a load-aware robot's probe
+says the rate at which it sends tasks to that server now (its rate to the server its next
+task goes to, none to the others), so a robot that moves loads its new server in the
+others' eyes at its next probe, not after its tasks have arrived for a while (robots that
+all saw an idle server came up idle moved to it together). The tasks of a robot that
+announces nothing count at the rate they arrive (:class:`Arrivals`).
 
 Server side, :class:`WorkQueue` holds the tasks waiting for the workers. A task carries
 its *deadline* (when its robot stops waiting): one that cannot be finished by then is
@@ -19,10 +31,10 @@ import statistics
 import threading
 import time
 
-Load = collections.namedtuple('Load', 'queued in_service workers backlog service')
-Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per task}``."""
-
-IDLE = Load(0, 0, 1, 0.0, {})
+Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization')
+Load.__new__.__defaults__ = (0.0,)
+Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per task}``,
+``utilization`` the share of the workers' time the others' tasks take (0: none)."""
 
 
 class ServiceTimes(object):
@@ -54,6 +66,55 @@ class ServiceTimes(object):
             return dict(self._medians)
 
 
+class Arrivals(object):
+    """The rate at which each sender's tasks of each kind arrive (not thread-safe: the
+    :class:`WorkQueue` holds its lock).
+
+    A sender's rate is the mean gap between its arrivals within the last ``horizon`` s
+    (at most ``keep`` of them); one arrival alone counts as one per ``horizon``. A sender
+    whose last arrival is older than twice its mean gap has stopped sending here (it moved
+    or stopped) and counts as none, so a robot that leaves a server stops loading it within
+    two of its periods rather than one horizon.
+    """
+
+    def __init__(self, horizon=10.0, keep=8):
+        if not horizon > 0 or keep < 2:
+            raise ValueError('horizon must be > 0 and keep >= 2, got %r, %r' % (horizon, keep))
+        self.horizon, self.keep = float(horizon), int(keep)
+        self._times = {}        # (owner, kind) -> deque of arrival times
+        self._seen = set()      # every (owner, kind) ever added
+
+    def add(self, owner, kind, now):
+        times = self._times.get((owner, kind))
+        if times is None:
+            times = self._times[(owner, kind)] = collections.deque(maxlen=self.keep)
+        times.append(now)
+        self._seen.add((owner, kind))
+
+    def seen(self, owner, kind):
+        """Whether ``owner`` has ever sent a task of ``kind``."""
+        return (owner, kind) in self._seen
+
+    def rates(self, now, excluding=None):
+        """``{(owner, kind): tasks per second}`` of the senders still sending, but
+        ``excluding`` (an owner)."""
+        rates = {}
+        for key, times in list(self._times.items()):
+            while times and now - times[0] > self.horizon:
+                times.popleft()
+            if not times:
+                del self._times[key]
+                continue
+            if excluding is not None and key[0] == excluding:
+                continue
+            gap = (times[-1] - times[0]) / (len(times) - 1) if len(times) > 1 else 0.0
+            if gap <= 0:
+                rates[key] = len(times) / self.horizon      # one arrival (or one instant)
+            elif now - times[-1] <= 2.0 * gap:
+                rates[key] = 1.0 / gap
+        return rates
+
+
 class Job(object):
     """A task in a :class:`WorkQueue`: what the worker needs, its kind, deadline and
     owner (who sent it: a robot's id, or None)."""
@@ -75,12 +136,16 @@ class WorkQueue(object):
     ``clock``.
     """
 
-    def __init__(self, workers, max_queue, times=None, clock=time.monotonic):
+    def __init__(self, workers, max_queue, times=None, clock=time.monotonic, horizon=10.0,
+                 announce_age=3.0):
         if workers < 1 or max_queue < 1:
             raise ValueError('workers and max_queue must be >= 1, got %r, %r'
                              % (workers, max_queue))
         self.workers, self.max_queue = int(workers), int(max_queue)
         self.times = times or ServiceTimes()
+        self.arrivals = Arrivals(horizon)
+        self.announce_age = announce_age
+        self._announced = {}    # owner -> (time, {kind: tasks per second})
         self._clock = clock
         self._cond = threading.Condition()
         self._queue = collections.deque()
@@ -119,6 +184,7 @@ class WorkQueue(object):
                 self.refused += 1
                 return why
             self._queue.append(Job(kind, item, deadline, now, owner))
+            self.arrivals.add(owner, kind, now)
             self._cond.notify()
             return None
 
@@ -157,15 +223,39 @@ class WorkQueue(object):
         if seconds is not None:
             self.times.add(job.kind, seconds)
 
+    def announce(self, owner, rates):
+        """``owner`` sends ``{kind: tasks per second}`` here now (empty: none), what its
+        tasks count for in the utilization for ``announce_age`` s."""
+        with self._cond:
+            self._announced[owner] = (self._clock(), dict(rates))
+
+    def _utilization(self, now, excluding):
+        """The others' work per second over the workers (call with the lock held)."""
+        announced = {}
+        for owner, (when, rates) in list(self._announced.items()):
+            if now - when > self.announce_age:
+                del self._announced[owner]
+            elif owner != excluding:
+                announced[owner] = rates
+        work = sum(rate * self.times.get(kind) for rates in announced.values()
+                   for kind, rate in rates.items())
+        work += sum(rate * self.times.get(kind)
+                    for (owner, kind), rate in self.arrivals.rates(now, excluding).items()
+                    if owner not in self._announced)
+        return work / self.workers
+
     def load(self, excluding=None):
-        """The :class:`Load` now; its backlog without the tasks of owner ``excluding``
-        (what a robot's next task waits for when the robot's own tasks are done by then:
-        a robot that keeps one task out would otherwise see its own task as load on its
-        server and none on the others, and move for nothing)."""
+        """The :class:`Load` now; its backlog and utilization without the tasks of owner
+        ``excluding`` (what a robot's next task waits for when the robot's own tasks are
+        done by then: a robot that keeps one task out would otherwise see its own task as
+        load on its server and none on the others, and move for nothing; leaving its own
+        out of its server's utilization is what keeps it there: moving would add them to
+        another's)."""
         with self._cond:
             now = self._clock()
             return Load(len(self._queue), len(self._running), self.workers,
-                        self._backlog(now, excluding), self.times.snapshot())
+                        self._backlog(now, excluding), self.times.snapshot(),
+                        self._utilization(now, excluding))
 
     def close(self):
         """Wake every worker with None; what is still queued is dropped (returned)."""
@@ -174,76 +264,3 @@ class WorkQueue(object):
             dropped, self._queue = list(self._queue), collections.deque()
             self._cond.notify_all()
             return dropped
-
-
-class LoadBoard(object):
-    """A robot's view of its servers' load: the newest report of each, and its own tasks
-    sent to each since (thread-safe).
-
-    ``mix`` is ``{kind: weight}`` of the tasks the robot sends (its streams' rates): the
-    *wait* of a server is its backlog plus the mix's work there, what :meth:`wait` adds to
-    a probe's round trip so that servers rank by expected completion. A report older than
-    ``max_age`` s counts as none (the probes stopped: health decides then). A server that
-    has not yet done a task of a kind is taken to need the median of what the others
-    report for it: not nothing, or every robot would rush to a server that just came up.
-    """
-
-    def __init__(self, mix, max_age=2.0, clock=time.monotonic):
-        total = float(sum(mix.values()))
-        if not mix or not total > 0:
-            raise ValueError('mix must give a positive weight to some kind, got %r' % (mix,))
-        self.mix = dict((k, w / total) for k, w in mix.items())
-        self.max_age = max_age
-        self._clock = clock
-        self._lock = threading.Lock()
-        self._reports = {}       # server -> [Load, time, tasks sent since]
-
-    def update(self, server, load):
-        with self._lock:
-            self._reports[server] = [load, self._clock(), collections.Counter()]
-
-    def sent(self, server, kind):
-        """One of the robot's tasks went to ``server`` (it is in no report yet)."""
-        with self._lock:
-            report = self._reports.get(server)
-            if report is not None:
-                report[2][kind] += 1
-
-    def forget(self, server):
-        with self._lock:
-            self._reports.pop(server, None)
-
-    def _fresh(self, server):
-        report = self._reports.get(server)
-        if report is None or self._clock() - report[1] > self.max_age:
-            return None
-        return report
-
-    def _work(self, load, kind):
-        """Seconds of work per ``kind`` task by ``load``, else the others' median."""
-        seconds = load.service.get(kind)
-        if seconds is not None:
-            return seconds
-        known = [r[0].service[kind] for r in self._reports.values()
-                 if kind in r[0].service and self._clock() - r[1] <= self.max_age]
-        return statistics.median(known) if known else 0.0
-
-    def wait(self, server):
-        """Backlog + the mix's work at ``server`` (s) by its newest report; None: none."""
-        with self._lock:
-            report = self._fresh(server)
-            if report is None:
-                return None
-            load = report[0]
-            return load.backlog + sum(w * self._work(load, k) for k, w in self.mix.items())
-
-    def expected(self, server, kind):
-        """Seconds from a task of ``kind`` reaching ``server`` to its answer leaving it, by
-        the newest report plus the robot's own tasks sent since (None: no fresh report)."""
-        with self._lock:
-            report = self._fresh(server)
-            if report is None:
-                return None
-            load, _, since = report
-            extra = sum(self._work(load, k) * n for k, n in since.items())
-            return load.backlog + extra / max(1, load.workers) + self._work(load, kind)

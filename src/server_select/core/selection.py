@@ -149,6 +149,21 @@ class Selection(object):
         candidates = self.candidates()
         return candidates[0] if candidates else NO_SERVER
 
+    def heading(self):
+        """Where the next task would go by the last decision, without making one (a
+        robot deciding alone decides when it sends): the manager's selection while its
+        flags are fresh, else the robot's own; the next candidate when that one is
+        ejected; NO_SERVER: none."""
+        if self.mode != 'select':
+            return self.target()
+        ranking = self.manager_ranking()
+        if ranking is None:
+            with self._lock:
+                ranking = [self._chooser.current] if self._chooser.current is not None else []
+        if self.health is not None:
+            ranking = self.health.order(ranking)
+        return ranking[0] if ranking else NO_SERVER
+
     def ready(self, answered):
         """Whether tasks may start: ``answered`` is the set of servers that have answered a
         probe (what fixed mode waits for)."""

@@ -74,13 +74,15 @@ class RobotNode(object):
         image = next((k for k, _ in kinds if isinstance(k, Frames)), None)
         self.search = image.search if image else None
         self.camera = image.source if image and isinstance(image.source, TopicSource) else None
-        self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds)) \
+        self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds),
+                              self.selection.heading) \
             if param('load_aware') and mode == 'select' else None
         self.passive = TaskSamples(self.robot_id, self.selection, self.load is None) \
             if self.selection.passive else None
         self.prober = Prober(self.robot_id, servers, param('probe_rate'), param('probe_timeout'),
                              on_sample=self.on_sample, stream=param('sample_stream'),
-                             load_of=self.load.on_answer if self.load else None)
+                             load_of=self.load.on_answer if self.load else None,
+                             announce=self.load.announcement if self.load else None)
         self.start_delay = param('start_delay')
         self.summary_period = param('summary_period')
         manager = param('manager_node')   # None: flags from any node

@@ -37,7 +37,8 @@ class ServerNode(object):
     queue's backlog says cannot be met is answered *busy* at once; one whose deadline
     passes while it waits is answered busy when a worker takes it (stale work is shed, not
     done). Every probe answer carries the load: tasks queued and in service, the backlog
-    in seconds, and the recent work per task of each kind.
+    in seconds, the utilization (the share of the workers' time the other robots' tasks
+    take at the rates they arrive) and the recent work per task of each kind.
 
     :ROS Parameters:
         - ``~server_id`` (int, required): this server's id.
@@ -122,11 +123,13 @@ class ServerNode(object):
         if self.direct and req.robot_id not in self._known_robots:
             self._known_robots.add(req.robot_id)   # its result publishers, off this path
             self._pool.submit(self._prepare, req.robot_id)
+        if req.task_kinds:
+            self.work.announce(req.robot_id, zip(req.task_kinds, req.task_rates))
         load = self.work.load(req.robot_id)
         return LatencyProbeResponse(
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),
             queued=load.queued, in_service=load.in_service, workers=load.workers,
-            backlog=load.backlog, kinds=list(load.service),
+            backlog=load.backlog, utilization=load.utilization, kinds=list(load.service),
             service_time=list(load.service.values()))
 
     def _prepare(self, robot):

@@ -1,21 +1,34 @@
 """A load-aware robot's view of its servers' load, fed by its probe answers
-(:class:`~server_select.core.load.LoadBoard`)."""
+(:class:`~server_select.core.load_board.LoadBoard`), and what its probes announce."""
 
-from server_select.core.load import Load, LoadBoard
+import time
+
+from server_select.core.load import Arrivals, Load
+from server_select.core.load_board import LoadBoard
 
 
 def load_of(response):
     """The :class:`~server_select.core.load.Load` a LatencyProbe answer reports."""
     return Load(response.queued, response.in_service, max(1, response.workers),
-                response.backlog, dict(zip(response.kinds, response.service_time)))
+                response.backlog, dict(zip(response.kinds, response.service_time)),
+                response.utilization)
 
 
 class RobotLoad(object):
     """What the robot's tasks would wait for at each server: ``mix`` is ``{kind: tasks
-    per second}`` of the robot's streams."""
+    per second}`` of the robot's streams. ``target()`` names the server the robot's next
+    task goes to: a probe of it announces the rate the robot sends tasks at (measured from
+    its sends, :class:`~server_select.core.load.Arrivals`; a kind's rate in ``mix`` until
+    its first task is sent), a probe of any other announces none, so that servers count
+    the robot where its tasks go now."""
 
-    def __init__(self, mix):
+    def __init__(self, mix, target=None, clock=time.monotonic):
         self.board = LoadBoard(mix)
+        self.mix = dict(mix)
+        self.kinds = sorted(mix)
+        self.target = target
+        self._sends = Arrivals()
+        self._clock = clock
 
     def on_answer(self, server, response):
         """A probe answer of ``server`` (the Prober's ``load_of``): its wait (s)."""
@@ -24,6 +37,15 @@ class RobotLoad(object):
 
     def sent(self, server, kind):
         self.board.sent(server, kind)
+        self._sends.add(None, kind, self._clock())
+
+    def announcement(self, server):
+        """``(kinds, tasks per second of each)`` for a probe of ``server``."""
+        if self.target is None or self.target() != server:
+            return self.kinds, [0.0] * len(self.kinds)
+        rates = self._sends.rates(self._clock())
+        return self.kinds, [rates.get((None, kind), 0.0 if self._sends.seen(None, kind)
+                                      else self.mix[kind]) for kind in self.kinds]
 
     def expected(self, kind):
         """``(server) -> seconds``: backlog + work of a ``kind`` task there (None: unknown),

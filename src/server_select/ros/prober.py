@@ -43,11 +43,12 @@ class Prober(object):
     ``on_sample(server, ok, rtt, error, wait)`` hears every sample. With ``load_of``, each
     answer's load goes to ``load_of(server, response)``, which returns the *wait* at that
     server (s, what a task of this robot would wait for there; None: unknown), carried in
-    the sample and in the batch's ``wait`` (a load-aware robot ranks by rtt + wait).
+    the sample and in the batch's ``wait`` (a load-aware robot ranks by rtt + wait);
+    ``announce(server)`` gives the ``(task kinds, rates)`` a probe of it carries.
     """
 
     def __init__(self, robot_id, servers, rate, timeout, on_sample=None, stream='pair',
-                 load_of=None):
+                 load_of=None, announce=None):
         self.robot_id = robot_id
         self.rate = rate
         self.timeout = timeout
@@ -55,6 +56,7 @@ class Prober(object):
         self.answered = set()
         self.on_sample = on_sample or (lambda server, ok, rtt, error, wait: None)
         self.load_of = load_of
+        self.announce = announce
         self._seq = itertools.count(1)
         self._rounds = itertools.count(1)
         self._lock = threading.Lock()
@@ -118,6 +120,8 @@ class Prober(object):
     def _probe(self, server, seq, batch):
         stamp = rospy.Time.now()
         request = LatencyProbeRequest(robot_id=self.robot_id, seq=seq, stamp=stamp)
+        if self.announce is not None:
+            request.task_kinds, request.task_rates = self.announce(server)
         proxy = self._proxies.get(server)
         if proxy is None:       # removed meanwhile
             self._publish(server, seq, stamp, None, 'server left the fleet', batch)

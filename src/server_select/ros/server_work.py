@@ -68,6 +68,10 @@ class ServerWork(object):
             % (self.server_id, endpoint.kind_name, task.task_id, task.robot_id, why, count))
         endpoint.reply(task, direct, endpoint.error_result(task, why, busy=True))
 
+    def announce(self, robot, rates):
+        """``robot``'s probe says it sends ``(kind, tasks per second)`` pairs here now."""
+        self.queue.announce(robot, rates)
+
     def load(self, robot=None):
         """The load as ``robot`` sees it (its own tasks left out of the backlog)."""
         return self.queue.load(excluding=robot)

@@ -1,0 +1,40 @@
+"""What a load-aware robot's probes announce and what it makes of the answers."""
+
+import os
+import sys
+
+import pytest
+
+from server_select.srv import LatencyProbeResponse
+from server_select.ros.load import RobotLoad
+
+sys.path.append(os.path.join(os.path.dirname(__file__), '..', 'unit'))
+from fake_clock import Clock   # noqa: E402
+
+
+def test_a_probe_announces_the_robots_send_rate_only_to_where_its_tasks_go():
+    clock = Clock(0.0)
+    heading = {'server': 2}
+    load = RobotLoad({'image': 0.5, 'sort': 4.0}, lambda: heading['server'], clock)
+    # nothing sent yet: the streams' rates, to the server its first task goes to
+    assert load.announcement(2) == (['image', 'sort'], [0.5, 4.0])
+    assert load.announcement(1) == (['image', 'sort'], [0.0, 0.0])
+    for t in (0.0, 4.0, 8.0):          # frames go out every 4 s (slower than asked)
+        clock.now = t
+        load.sent(2, 'image')
+    clock.now = 9.0
+    kinds, rates = load.announcement(2)
+    assert rates == [pytest.approx(0.25), 4.0]       # no sort task sent yet: as asked
+    heading['server'] = 1                            # the flag moved the robot
+    assert load.announcement(2)[1] == [0.0, 0.0]
+    assert load.announcement(1)[1] == [pytest.approx(0.25), 4.0]
+    clock.now = 17.0                                 # no frame for two of its gaps
+    assert load.announcement(1)[1] == [0.0, 4.0]
+
+
+def test_the_wait_comes_from_the_answers_utilization():
+    load = RobotLoad({'image': 1.0}, lambda: 1)
+    answer = LatencyProbeResponse(server_id=1, workers=1, backlog=3.0, utilization=0.5,
+                                  kinds=['image'], service_time=[0.6])
+    assert load.on_answer(1, answer) == pytest.approx(0.6 + 0.5 * 0.6 / 2 / 0.5)
+    assert load.expected('image')(1) == pytest.approx(3.0 + 0.6)   # deadlines: backlog
