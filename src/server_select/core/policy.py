@@ -31,12 +31,24 @@ Berenbrink et al. 2007, where a random choice of target does the halving). A mov
 gain in round trip alone (the statistics less the servers' *waits*, from load-aware
 samples: backlog and work) is larger than the best server's wait is taken at once: robots
 that follow it add to the wait, not to the distance, so a server that is nearer on the
-network by more than the work it is asked for is not held back. :class:`Chooser` keeps the
-draws and the servers' last waits.
+network by more than the work it is asked for is not held back (the waits are those of the
+ranking's statistics, the window's: the newest sample's wait set against a window's
+statistic took a fall in a server's load for a gain in distance, and moved every robot on
+it at once). :class:`Chooser` keeps the draws.
+
+A draw is right for the loads it sees, and a move shows in them only once the robot's
+probes announce it and the window holds samples taken since: robots that draw in that
+time draw on the same old loads and move together (seen in the manager: four of five
+robots left a loaded server for one idle-looking one within 0.7 s, and three came back).
+The choosers of one manager share a :class:`Settling`: a server that a robot was just
+moved to takes no other robot by a draw until ``seconds`` later (the manager's window),
+and a robot with no server yet takes the best server that is not settling. Moves that are
+not drawn for (its server left the ranking, nearer by more than the wait) are not held.
 """
 
 import math
 import random
+import threading
 
 from server_select.core.ranking import NO_SERVER
 
@@ -100,19 +112,35 @@ class Policy(object):
         return text + (', spread' if self.spread else '')
 
 
+class Settling(object):
+    """When each server last had a robot moved to it, shared by the :class:`Chooser` s of
+    one manager (thread-safe): a server is *settling* for ``seconds`` after."""
+
+    def __init__(self, seconds):
+        self.seconds = float(seconds)
+        self._lock = threading.Lock()
+        self._moved = {}
+
+    def moved(self, server, now):
+        with self._lock:
+            self._moved[server] = now
+
+    def settling(self, server, now):
+        with self._lock:
+            last = self._moved.get(server)
+        return last is not None and now - last < self.seconds
+
+
 class Chooser(object):
     """A :class:`Policy` with the current choice of one robot, when it was made, and (with
-    ``spread``) when the last draw was and the random numbers drawn (``rng``)."""
+    ``spread``) when the last draw was, the random numbers drawn (``rng``) and the
+    :class:`Settling` it shares with the other robots' choosers (None: none)."""
 
-    def __init__(self, policy, rng=None):
+    def __init__(self, policy, rng=None, settling=None):
         self.policy, self.current, self.since = policy, None, None
         self.drawn = None
         self.rng = rng or random.Random()
-        self.waits = {}         # server -> its last wait (s), from load-aware samples
-
-    def note_wait(self, server, seconds):
-        """The wait a load-aware sample reported for ``server``."""
-        self.waits[server] = seconds
+        self.settling = settling if policy.spread else None
 
     def choose(self, ranking, now, current=None):
         """The server to select now (``current``: what was last published, if the caller
@@ -120,26 +148,44 @@ class Chooser(object):
         if current is not None and current != self.current:
             self.current, self.since = current, None
         selected = self.policy.choose(ranking, self.current, self.since, now)
+        if self.settling is not None and self.current in (None, NO_SERVER):
+            selected = next((s for i, s in enumerate(ranking.ranking)
+                             if not self.settling.settling(s, now)
+                             and ranking.waits and ranking.waits[i] is not None
+                             and not _nearer(ranking, i)), selected)
         if selected != self.current and self.policy.spread and not self._draw(ranking, now):
             selected = self.current
         if selected != self.current:
             self.current, self.since = selected, now
+            if self.settling is not None and selected != NO_SERVER:
+                self.settling.moved(selected, now)
         return selected
 
     def _draw(self, ranking, now):
         """Whether a warranted move away from a still-ranked server is taken now."""
         if self.current is None or self.current not in ranking.ranking:
             return True                     # nothing to keep: no draw
-        here = ranking.means[ranking.ranking.index(self.current)]
-        best = ranking.ranking[0]
-        if self.current in self.waits and best in self.waits:
-            network = (here - self.waits[self.current]) - (ranking.means[0] - self.waits[best])
-            if network > self.waits[best]:
-                return True     # nearer by more than its wait: robots that follow cannot undo it
+        index = ranking.ranking.index(self.current)
+        here, best = ranking.means[index], ranking.ranking[0]
+        if _nearer(ranking, index):
+            return True     # nearer by more than its wait: robots that follow cannot undo it
         if self.drawn is not None and now - self.drawn < max(1.0, self.policy.dwell):
             return False
+        if self.settling is not None and self.settling.settling(best, now):
+            return False        # its last newcomer does not show yet: no draw spent
         self.drawn = now
         return here > 0 and self.rng.random() < (1.0 - ranking.means[0] / here) / 2.0
+
+
+def _nearer(ranking, index):
+    """Whether the best server is nearer on the network than the one at ``index`` by more
+    than the best's wait (the statistics' network parts and waits: a window's, not the
+    newest sample's; False when the waits are not known)."""
+    waits = ranking.waits
+    if not waits or waits[index] is None or waits[0] is None:
+        return False
+    network = (ranking.means[index] - waits[index]) - (ranking.means[0] - waits[0])
+    return network > waits[0]
 
 
 def from_params(get):

@@ -4,11 +4,14 @@ import collections
 
 from server_select.core.outcome import NO_SERVER  # noqa: F401 (re-exported)
 
-Ranking = collections.namedtuple('Ranking', 'selected ranking means counts excluded errors')
-Ranking.__new__.__defaults__ = (None,)
+Ranking = collections.namedtuple('Ranking',
+                                 'selected ranking means counts excluded errors waits')
+Ranking.__new__.__defaults__ = (None, None)
 Ranking.__doc__ = """A robot's servers, best first: ``means`` holds each ranked server's
 latency statistic (the window mean in the paper; what ``SelectionFlag.mean_latency``
-carries), ``errors`` the standard errors of their means (None: not known)."""
+carries), ``errors`` the standard errors of their means (None: not known), ``waits`` the
+part of each statistic that is the server's wait (None: a server's, or all, not
+load-aware)."""
 
 
 def latency(stats):
@@ -39,4 +42,5 @@ def rank_servers(pair_stats, fail_fast=0):
         counts=[pair_stats[s].ok_count for s in ranking],
         excluded=excluded,
         errors=[pair_stats[s].se or 0.0 for s in ranking],
+        waits=[pair_stats[s].wait for s in ranking],
     )

@@ -84,8 +84,6 @@ class Selection(object):
         now = self._clock()
         if wait is not None:
             self._aware = True
-            with self._lock:
-                self._chooser.note_wait(server, wait)
         value = rtt if self.cost is None else self.cost.enter(server, now, ok, rtt, probe)
         if ok and not probe and self.cost is not None and self._aware:
             wait = self.cost.above_probes(server, value)    # a task's queueing and work

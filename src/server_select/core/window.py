@@ -21,8 +21,8 @@ STATISTICS = ('mean', 'median', 'trimmed', 'peak_ewma')
 
 Sample = collections.namedtuple('Sample', 'time ok rtt wait')
 PairStats = collections.namedtuple('PairStats',
-                                   'mean ok_count failed_count value se failed_run')
-PairStats.__new__.__defaults__ = (None, None, 0)
+                                   'mean ok_count failed_count value se failed_run wait')
+PairStats.__new__.__defaults__ = (None, None, 0, None)
 PairStats.__doc__ = """A pair's window: ``mean`` of the successful samples (None: none),
 their count, the failed count, ``value`` the window's statistic (None: no successful
 sample; of samples that say their *wait* part, load-aware ones, the statistic of the
@@ -32,8 +32,9 @@ pay in their work already), ``se`` the standard error of the mean (0 with fewer 
 samples; with ``robust``, that of the network part from the median absolute deviation,
 which a step in the latency does not inflate, and that of the wait part from the plain
 variance: waits are zero most of the time and seconds now and then, which the median
-absolute deviation would call no spread at all) and ``failed_run`` how many of the newest
-samples failed in a row."""
+absolute deviation would call no spread at all), ``failed_run`` how many of the newest
+samples failed in a row and ``wait`` the mean wait part of load-aware samples (None:
+not load-aware)."""
 
 EMPTY = PairStats(None, 0, 0, None, None, 0)
 
@@ -139,7 +140,7 @@ class _Pair(object):
                     variance *= math.pi / 2           # whose error is 1.25 x the mean's
                 variance += variance_of(waits)
         return PairStats(mean, n, failed, value, math.sqrt(variance / n),
-                         self.failed_run)
+                         self.failed_run, sum(waits) / n if self.aware else None)
 
 
 class LatencyWindow(object):

@@ -6,7 +6,7 @@ import rospy
 
 from server_select.core import names
 from server_select.core.params import ParamError
-from server_select.core.policy import Chooser, from_params
+from server_select.core.policy import Chooser, Settling, from_params
 from server_select.core.rankings import FleetRankings
 from server_select.core.window import RTT_RANGE, valid_rtt
 from server_select.msg import LatencySample, LatencySamples
@@ -91,6 +91,7 @@ class ManagerNode(object):
                                   lookup=node_pattern(pattern) if pattern else None)
         self._locks = {}          # robot -> lock of its ranking and flag
         self._choosers = {}       # robot -> its Chooser (the policy's state)
+        self._settling = Settling(param('window'))   # servers a robot was just moved to
         self._slice = 0
         self.group = param('group')       # grouped: robots get their servers elsewhere
         self.discovery = ServerDiscovery(param('discovery_period')) \
@@ -182,8 +183,6 @@ class ManagerNode(object):
             if why:
                 self.warn(topic, batch, why)
                 continue
-            if ok and batch.wait:     # what spread needs to tell load from distance
-                self._chooser(robot).note_wait(server, wait)
             if self.rankings.add(robot, server, now, ok, rtt + wait,
                                  probe=topic != names.TASK_SAMPLES_TOPIC,
                                  wait=wait if batch.wait else None):
@@ -238,7 +237,11 @@ class ManagerNode(object):
 
     def _chooser(self, robot):
         """The policy's state for ``robot``."""
-        return self._choosers.setdefault(robot, Chooser(self.policy))
+        chooser = self._choosers.get(robot)
+        if chooser is None:
+            chooser = self._choosers.setdefault(
+                robot, Chooser(self.policy, settling=self._settling))
+        return chooser
 
 
 def main():
