@@ -37,4 +37,7 @@ def test_failed_tasks_count_at_the_timeout_and_extra_sends_per_task():
     assert row['mean'] == pytest.approx((1.0 + 5.0 + 2.0) / 3)
     assert row['oldest'] == 2.0 and row['extra'] == pytest.approx(2 / 3.0)
     assert row['switches'] == pytest.approx(60.0 / 20.0 / 1)   # 1 -> 2 for robot 1
-    assert 'work' not in row
+    assert 'work' not in row and 'settled' not in row
+    # from 21 s on: tasks 2 (server 1) and 3 (server 2) of robot 1: one switch in 9 s
+    row = figures(Run({}, [], reports, [], []), None, 1.0, 10.0, 30.0, 5.0, settled=21.0)
+    assert row['settled'] == pytest.approx(60.0 / 9.0)

@@ -56,6 +56,7 @@ SCENARIOS = {
 }
 TIMEOUT = 5.0        # the task timeout: an answer later than this is not wanted
 WARMUP = 15.0        # s of scenario time before the measured part (nodes up, first tasks)
+SETTLE = 10.0        # s after the late server came up that "settled switches" start
 SORT_SIZE = 20000    # 80 kB a task: on this testbed bytes, not CPU, limit larger ones
 
 
@@ -154,7 +155,8 @@ def run_once(variant, kind, rate, args, work, name):
     capacities = dict((s, share / args.cpu) for s, share in enumerate(shares, start=1)) \
         if kind == 'image' else None
     row = capacity_report.figures(bag_analysis.load(bag), done, rate * args.robots, WARMUP,
-                                  WARMUP + args.seconds, TIMEOUT, capacities)
+                                  WARMUP + args.seconds, TIMEOUT, capacities,
+                                  None if late is None else late + SETTLE)
     row['work'] = capacity_report.work_rate(os.path.join(work, name), t0, WARMUP,
                                             WARMUP + args.seconds)
     return row

@@ -18,6 +18,7 @@ COLUMNS = (('offered', 'offered /s', '%.2f', 1.0), ('sent', 'sent /s', '%.2f', 1
            ('oldest', 'oldest answer ms', '%.0f', 1e3), ('extra', 'extra sends %', '%.1f', 100.0),
            ('work', 'server work /s', '%.2f', 1.0), ('wanted', 'work wanted %', '%.0f', 100.0),
            ('switches', 'switches /min /robot', '%.1f', 1.0),
+           ('settled', 'settled switches /min /robot', '%.1f', 1.0),
            ('overloaded', 'longest overload s', '%.0f', 1.0))
 
 
@@ -85,10 +86,11 @@ def overloaded(reports, capacities, timeout, start, end, span=2.0, slack=1.25):
     return longest
 
 
-def figures(run, done, offered, start, end, timeout, capacities=None):
+def figures(run, done, offered, start, end, timeout, capacities=None, settled=None):
     """The figures of one run: ``run`` a bag_analysis Run, ``done`` its detections (None:
     not frames), ``offered`` tasks/s the robots were asked to send, ``capacities`` each
-    server's tasks/s."""
+    server's tasks/s; from scenario time ``settled`` on (None: no such figure), the
+    switches again: after a change the robots had to follow (a server came up)."""
     from server_select.testbed.bag_analysis import switches
     seconds = end - start
     reports = [r for r in run.reports if start <= r.t < end]
@@ -104,6 +106,10 @@ def figures(run, done, offered, start, end, timeout, capacities=None):
            'extra': (sum(attempts) - len(attempts)) / max(1, len(reports)),
            'switches': sum(switches(reports).values()) * 60.0 / seconds / max(
                1, len(set(r.robot for r in reports)))}
+    if settled is not None:
+        late = [r for r in reports if r.t >= settled]
+        row['settled'] = sum(switches(late).values()) * 60.0 / max(1e-9, end - settled) / max(
+            1, len(set(r.robot for r in late)))
     if capacities:
         row['overloaded'] = overloaded(reports, capacities, timeout, start, end)
     if done is not None:
