@@ -7,6 +7,9 @@ take 0.6 s each (``~work_delay``). Robot 1 (load-aware, task timeout 1 s) gives 
 the second it has: server 1, whose backlog is more than that, must answer it busy at once,
 without doing it, and the robot must send it to server 2, which answers it; no task fails,
 server 1 is not ejected for being busy, and it still does the work that has time.
+
+And a load-aware robot's probes announce its task rate to the server its tasks go to, and
+to that server only: the utilization a server reports to another prober follows the flags.
 """
 
 import itertools
@@ -21,6 +24,7 @@ import rostest
 
 from server_select.core.procs import wait_until
 from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
+from server_select.srv import LatencyProbe
 
 from fleet_recorder import until_answered
 
@@ -114,6 +118,28 @@ class BusyServerTest(unittest.TestCase):
         self.assertGreater(times[-1] - times[0], 6.0, times)
         self.assertGreaterEqual(len(self.of('results', lambda m: m.robot_id == OWN and m.ok)),
                                 5, 'server 1 must keep doing the work that has time')
+
+    def test_a_robots_probes_announce_its_rate_where_its_tasks_go(self):
+        self.assertTrue(wait_until(lambda: self.flags.get_num_connections() >= 1, 30.0))
+        probes = dict((s, rospy.ServiceProxy('/latency_S%d' % s, LatencyProbe))
+                      for s in (1, 2))
+        for proxy in probes.values():
+            proxy.wait_for_service(30.0)
+
+        def utilization():        # as another robot sees it (this node's tasks left out)
+            return dict((s, probes[s](robot_id=OWN, seq=1).utilization) for s in (1, 2))
+
+        seen = {}
+        for first, second in ((1, 2), (2, 1)):
+            def follows():
+                self.flags.publish(SelectionFlag(robot_id=1, server_id=first,
+                                                 ranking=[first, second]))
+                seen[first] = utilization()
+                return seen[first][first] > 0 and seen[first][second] == 0
+            self.assertTrue(wait_until(follows, 20.0, period=0.2),
+                            'flags to server %d: utilization seen %s' % (first, seen[first]))
+        print('\nutilization robot 1 adds, flags to server 1: %s; to server 2: %s' % (
+            seen[1], seen[2]))
 
 
 if __name__ == '__main__':

@@ -6,7 +6,8 @@ import threading
 import pytest
 
 from server_select.core.budget import RetryBudget
-from server_select.core.load import Arrivals, Load, ServiceTimes, WorkQueue
+from server_select.core.demand import Arrivals, Demand
+from server_select.core.load import Load, ServiceTimes, WorkQueue
 from server_select.core.load_board import LoadBoard, queueing
 
 from fake_clock import Clock
@@ -124,8 +125,8 @@ def test_announced_rates_count_at_once_and_replace_the_announcers_arrivals():
             assert q.offer('image', 'b', owner=2) is None
     clock.now = 4.5
     assert q.load(excluding=3).utilization == pytest.approx((0.5 + 0.25) * 0.5)
-    q.announce(4, {'image': 1.0})                # robot 4 moved here: counts at once
-    q.announce(1, {'image': 0.0})                # robot 1 moved away: counts no more
+    q.announce(4, [('image', 1.0)])              # robot 4 moved here: counts at once
+    q.announce(1, [('image', 0.0)])              # robot 1 moved away: counts no more
     assert q.load(excluding=3).utilization == pytest.approx((0.25 + 1.0) * 0.5)
     assert q.load(excluding=4).utilization == pytest.approx(0.25 * 0.5)
     clock.now = 7.0                              # robot 4's announcement is 2.5 s old ...
@@ -228,3 +229,20 @@ def test_hedges_do_not_draw_on_the_reserve():
 def test_a_zero_retry_budget_means_no_limit():
     budget = RetryBudget(ratio=0.0, reserve=0)
     assert all(budget.spend() for _ in range(100)) and budget.describe() == 'no limit'
+
+
+def test_demand_keeps_running_sums_and_forgets_robots_that_stopped_probing():
+    demand = Demand(horizon=10.0, announce_age=3.0)
+    for robot in range(1, 1001):        # a thousand robots probe; 10 send here
+        demand.announce(robot, [('image', 0.25 if robot <= 10 else 0.0)], 0.0)
+    assert demand.rates(0.5) == {'image': pytest.approx(2.5)}
+    assert demand.rates(0.5, excluding=3) == {'image': pytest.approx(2.25)}
+    demand.announce(3, [('image', 0.0), ('sort', 4.0)], 1.0)   # robot 3 changed its mind
+    assert demand.rates(1.0) == {'image': pytest.approx(2.25), 'sort': pytest.approx(4.0)}
+    demand.arrived(3, 'image', 1.5)     # an announcer's arrivals do not count twice
+    demand.arrived(None, 'image', 1.5)  # a task of nobody's does: one per horizon
+    assert demand.rates(1.5)['image'] == pytest.approx(2.25 + 0.1)
+    assert demand.rates(3.5) == {'image': pytest.approx(0.1), 'sort': pytest.approx(4.0)}
+    assert demand.rates(4.5) == {'image': pytest.approx(0.1)}   # robot 3's, 3.5 s old
+    with pytest.raises(ValueError):
+        Demand(announce_age=0.0)

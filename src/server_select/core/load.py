@@ -17,7 +17,7 @@ says the rate at which it sends tasks to that server now (its rate to the server
 task goes to, none to the others), so a robot that moves loads its new server in the
 others' eyes at its next probe, not after its tasks have arrived for a while (robots that
 all saw an idle server came up idle moved to it together). The tasks of a robot that
-announces nothing count at the rate they arrive (:class:`Arrivals`).
+announces nothing count at the rate they arrive (:mod:`server_select.core.demand`).
 
 Server side, :class:`WorkQueue` holds the tasks waiting for the workers. A task carries
 its *deadline* (when its robot stops waiting): one that cannot be finished by then is
@@ -30,6 +30,8 @@ import collections
 import statistics
 import threading
 import time
+
+from server_select.core.demand import Demand
 
 Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization')
 Load.__new__.__defaults__ = (0.0,)
@@ -66,55 +68,6 @@ class ServiceTimes(object):
             return dict(self._medians)
 
 
-class Arrivals(object):
-    """The rate at which each sender's tasks of each kind arrive (not thread-safe: the
-    :class:`WorkQueue` holds its lock).
-
-    A sender's rate is the mean gap between its arrivals within the last ``horizon`` s
-    (at most ``keep`` of them); one arrival alone counts as one per ``horizon``. A sender
-    whose last arrival is older than twice its mean gap has stopped sending here (it moved
-    or stopped) and counts as none, so a robot that leaves a server stops loading it within
-    two of its periods rather than one horizon.
-    """
-
-    def __init__(self, horizon=10.0, keep=8):
-        if not horizon > 0 or keep < 2:
-            raise ValueError('horizon must be > 0 and keep >= 2, got %r, %r' % (horizon, keep))
-        self.horizon, self.keep = float(horizon), int(keep)
-        self._times = {}        # (owner, kind) -> deque of arrival times
-        self._seen = set()      # every (owner, kind) ever added
-
-    def add(self, owner, kind, now):
-        times = self._times.get((owner, kind))
-        if times is None:
-            times = self._times[(owner, kind)] = collections.deque(maxlen=self.keep)
-        times.append(now)
-        self._seen.add((owner, kind))
-
-    def seen(self, owner, kind):
-        """Whether ``owner`` has ever sent a task of ``kind``."""
-        return (owner, kind) in self._seen
-
-    def rates(self, now, excluding=None):
-        """``{(owner, kind): tasks per second}`` of the senders still sending, but
-        ``excluding`` (an owner)."""
-        rates = {}
-        for key, times in list(self._times.items()):
-            while times and now - times[0] > self.horizon:
-                times.popleft()
-            if not times:
-                del self._times[key]
-                continue
-            if excluding is not None and key[0] == excluding:
-                continue
-            gap = (times[-1] - times[0]) / (len(times) - 1) if len(times) > 1 else 0.0
-            if gap <= 0:
-                rates[key] = len(times) / self.horizon      # one arrival (or one instant)
-            elif now - times[-1] <= 2.0 * gap:
-                rates[key] = 1.0 / gap
-        return rates
-
-
 class Job(object):
     """A task in a :class:`WorkQueue`: what the worker needs, its kind, deadline and
     owner (who sent it: a robot's id, or None)."""
@@ -132,8 +85,10 @@ class WorkQueue(object):
     :meth:`offer` queues a task or says at once why not (full, or it cannot be done by its
     deadline: busy); workers :meth:`take` the oldest (None once closed), ask
     :meth:`stale` whether its deadline has passed meanwhile, and call :meth:`done` with the
-    seconds it took, which teach :class:`ServiceTimes`. Deadlines and times are those of
-    ``clock``.
+    seconds it took, which teach :class:`ServiceTimes`. :meth:`announce` hears what a
+    robot's probe says it sends here (:class:`~server_select.core.demand.Demand`: kept
+    ``announce_age`` s; a robot that announces nothing counts by its arrivals over
+    ``horizon`` s). Deadlines and times are those of ``clock``.
     """
 
     def __init__(self, workers, max_queue, times=None, clock=time.monotonic, horizon=10.0,
@@ -143,9 +98,7 @@ class WorkQueue(object):
                              % (workers, max_queue))
         self.workers, self.max_queue = int(workers), int(max_queue)
         self.times = times or ServiceTimes()
-        self.arrivals = Arrivals(horizon)
-        self.announce_age = announce_age
-        self._announced = {}    # owner -> (time, {kind: tasks per second})
+        self.demand = Demand(horizon, announce_age)
         self._clock = clock
         self._cond = threading.Condition()
         self._queue = collections.deque()
@@ -184,7 +137,7 @@ class WorkQueue(object):
                 self.refused += 1
                 return why
             self._queue.append(Job(kind, item, deadline, now, owner))
-            self.arrivals.add(owner, kind, now)
+            self.demand.arrived(owner, kind, now)
             self._cond.notify()
             return None
 
@@ -224,25 +177,14 @@ class WorkQueue(object):
             self.times.add(job.kind, seconds)
 
     def announce(self, owner, rates):
-        """``owner`` sends ``{kind: tasks per second}`` here now (empty: none), what its
-        tasks count for in the utilization for ``announce_age`` s."""
+        """``owner`` sends ``(kind, tasks per second)`` pairs here now (none: nothing)."""
         with self._cond:
-            self._announced[owner] = (self._clock(), dict(rates))
+            self.demand.announce(owner, rates, self._clock())
 
     def _utilization(self, now, excluding):
         """The others' work per second over the workers (call with the lock held)."""
-        announced = {}
-        for owner, (when, rates) in list(self._announced.items()):
-            if now - when > self.announce_age:
-                del self._announced[owner]
-            elif owner != excluding:
-                announced[owner] = rates
-        work = sum(rate * self.times.get(kind) for rates in announced.values()
-                   for kind, rate in rates.items())
-        work += sum(rate * self.times.get(kind)
-                    for (owner, kind), rate in self.arrivals.rates(now, excluding).items()
-                    if owner not in self._announced)
-        return work / self.workers
+        return sum(rate * self.times.get(kind)
+                   for kind, rate in self.demand.rates(now, excluding).items()) / self.workers
 
     def load(self, excluding=None):
         """The :class:`Load` now; its backlog and utilization without the tasks of owner

@@ -81,9 +81,10 @@ PARAMS = {
                      "use, its cgroup's CPU quota rounded up)"),
     'max_queue': Param(100, parse_positive_int, 'tasks waiting for a worker; more are answered '
                        'busy'),
-    'load_aware': Param(False, parse_bool, "rank servers by round trip + the server's backlog "
-                        '+ work per task (from its probe answers), give each task its '
-                        'deadline, and let attempt deadlines follow the load'),
+    'load_aware': Param(False, parse_bool, 'rank servers by round trip + mean wait at the '
+                        "server's utilization + work per task (from its probe answers), "
+                        'announce its task rate in probes, give each task its deadline, and '
+                        "let attempt deadlines follow the server's backlog"),
     'max_in_flight': Param(0, parse_count, 'tasks of a stream out at once; a send finding '
                            'them all out waits for one to end, the newest frame winning '
                            '(0: no limit)'),

@@ -3,7 +3,8 @@
 
 import time
 
-from server_select.core.load import Arrivals, Load
+from server_select.core.demand import Arrivals
+from server_select.core.load import Load
 from server_select.core.load_board import LoadBoard
 
 
