@@ -38,7 +38,8 @@ class ServerNode(object):
     passes while it waits is answered busy when a worker takes it (stale work is shed, not
     done). Every probe answer carries the load: tasks queued and in service, the backlog
     in seconds, the utilization (the share of the workers' time the other robots' tasks
-    take at the rates they arrive) and the recent work per task of each kind.
+    take, at the rates their probes announce or, for robots that announce none, at which
+    they arrive) and the recent work per task of each kind.
 
     :ROS Parameters:
         - ``~server_id`` (int, required): this server's id.

@@ -1,6 +1,7 @@
 """A load-aware robot's view of its servers' load, fed by its probe answers
 (:class:`~server_select.core.load_board.LoadBoard`), and what its probes announce."""
 
+import threading
 import time
 
 from server_select.core.demand import Arrivals
@@ -19,9 +20,9 @@ class RobotLoad(object):
     """What the robot's tasks would wait for at each server: ``mix`` is ``{kind: tasks
     per second}`` of the robot's streams. ``target()`` names the server the robot's next
     task goes to: a probe of it announces the rate the robot sends tasks at (measured from
-    its sends, :class:`~server_select.core.load.Arrivals`; a kind's rate in ``mix`` until
-    its first task is sent), a probe of any other announces none, so that servers count
-    the robot where its tasks go now."""
+    its sends, :class:`~server_select.core.demand.Arrivals`; a kind's rate in ``mix``
+    until its first task is sent), a probe of any other announces none, so that servers
+    count the robot where its tasks go now. Thread-safe."""
 
     def __init__(self, mix, target=None, clock=time.monotonic):
         self.board = LoadBoard(mix)
@@ -30,6 +31,7 @@ class RobotLoad(object):
         self.target = target
         self._sends = Arrivals()
         self._clock = clock
+        self._lock = threading.Lock()      # sends from task threads, probes from others
 
     def on_answer(self, server, response):
         """A probe answer of ``server`` (the Prober's ``load_of``): its wait (s)."""
@@ -38,15 +40,17 @@ class RobotLoad(object):
 
     def sent(self, server, kind):
         self.board.sent(server, kind)
-        self._sends.add(None, kind, self._clock())
+        with self._lock:
+            self._sends.add(None, kind, self._clock())
 
     def announcement(self, server):
         """``(kinds, tasks per second of each)`` for a probe of ``server``."""
         if self.target is None or self.target() != server:
             return self.kinds, [0.0] * len(self.kinds)
-        rates = self._sends.rates(self._clock())
-        return self.kinds, [rates.get((None, kind), 0.0 if self._sends.seen(None, kind)
-                                      else self.mix[kind]) for kind in self.kinds]
+        with self._lock:
+            rates = self._sends.rates(self._clock())
+            return self.kinds, [rates.get((None, kind), 0.0 if self._sends.seen(None, kind)
+                                          else self.mix[kind]) for kind in self.kinds]
 
     def expected(self, kind):
         """``(server) -> seconds``: backlog + work of a ``kind`` task there (None: unknown),
