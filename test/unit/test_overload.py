@@ -230,19 +230,18 @@ def test_robots_that_see_moves_late_move_less_with_a_shared_settling():
     assert moves < 10 * 30, moves                               # can do
 
 
-def test_a_robot_with_no_server_takes_the_best_that_is_not_settling():
+def test_robots_with_no_server_go_round_the_servers_the_policy_would_keep():
     shared = Settling(1.5)
-    first, second, third = (Chooser(Policy('mean', spread=True), random.Random(r),
-                                    settling=shared) for r in range(3))
-    servers = ranking({1: 0.8, 2: 0.9}, {1: 0.79, 2: 0.89})      # equally near, loaded
-    assert first.choose(servers, 0.0) == 1
-    assert second.choose(servers, 0.5) == 2            # 1 is settling
-    assert third.choose(servers, 1.0) == 1             # both are: the best
-    assert Chooser(Policy('mean', spread=True), settling=shared).choose(servers, 3.0) == 1
-    # nearer by more than its wait, or nothing known of the waits: the best, settling or not
-    near = ranking({1: 0.012, 2: 0.030}, {1: 0.001, 2: 0.001})
-    assert Chooser(Policy('mean', spread=True), settling=shared).choose(near, 3.5) == 1
-    assert Chooser(Policy('mean', spread=True), settling=shared).choose(
-        ranking({1: 0.8, 2: 0.9}), 4.0) == 1
+    policy = Policy('hysteresis', margin=0.0003, z=3.0, dwell=3.0, spread=True)
+
+    def first_choice(servers, now, seed):
+        return Chooser(policy, random.Random(seed), settling=shared).choose(servers, now)
+    # three servers alike but for noise, one far: robots starting together go round the
+    # three, never to the far one
+    servers = Ranking(1, [1, 2, 3, 4], [0.0101, 0.0102, 0.0103, 0.050], [10] * 4, [],
+                      [0.002] * 4, [0.001] * 4)
+    chosen = [first_choice(servers, 0.1 * i, i) for i in range(6)]
+    assert chosen == [1, 2, 3, 1, 2, 3], chosen
+    assert first_choice(servers, 5.0, 7) == 1          # all settled again: the best
     # without spread no settling is kept
     assert Chooser(Policy('mean'), settling=shared).settling is None

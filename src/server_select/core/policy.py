@@ -42,8 +42,11 @@ time draw on the same old loads and move together (seen in the manager: four of 
 robots left a loaded server for one idle-looking one within 0.7 s, and three came back).
 The choosers of one manager share a :class:`Settling`: a server that a robot was just
 moved to takes no other robot by a draw until ``seconds`` later (the manager's window),
-and a robot with no server yet takes the best server that is not settling. Moves that are
-not drawn for (its server left the ranking, nearer by more than the wait) are not held.
+and a robot with no server yet takes, of the servers the policy would keep if it were on
+them, the best that is not settling (robots that start together go round them: a fleet's
+first flags, before any load shows, put all robots on the one server the network noise
+favoured). Moves that are not drawn for (its server left the ranking, nearer by more than
+the wait) are not held.
 """
 
 import math
@@ -130,6 +133,16 @@ class Settling(object):
             last = self._moved.get(server)
         return last is not None and now - last < self.seconds
 
+    def first(self, servers, now):
+        """The first of ``servers`` that is not settling, else the one whose last newcomer
+        came longest ago (robots that start together go round the servers)."""
+        with self._lock:
+            last = [self._moved.get(s) for s in servers]
+        for server, moved in zip(servers, last):
+            if moved is None or now - moved >= self.seconds:
+                return server
+        return min(zip(last, servers))[1]
+
 
 class Chooser(object):
     """A :class:`Policy` with the current choice of one robot, when it was made, and (with
@@ -148,11 +161,10 @@ class Chooser(object):
         if current is not None and current != self.current:
             self.current, self.since = current, None
         selected = self.policy.choose(ranking, self.current, self.since, now)
-        if self.settling is not None and self.current in (None, NO_SERVER):
-            selected = next((s for i, s in enumerate(ranking.ranking)
-                             if not self.settling.settling(s, now)
-                             and ranking.waits and ranking.waits[i] is not None
-                             and not _nearer(ranking, i)), selected)
+        if self.settling is not None and self.current in (None, NO_SERVER) and ranking.ranking:
+            # no server yet: among those the policy would keep, one not settling
+            kept = [s for s in ranking.ranking if self.policy.choose(ranking, s) == s]
+            selected = self.settling.first(kept or [selected], now)
         if selected != self.current and self.policy.spread and not self._draw(ranking, now):
             selected = self.current
         if selected != self.current:
