@@ -28,7 +28,9 @@ def test_a_probe_announces_the_robots_send_rate_only_to_where_its_tasks_go():
     heading['server'] = 1                            # the flag moved the robot
     assert load.announcement(2)[1] == [0.0, 0.0]
     assert load.announcement(1)[1] == [pytest.approx(0.25), 4.0]
-    clock.now = 17.0                                 # no frame for two of its gaps
+    clock.now = 17.0        # 10 s on, only the last frame is left: one in 10 s
+    assert load.announcement(1)[1] == [pytest.approx(0.1), 4.0]
+    clock.now = 18.5        # none left: none announced
     assert load.announcement(1)[1] == [0.0, 4.0]
 
 
