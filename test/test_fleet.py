@@ -12,11 +12,13 @@ import collections
 import re
 import subprocess
 import sys
+import threading
 import unittest
 
 import rosnode
 import rospy
 import rostest
+from rosgraph_msgs.msg import Log
 
 from server_select.core import names
 from server_select.core.params import parse_id_list
@@ -38,6 +40,8 @@ class FleetTest(unittest.TestCase):
         cls.direct = rospy.get_param('~routing', 'broadcast') == 'direct'
         cls.best_first = bool(rospy.get_param('~best_first', True))
         cls.rec = FleetRecorder(cls.robots, cls.servers) if cls.direct else FleetRecorder()
+        cls.logs, cls.log_lock = [], threading.Lock()
+        rospy.Subscriber('/rosout', Log, cls.on_log, queue_size=1000)
 
     def test_every_robot_selects_a_live_server(self):
         if self.mode == 'fixed':   # no manager runs: no flag names a server the robots do not use
@@ -78,6 +82,11 @@ class FleetTest(unittest.TestCase):
         self.assertTrue(re.search(r'stamp:\s*\n\s*secs: 3\s*\n\s*nsecs:\s*4\b', out.stdout),
                         out.stdout)
 
+    @classmethod
+    def on_log(cls, msg):
+        with cls.log_lock:
+            cls.logs.append(msg)
+
     @staticmethod
     def flagged_at(flags, robot, stamp, delivery=rospy.Duration(0.5)):
         """The servers the manager's flags had selected for ``robot`` at ``stamp`` (one
@@ -90,14 +99,14 @@ class FleetTest(unittest.TestCase):
         racing = [f for f in mine if stamp - delivery < f.header.stamp <= stamp]
         return set(f.server_id for f in settled[-1:] + racing)
 
-    @staticmethod
-    def failed_on(reports, stamp, within=rospy.Duration(4.0)):
-        """The servers on which an attempt of an earlier task failed within ``within``
-        before ``stamp``: a robot ejects such a server and sends its next tasks to the next
-        one, whatever the flags say, until the server is back (1 s, then good probes)."""
-        return set(r.server_id for r in reports if r.attempts > 1
-                   and r.answered_by != r.server_id
-                   and stamp - within <= r.header.stamp <= stamp)
+    def doubted(self, robot, stamp, within=rospy.Duration(6.0)):
+        """The servers ``robot`` logged, in the ``within`` before ``stamp``, that it ejected
+        or that had not answered yet: its own evidence, which goes before the flags (an
+        ejection lasts 1 s and then needs good probes; a server not up yet, good probes)."""
+        pattern = re.compile(r'robot %d: server (\d+) (ejected|has not answered yet)' % robot)
+        with self.log_lock:
+            lines = [m.msg for m in self.logs if stamp - within <= m.header.stamp <= stamp]
+        return set(int(m.group(1)) for m in map(pattern.match, lines) if m)
 
     def test_tasks_complete_exactly_once_from_the_flagged_server(self):
         def all_reported():
@@ -148,8 +157,8 @@ class FleetTest(unittest.TestCase):
                 else:
                     flagged = self.flagged_at(flags, robot, copies[0].header.stamp)
                     if report.server_id not in flagged:   # only if its own evidence said
-                        self.assertLessEqual(flagged, self.failed_on(  # so: an attempt there
-                            reports, copies[0].header.stamp), what)    # failed just before
+                        self.assertLessEqual(flagged, self.doubted(    # so just before
+                            robot, copies[0].header.stamp), what)
             rtts = sorted(r.rtt for r in reports)
             print('robot %d: %d tasks, %d sends beyond the first (hedged or re-sent), round '
                   'trip median %.1f ms, max %.1f ms'

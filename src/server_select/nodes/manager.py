@@ -36,6 +36,9 @@ class ManagerNode(object):
     sample (a restarted manager does not publish an empty ranking over a robot's working
     choice). Samples claiming another pair, with an impossible round trip, or not
     published by ``~robot_node`` are ignored with a throttled warning naming the publisher.
+    With ``~spread`` the robots' choices share a settling record: a server a robot was
+    just moved to takes no other robot by a draw for ``~window`` s (the others see the
+    move in their samples only then).
 
     :ROS Parameters:
         - ``~profile`` (``paper``): ``fleet`` sets the defaults marked (fleet) below.
