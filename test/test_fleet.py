@@ -26,6 +26,9 @@ from server_select.core.params import parse_id_list
 from fleet_recorder import FleetRecorder
 
 
+NO_SERVER = 'no server selected'     # the report's error when no server may be used
+
+
 class FleetTest(unittest.TestCase):
 
     @classmethod
@@ -121,14 +124,24 @@ class FleetTest(unittest.TestCase):
         for robot in self.robots:
             reports = self.rec.reports_of(robot)
             self.assertEqual(sorted(r.task_id for r in reports), list(range(1, self.tasks + 1)))
-            failed = [(r.task_id, r.error) for r in reports if not r.ok]
+            # a task may fail only for want of a server the robot's own evidence allows
+            # (every one ejected or not answering: make test runs this at low priority
+            # beside other tests, where a 0.5 s probe or a 1 s first attempt can time out)
+            unserved = [r.task_id for r in reports if not r.ok and r.error == NO_SERVER and
+                        set(self.servers) <= self.doubted(robot, r.header.stamp)]
+            failed = [(r.task_id, r.error) for r in reports
+                      if not r.ok and r.task_id not in unserved]
             self.assertEqual(failed, [])
+            if unserved:
+                print('robot %d: tasks %s failed with every server ejected or not answering '
+                      '(its log)' % (robot, unserved))
             by_id = dict((r.task_id, r) for r in reports)
             sends = collections.defaultdict(list)     # task id: its sends, in arrival order
             for t in tasks:
                 if t.msg.robot_id == robot:
                     sends[t.msg.task_id].append(t.msg)
-            self.assertEqual(sorted(sends), list(range(1, self.tasks + 1)))
+            self.assertEqual(sorted(sends), [i for i in range(1, self.tasks + 1)
+                                             if i not in unserved])
             answers = collections.Counter(
                 (r.msg.task_id, r.msg.server_id) for r in results if r.msg.robot_id == robot)
             extra = 0
@@ -159,11 +172,11 @@ class FleetTest(unittest.TestCase):
                     if report.server_id not in flagged:   # only if its own evidence said
                         self.assertLessEqual(flagged, self.doubted(    # so just before
                             robot, copies[0].header.stamp), what)
-            rtts = sorted(r.rtt for r in reports)
+            rtts = sorted(r.rtt for r in reports if r.ok)
             print('robot %d: %d tasks, %d sends beyond the first (hedged or re-sent), round '
                   'trip median %.1f ms, max %.1f ms'
                   % (robot, len(sends), extra, rtts[len(rtts) // 2] * 1e3, rtts[-1] * 1e3))
-            for report in reports:
+            for report in (r for r in reports if r.ok):
                 self.assertGreater(report.rtt, 0.0)
                 self.assertLess(report.rtt, 2.0)
         if self.mode == 'fixed':
