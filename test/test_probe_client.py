@@ -24,6 +24,10 @@ from server_select.ros.probe_client import ProbeTimeout, TimedServiceProxy
 from server_select.srv import LatencyProbe, LatencyProbeRequest, LatencyProbeResponse
 
 DEADLINE = 0.3
+# how late a call that ended at its deadline may return: make test runs the rostests at nice
+# 19 beside other tests, where a woken thread waited 0.44 s for the CPU (a hung call, without
+# the deadline, would never return)
+SLACK = 0.6
 
 
 def request(seq):
@@ -62,7 +66,7 @@ class ProbeClientTest(unittest.TestCase):
             for seq in range(2, 5):
                 outcome, elapsed = timed(self.proxy, seq)
                 self.assertIsInstance(outcome, ProbeTimeout)
-                self.assertLess(elapsed, DEADLINE + 0.2, 'call %d took %.3f s' % (seq, elapsed))
+                self.assertLess(elapsed, DEADLINE + SLACK, 'call %d took %.3f s' % (seq, elapsed))
         finally:
             os.kill(pid, signal.SIGCONT)
         self.answers(5)
@@ -102,7 +106,7 @@ class ProbeClientTest(unittest.TestCase):
         os.kill(node_pid('/server1', rospy.get_name()), signal.SIGKILL)
         outcome, elapsed = timed(self.proxy, 11)
         self.assertIsInstance(outcome, rospy.ServiceException)
-        self.assertLess(elapsed, DEADLINE + 0.2)
+        self.assertLess(elapsed, DEADLINE + SLACK)
         restarted = subprocess.Popen(['rosrun', 'server_select', 'server', '_server_id:=1',
                                       '__name:=server1'], start_new_session=True,
                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
