@@ -4,7 +4,7 @@ A task's round trip is the network, the wait for a worker and the work itself. A
 answered on its own thread, measures only the first; so every probe answer carries the
 server's :class:`Load` (tasks queued and in service, workers, the *backlog*: seconds a
 task sent now would wait for a worker, the *utilization*: the share of the workers' time
-the other robots' tasks take at the rates they arrive, and the recent work per task of
+the other robots' tasks take at the rates they announce, and the recent work per task of
 each kind), and a robot ranks servers by round trip + expected wait + work for the tasks it
 sends (C3's expected completion, NSDI '15; :mod:`server_select.core.load_board`).
 
