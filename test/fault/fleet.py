@@ -46,6 +46,16 @@ class Recorder(object):
             return [r for r in store if r.time >= since
                     and (robot is None or getattr(r.msg, 'robot_id', robot) == robot)]
 
+    def failures(self, robot):
+        """Robot ``robot``'s failed tasks (receive time, id, error) and its warnings, for a
+        failing test's message."""
+        failed = [(round(r.time, 2), r.msg.task_id, r.msg.error)
+                  for r in self.of(self.reports, robot) if not r.msg.ok]
+        with self.lock:
+            warned = [(round(r.time, 2), r.msg.msg) for r in self.logs
+                      if r.msg.name == '/robot%d' % robot and r.msg.level >= Log.WARN]
+        return {'failed': failed, 'warnings': warned[-15:]}
+
     def log_lines(self, node, text):
         with self.lock:
             return [r.msg.msg for r in self.logs if r.msg.name == node and text in r.msg.msg]

@@ -92,15 +92,17 @@ def test_selected_server_fails_three_times(ros, how):
                                                               else None), 20.0)
             back = wait_until(lambda: ranked(rec, 1, victim, t_dropped), 20.0)
             assert dropped and back, (cycle, victim, dropped, back)
-            cycles.append({'cycle': cycle + 1, 'server': victim,
+            cycles.append({'cycle': cycle + 1, 'server': victim, 'at': round(t_fault, 2),
                            'first answer elsewhere after s': '%.3f' % moved
                            if moved is not None else 'never'})
         outcomes = rec.outcomes((1, 2), TASK_TIMEOUT)
     show('%s of robot 1\'s server, 3 cycles:' % how, cycles)
     show('tasks:', [dict(robot=r, **o) for r, o in outcomes.items()])
-    for outcome in outcomes.values():
-        assert (outcome['never answered'], outcome['duplicates']) == (0, 0), outcome
-        assert outcome['failed'] == 0, outcome
+    for robot, outcome in outcomes.items():
+        assert (outcome['never answered'], outcome['duplicates']) == (0, 0), \
+            'robot %d: %s' % (robot, outcome)
+        assert outcome['failed'] == 0, 'robot %d: %s; %s; cycles %s' % (
+            robot, outcome, rec.failures(robot), cycles)
     assert all(c['first answer elsewhere after s'] != 'never' for c in cycles), cycles
     assert max(float(c['first answer elsewhere after s']) for c in cycles) <= 1.0, cycles
 
