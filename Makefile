@@ -14,7 +14,7 @@ DEMO_DURATION ?= 30
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
-  bench-scale bench-routing bench-hedging bench-capacity bench-master bench-seal \
+  bench-scale bench-routing bench-hedging bench-capacity bench-master bench-seal bench-probes \
   test check unit-test testbed-test fault-test catkin-test rostest lint docs help clean
 all: build
 
@@ -29,7 +29,7 @@ help:
 	@echo 'make evaluate-suite  every scenario, every variant, side by side (about 45 min)'
 	@echo 'make bench           the papers tables and throughput (bench-scale, bench-routing,'
 	@echo '                     bench-hedging, bench-capacity, bench-master, bench-memory, bench-emulator,'
-	@echo '                     bench-seal)'
+	@echo '                     bench-seal, bench-probes)'
 	@echo 'make unit-test, testbed-test, fault-test, catkin-test, rostest T=x.test, lint: parts of make test'
 	@echo 'make docs            docs/parameters.md from the parameter table and the launch files'
 	@echo 'make clean           remove build/ and .venv'
@@ -130,6 +130,11 @@ bench-capacity: build
 	@$(ROSENV) cd $(TOP) && for s in overload crowd herd; do \
 	  $(PY) -m server_select.bench.capacity --scenario $$s --repeats 2 --out results/bench \
 	  || exit 1; done
+
+# Probe calls per robot per second and robot CPU, uniform vs adaptive probing, 10, 50 and
+# 100 servers, 3 runs each (~8 min).
+bench-probes: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.probe_cost --out results/bench
 
 # Calls to the master per node in steady state, both profiles, through a counting proxy
 # (20 robots, 5 servers, the manager on this host; ~4 min).

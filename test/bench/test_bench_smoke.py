@@ -82,3 +82,19 @@ def test_the_seal_benchmark_runs_and_reports(tmp_path):
     assert len(rows) == 8 and all(len(r['seal_us']) == 2 and all(
         finite(v) and v > 0 for v in r['seal_us'] + r['check_us']) for r in rows), rows
     assert '(seal + check) / serialize' in proc.stdout
+
+
+def test_the_probe_cost_benchmark_counts_probes(tmp_path):
+    """`make bench-probes` in a tiny configuration: the servers count the robot's probes."""
+    proc = subprocess.run([sys.executable, '-m', 'server_select.bench.probe_cost',
+                           '--servers', '6', '--repeats', '1', '--warmup', '3', '--seconds', '4',
+                           '--out', str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:]
+    runs = json.loads((tmp_path / 'probe_cost.json').read_text())
+    assert [r['variant'] for r in runs] == ['uniform', 'adaptive']
+    # uniform: every server at 4 Hz; adaptive: the nearest two at up to 10 Hz each
+    assert all(r['probes'] > 0 and r['cpu'] is not None for r in runs), runs
+    assert runs[1]['near'] > runs[0]['near'], runs
+    assert 'target probes/s' in proc.stdout

@@ -11,7 +11,9 @@ that enters or leaves the ranking, or a server whose mean falls below the select
 :meth:`FleetRankings.add` says so in O(1), and only then need the robot be ranked again.
 A server also leaves a ranking without any sample, when its newest good sample leaves the
 window: :meth:`FleetRankings.departures` names the robots this happened to (one scheduled
-check per pair and window, O(log pairs) each).
+check per pair and window, O(log pairs) each; with a window that keeps a rarely sampled
+pair's newest samples, its ``horizon``: sooner only when newer samples push the good one
+out, which :meth:`FleetRankings.add` reports).
 """
 
 import heapq
@@ -26,8 +28,8 @@ class FleetRankings(object):
     """Samples in, :class:`~server_select.core.ranking.Ranking` per robot out. Thread-safe."""
 
     def __init__(self, window, robots=(), servers=(), statistic='mean', tau=1.0,
-                 fail_fast=0, robust=False, task_memory=0.0):
-        self.window = LatencyWindow(window, statistic, tau, robust)
+                 fail_fast=0, robust=False, task_memory=0.0, keep=0, horizon=None):
+        self.window = LatencyWindow(window, statistic, tau, robust, keep, horizon)
         # task samples' cost above the probes, remembered (core/passive.py; 0: off)
         self.cost = TaskCost(task_memory) if task_memory > 0 else None
         self.fail_fast = fail_fast
@@ -80,7 +82,7 @@ class FleetRankings(object):
         with self._lock:
             newest = self._last_good.get((robot, server)) if ok else None
             if ok and newest is None:       # (again) in the window: due when this leaves
-                heapq.heappush(self._due, (now + self.window.window, robot, server))
+                heapq.heappush(self._due, (now + self.window.horizon, robot, server))
             if ok and (newest is None or now > newest):
                 self._last_good[(robot, server)] = now
             heard = self._servers.get(robot)
@@ -108,11 +110,11 @@ class FleetRankings(object):
             while self._due and self._due[0][0] <= now:
                 _, robot, server = heapq.heappop(self._due)
                 newest = self._last_good[(robot, server)]
-                if newest + self.window.window <= now:
+                if newest + self.window.horizon <= now:
                     del self._last_good[(robot, server)]    # the next good one re-enters
                     robots.add(robot)
                 else:
-                    heapq.heappush(self._due, (newest + self.window.window, robot, server))
+                    heapq.heappush(self._due, (newest + self.window.horizon, robot, server))
             members = set(self.fixed_robots) if not self.learn_robots else None
         return sorted(r for r in robots if members is None or r in members)
 

@@ -24,7 +24,7 @@ class Selection(object):
 
     def __init__(self, robot_id, servers, mode, fixed_server=None, health=None, window=5.0,
                  policy=None, manager_timeout=3.0, clock=time.monotonic, statistic=None,
-                 tau=1.0, passive=False, task_memory=0.0):
+                 tau=1.0, passive=False, task_memory=0.0, keep=0, horizon=None):
         if mode not in MODES:
             raise ValueError('unknown mode %r' % (mode,))
         self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
@@ -33,11 +33,13 @@ class Selection(object):
         self.health = health
         policy = policy or Policy()
         self.manager_timeout = manager_timeout
-        self.window = LatencyWindow(window, statistic or policy.statistic(), tau, policy.robust)
+        self.window = LatencyWindow(window, statistic or policy.statistic(), tau, policy.robust,
+                                    keep, horizon)
         # probes only, what a task sample is compared with: a window of its own only when
         # task samples share the main one (``passive``)
         self.passive = passive
-        self.probes = LatencyWindow(window) if passive else self.window
+        self.probes = LatencyWindow(window, keep=keep, horizon=horizon) if passive \
+            else self.window
         self.cost = TaskCost(task_memory) if passive and task_memory > 0 else None
         self._chooser = Chooser(policy)
         self._clock = clock
@@ -90,6 +92,27 @@ class Selection(object):
         self.window.add(self.robot_id, server, now, ok, value, wait)
         if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
+
+    def contenders(self, rule):
+        """The servers that ``rule`` (a :class:`~server_select.core.probing.ContenderRule`)
+        calls contenders by the robot's own window, around where the next task goes."""
+        now = self._clock()
+        with self._lock:
+            servers = list(self.servers)
+        return rule.select(self.window.robot_stats(self.robot_id, servers, now, errors=False),
+                           self.heading())
+
+    def near(self, rule, value):
+        """Whether a sample of ``value`` lands near the contenders (``rule.near``; by the
+        window of the server the next task goes to alone, when it has one)."""
+        now, heading = self._clock(), self.heading()
+        stats = self.window.stats(self.robot_id, heading, now, errors=False)
+        if stats.ok_count:
+            return rule.near({heading: stats}, heading, value)
+        with self._lock:
+            servers = list(self.servers)
+        return rule.near(self.window.robot_stats(self.robot_id, servers, now, errors=False),
+                         heading, value)
 
     def probe_latency(self, server):
         """The mean of the robot's probes of ``server`` in the window (None: none)."""

@@ -51,6 +51,13 @@ PARAMS = {
     'fixed_server': Param(None, parse_id, 'target in fixed mode (default: first server)'),
     'probe_rate': Param(1.0, parse_positive, 'probes per second to each server (Hz)'),
     'probe_timeout': Param(0.5, parse_positive, 'a probe without answer after this fails (s)'),
+    'contender_rate': Param(0.0, parse_non_negative, 'adaptive probing: probes per second to '
+                            'each contender (the selected server and those near it; 0: every '
+                            'server at ~probe_rate)'),
+    'background_rate': Param(0.5, parse_positive, 'adaptive probing: probes per second to '
+                             'each server that is not a contender (Hz)'),
+    'contender_budget': Param(20.0, parse_positive, 'adaptive probing: probes per second to '
+                              'all contenders together, at most (Hz)'),
     'sort_tasks': Param(True, parse_bool, 'send sort tasks'),
     'task_rate': Param(2.0, parse_positive, 'sort tasks per second (Hz)'),
     'task_size': Param(1000, parse_positive_int, 'values per sort task'),
@@ -98,6 +105,10 @@ PARAMS = {
     'image_transport': Param('raw', one_of('raw', 'compressed'), 'how frames travel'),
     'jpeg_quality': Param(80, parse_count, 'JPEG quality of compressed frames (0-100)'),
     'window': Param(5.0, parse_positive, 'latency sample window (s)'),
+    'window_samples': Param(0, parse_count, "a pair's window also keeps its newest this many "
+                            'samples, up to ~window_max old (for servers probed rarely)'),
+    'window_max': Param(8.0, parse_positive, 'the oldest a sample kept by ~window_samples may '
+                        'be (s)'),
     'publish_rate': Param(1.0, parse_positive, 'periodic selection flag rate (Hz)'),
     'update_rate': Param(10.0, parse_positive, 're-evaluation rate between samples (Hz)'),
     'hysteresis': Param(0.0, parse_non_negative, 'keep the current server while within this '
@@ -171,6 +182,8 @@ PROFILES = {
               # the scenario suite's winner (docs/evaluation.md, "The scenario suite")
               'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
               'window': 1.5, 'probe_rate': 4.0, 'passive': True, 'task_memory': 5.0,
+              # adaptive probing: docs/design.md, "Adaptive probing"
+              'contender_rate': 10.0, 'window_samples': 3,
               'fail_fast': 2, 'hedge': True,
               # capacity: docs/design.md, "Capacity and overload"
               'load_aware': True, 'max_in_flight': 1, 'spread': True},

@@ -97,9 +97,12 @@ class _Pair(object):
                 self.ewma = self.ewma * weight + sample.rtt * (1.0 - weight)
             self.ewma_time = sample.time
 
-    def prune(self, horizon):
-        samples = self.samples
-        while samples and samples[0].time <= horizon:
+    def prune(self, start, keep=0, oldest=None):
+        """Drop the samples taken at or before ``start``, but the newest ``keep`` of them
+        only when taken at or before ``oldest``."""
+        samples, oldest = self.samples, start if oldest is None else oldest
+        while samples and samples[0].time <= start and (
+                len(samples) > keep or samples[0].time <= oldest):
             old = samples.popleft()
             if old.ok:
                 self.ok_count -= 1
@@ -152,11 +155,27 @@ class LatencyWindow(object):
     (one of :data:`STATISTICS`) is the pair's ``value``; ``tau`` (s) is the peak EWMA's
     decay time; ``robust``: standard errors from the median absolute deviation (O(n log n)
     per read). Thread-safe: subscriber callbacks add, a timer reads.
+
+    Pairs need not be sampled at one rate (adaptive probing samples contenders often and
+    the other servers rarely). The window is a time, the same for every pair: a pair's
+    statistic is that of its own samples in it, and its standard error comes from their
+    number, so a rarely sampled pair has a wide interval, not a made-up precise one. With
+    ``keep`` > 0 a pair sampled less often than ``keep`` times a window also keeps its
+    newest ``keep`` samples, up to ``horizon`` s old: a server probed every few seconds
+    stays ranked (by what it last showed, with the error of that few) instead of
+    flickering in and out of the ranking between its probes. A sample is in the window at
+    time t when t - its time < ``window``, or when it is one of the pair's newest ``keep``
+    and t - its time < ``horizon``.
     """
 
-    def __init__(self, window, statistic='mean', tau=1.0, robust=False):
+    def __init__(self, window, statistic='mean', tau=1.0, robust=False, keep=0, horizon=None):
         if not window > 0:
             raise ValueError('window must be positive, got %r' % (window,))
+        horizon = window if horizon is None or not keep else horizon
+        if not (isinstance(keep, int) and keep >= 0 and horizon >= window):
+            raise ValueError('keep must be a count >= 0 and horizon >= window, got %r, %r'
+                             % (keep, horizon))
+        self.keep, self.horizon = keep, float(horizon)
         if statistic not in STATISTICS:
             raise ValueError('unknown statistic %r (expected one of %s)'
                              % (statistic, ', '.join(STATISTICS)))
@@ -181,7 +200,7 @@ class LatencyWindow(object):
             pair = self._pairs.get((robot_id, server_id))
             if pair is None:
                 pair = self._pairs[(robot_id, server_id)] = _Pair()
-            pair.prune(now - self.window)
+            self._prune(pair, now)
             had_value = pair.ok_count > 0
             pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan'),
                                min(float(wait), float(rtt)) if ok and wait is not None
@@ -195,11 +214,14 @@ class LatencyWindow(object):
             pair = self._pairs.get((robot_id, server_id))
             if pair is None:
                 return EMPTY
-            pair.prune(now - self.window)
+            self._prune(pair, now)
             if not pair.samples:       # nothing left: forget the pair
                 del self._pairs[(robot_id, server_id)]
             return pair.stats(self.statistic, self.robust and errors)
 
-    def robot_stats(self, robot_id, servers, now):
+    def _prune(self, pair, now):
+        pair.prune(now - self.window, self.keep, now - self.horizon)
+
+    def robot_stats(self, robot_id, servers, now, errors=True):
         """``{server_id: PairStats}`` for each of ``servers``."""
-        return dict((s, self.stats(robot_id, s, now)) for s in servers)
+        return dict((s, self.stats(robot_id, s, now, errors)) for s in servers)

@@ -81,7 +81,8 @@ class ManagerNode(object):
         self.rankings = FleetRankings(param('window'), param('robots'), param('servers'),
                                       statistic, param('ewma_tau'), param('fail_fast'),
                                       self.policy.robust,
-                                      param('task_memory') if param('passive') else 0.0)
+                                      param('task_memory') if param('passive') else 0.0,
+                                      param('window_samples'), param('window_max'))
         self.passive = param('passive')
         for name in ('robots', 'servers'):
             if self.stream == 'pair' and not getattr(self.rankings, 'fixed_' + name):

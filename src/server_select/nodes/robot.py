@@ -6,7 +6,7 @@ import time
 
 import rospy
 
-from server_select.core import names
+from server_select.core import names, probing
 from server_select.core.attempts import AttemptClock
 from server_select.core.budget import RetryBudget
 from server_select.core.health import ServerHealth
@@ -43,7 +43,7 @@ class RobotNode(object):
     :ROS Parameters: (all, with defaults: docs/parameters.md, made from ``core/settings.py``)
         - ``~robot_id``; ``~servers`` (may be empty with ``~discover`` or
           ``~top_manager_node``); ``~profile``, ``~routing``, ``~sample_stream``
-        - ``~mode``, ``~fixed_server``, ``~probe_rate``, ``~probe_timeout``, the task
+        - ``~mode``, ``~fixed_server``, ``~probe_rate`` or ``~contender_rate`` (adaptive), the task
           streams' (``~sort_tasks``, ``~task_rate``, ``~image_source`` or
           ``~image_topic``, ``~frame_rate``, ``~task_plugins``, ...), failover and health
           (``~retry_factor``, ...), policy (``~policy``, ...), ``~passive``,
@@ -79,10 +79,12 @@ class RobotNode(object):
             if param('load_aware') and mode == 'select' else None
         self.passive = TaskSamples(self.robot_id, self.selection, self.load is None) \
             if self.selection.passive else None
-        self.prober = Prober(self.robot_id, servers, param('probe_rate'), param('probe_timeout'),
+        plan, rule = probing.from_params(param, self.policy)
+        self.prober = Prober(self.robot_id, servers, plan, param('probe_timeout'),
                              on_sample=self.on_sample, stream=param('sample_stream'),
                              load_of=self.load.on_answer if self.load else None,
-                             announce=self.load.announcement if self.load else None)
+                             announce=self.load.announcement if self.load else None,
+                             contenders=(rule, self.selection) if rule else None)
         self.start_delay = param('start_delay')
         self.summary_period = param('summary_period')
         manager = param('manager_node')   # None: flags from any node
@@ -109,11 +111,12 @@ class RobotNode(object):
             raise ParamError('~eject_time %g is longer than ~eject_max %g'
                              % (eject_time, eject_max))
         self.health = ServerHealth(servers, eject_time, eject_max, param('probation_probes'))
-        policy, statistic = from_params(param)
+        self.policy, statistic = from_params(param)
         return Selection(self.robot_id, servers, mode, fixed, self.health, param('window'),
-                         policy, param('manager_timeout'), statistic=statistic,
+                         self.policy, param('manager_timeout'), statistic=statistic,
                          tau=param('ewma_tau'), passive=param('passive') and mode == 'select',
-                         task_memory=param('task_memory'))
+                         task_memory=param('task_memory'), keep=param('window_samples'),
+                         horizon=param('window_max'))
 
     def _stream(self, kind, rate, mode):
         timeout = param('task_timeout')
@@ -155,10 +158,10 @@ class RobotNode(object):
                        rospy.Timer(rospy.Duration(0.5), self.on_decision_timer)]
         rospy.on_shutdown(self.on_shutdown)
         selection = self.selection
-        rospy.loginfo('robot %d: mode %s%s, probing servers %s at %.3g Hz, tasks: %s',
+        rospy.loginfo('robot %d: mode %s%s, probing servers %s %s, tasks: %s',
                       self.robot_id, selection.mode,
                       ' (server %d)' % selection.fixed_server if selection.mode == 'fixed' else '',
-                      self.prober.servers, self.prober.rate,
+                      self.prober.servers, self.prober.plan.describe(),
                       ', '.join(s.flow.kind for s in self.streams))
 
     def ready(self):

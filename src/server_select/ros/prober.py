@@ -1,8 +1,9 @@
-"""A robot's probing of its servers: one timed LatencyProbe call per server per period."""
+"""A robot's probing of its servers: timed LatencyProbe calls when its probe plan says."""
 
 import concurrent.futures
 import itertools
 import threading
+import time
 
 import rospy
 
@@ -32,7 +33,14 @@ class _Round(object):
 
 
 class Prober(object):
-    """Probes every server every ``1/rate`` s and publishes each sample, failed ones too.
+    """Probes the servers when ``plan`` (a :class:`~server_select.core.probing.ProbePlan`)
+    says, one round per tick of the plan, and publishes each sample, failed ones too.
+    ``contenders``, for adaptive plans, is ``(rule, view)``: a
+    :class:`~server_select.core.probing.ContenderRule` and the robot's
+    :class:`~server_select.core.selection.Selection`, whose ``contenders(rule)`` the plan
+    takes each tick; a sample of a background server that lands near them
+    (``view.near(rule, value)``, after ``on_sample`` has entered it) makes that server a
+    contender at once (a fast re-check).
 
     Each server is probed from a worker thread over a persistent connection, every call
     bounded by ``timeout``; a server whose previous probe is still running gets a failed
@@ -47,10 +55,10 @@ class Prober(object):
     ``announce(server)`` gives the ``(task kinds, rates)`` a probe of it carries.
     """
 
-    def __init__(self, robot_id, servers, rate, timeout, on_sample=None, stream='pair',
-                 load_of=None, announce=None):
+    def __init__(self, robot_id, servers, plan, timeout, on_sample=None, stream='pair',
+                 load_of=None, announce=None, contenders=None):
         self.robot_id = robot_id
-        self.rate = rate
+        self.plan, self.contenders = plan, contenders
         self.timeout = timeout
         self.stream = stream
         self.answered = set()
@@ -85,24 +93,38 @@ class Prober(object):
                     queue_size=10)
             self._proxies[server] = TimedServiceProxy(fleet(names.probe_service(server)),
                                                       LatencyProbe)
+            self.plan.add(server, time.monotonic())
 
     def remove(self, server):
         with self._lock:
             proxy = self._proxies.pop(server, None)
             pub = self._pubs.pop(server, None)
             self.answered.discard(server)
+            self.plan.remove(server)
         if proxy is not None:
             proxy.close()
         if pub is not None:
             pub.unregister()
 
+    def rate(self):
+        """Probes per second now, all servers together (by the plan)."""
+        with self._lock:
+            return self.plan.rate()
+
     def start(self):
-        self._timer = rospy.Timer(rospy.Duration(1.0 / self.rate), self.on_timer)
+        self._timer = rospy.Timer(rospy.Duration(self.plan.tick), self.on_timer)
 
     def on_timer(self, _event):
         if rospy.is_shutdown():
             return
-        servers = self.servers
+        contenders = self.contenders[1].contenders(self.contenders[0]) \
+            if self.contenders is not None else ()
+        with self._lock:
+            now = time.monotonic()
+            self.plan.update(contenders, now)
+            servers = self.plan.due(now)
+        if not servers:
+            return
         stamp = rospy.Time.now()
         batch = _Round(next(self._rounds), stamp, servers) if self._batch_pub else None
         for server in servers:
@@ -149,8 +171,20 @@ class Prober(object):
             sample.header.stamp = stamp
             pub.publish(sample)
         self.on_sample(server, not error, rtt, error, wait)
+        if not error and self.contenders is not None:
+            self._recheck(server, rtt + (wait or 0.0))
         if batch is not None and batch.record(server, not error, rtt, wait):
             self._publish_round(batch)
+
+    def _recheck(self, server, value):
+        """A background server's sample that lands near the contenders: one from now."""
+        with self._lock:
+            if server in self.plan.contenders:
+                return
+        rule, view = self.contenders
+        if view.near(rule, value):
+            with self._lock:
+                self.plan.promote(server, time.monotonic())
 
     def _publish_round(self, batch):
         servers, oks, rtts, waits = zip(*sorted(batch.samples)) if batch.samples \

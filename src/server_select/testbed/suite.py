@@ -44,14 +44,16 @@ VARIANTS = collections.OrderedDict([
     ('peak_ewma', Variant('select', 'paper', {'policy': 'peak_ewma'})),
     ('fleet_no_hedge', Variant('select', 'fleet', {'hedge': False})),
     ('fleet_probes', Variant('select', 'fleet', {'passive': False})),
-    ('fleet_2hz', Variant('select', 'fleet', {'probe_rate': 2.0, 'window': 2.0})),
+    ('fleet_uniform', Variant('select', 'fleet', {'contender_rate': 0})),
     # not in the default run: ask for them with --variants
+    ('fleet_2hz', Variant('select', 'fleet', {'contender_rate': 0, 'probe_rate': 2.0,
+                                              'window': 2.0})),
     ('fleet_trimmed', Variant('select', 'fleet', {'statistic': 'trimmed'})),
     ('fleet_median', Variant('select', 'fleet', {'statistic': 'median'})),
     ('fleet_no_memory', Variant('select', 'fleet', {'task_memory': 0.0})),
     ('fleet_memory10', Variant('select', 'fleet', {'task_memory': 10.0})),
 ])
-ON_REQUEST = ('fleet_trimmed', 'fleet_median', 'fleet_no_memory', 'fleet_memory10')
+ON_REQUEST = ('fleet_2hz', 'fleet_trimmed', 'fleet_median', 'fleet_no_memory', 'fleet_memory10')
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ON_REQUEST)
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server', 'search_sweep')

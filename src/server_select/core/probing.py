@@ -1,0 +1,188 @@
+"""When a robot probes each of its servers: uniformly, or adaptively (no rospy).
+
+A ranking is decided by the few servers whose intervals overlap the selected one's: its
+*contenders*. Adaptive probing samples those often and the rest rarely. The standard error
+of a difference of means falls with the square root of the samples, so a contender probed
+at 10 Hz narrows the policy's margin about 1.6x against 4 Hz over the same window, while a
+server 40 ms away needs a probe every few seconds only to notice that it came near.
+
+- :class:`ContenderRule`: which servers are contenders, from a robot's window statistics:
+  the selected server, every server whose statistic is within ``margin`` + ``z`` x (the
+  sum of the two standard errors) of the selected one's (their intervals overlap, or it
+  is within the policy's margin), servers better than the selected one, and servers not
+  sampled yet. A pair with one sample has no spread of its own: it is given the selected
+  server's per-sample spread.
+- :class:`ProbePlan`: each server's next probe time. Contenders are probed at
+  ``contender_rate`` each, together at most ``budget`` probes a second (a near-equal fleet
+  has many contenders), never below ``background_rate``; the others at
+  ``background_rate``, their phases spread over the period so that they do not come in one
+  burst. A server stays a contender for ``hold`` s after it last was one (so that its
+  window fills with fast samples before it can be demoted) and a server promoted by a
+  *fast re-check* (a background sample that lands near the contenders) is probed at once.
+  Without a ``contender_rate`` the plan is uniform: every server every ``1/rate`` s, in
+  rounds (the paper: 1 Hz).
+
+The robot asks :meth:`ProbePlan.due` once per tick (``tick`` s) and probes what it returns
+as one round; the manager sees the same uneven rounds in the robot's sample batches.
+"""
+
+import math
+
+from server_select.core.ranking import NO_SERVER, latency
+
+GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0     # phases i x GOLDEN mod 1 spread evenly
+
+
+class ContenderRule(object):
+    """Which servers are a robot's contenders (see the module's docstring)."""
+
+    def __init__(self, margin=0.0, z=3.0):
+        if not (margin >= 0 and z >= 0):
+            raise ValueError('margin and z must be >= 0, got %r, %r' % (margin, z))
+        self.margin, self.z = float(margin), float(z)
+
+    def _reference(self, stats, selected):
+        """(value, standard error, per-sample spread) of the selected server, else of the
+        best-valued one; None when no server has a value."""
+        ref = stats.get(selected)
+        if ref is None or latency(ref) is None:
+            valued = [s for s in stats.values() if latency(s) is not None]
+            if not valued:
+                return None
+            ref = min(valued, key=latency)
+        se = ref.se or 0.0
+        return latency(ref), se, se * math.sqrt(max(1, ref.ok_count))
+
+    def _near(self, reference, value, se):
+        ref_value, ref_se, _ = reference
+        return value - ref_value <= self.margin + self.z * (se + ref_se)
+
+    def select(self, stats, selected=NO_SERVER):
+        """The contenders among ``stats`` (``{server: PairStats}``, a robot's window)."""
+        reference = self._reference(stats, selected)
+        chosen = set([selected]) & set(stats)
+        for server, pair in stats.items():
+            value = latency(pair)
+            if not pair.ok_count and not pair.failed_count:
+                chosen.add(server)                  # not sampled yet: learn it
+            elif value is not None and reference is not None and self._near(
+                    reference, value, pair.se if pair.ok_count > 1 else reference[2]):
+                chosen.add(server)
+        return chosen
+
+    def near(self, stats, selected, value):
+        """Whether one sample of ``value`` lands near the contenders (a fast re-check)."""
+        reference = self._reference(stats, selected)
+        return reference is None or self._near(reference, value, reference[2])
+
+
+class ProbePlan(object):
+    """Each server's next probe time (see the module's docstring). Not thread-safe: one
+    timer drives it. Times are the caller's clock (s)."""
+
+    def __init__(self, rate=1.0, contender_rate=0.0, background_rate=0.5, budget=20.0,
+                 hold=1.0):
+        for name, value in (('rate', rate), ('background_rate', background_rate),
+                            ('budget', budget)):
+            if not value > 0:
+                raise ValueError('%s must be positive, got %r' % (name, value))
+        if contender_rate and contender_rate < background_rate:
+            raise ValueError('contender_rate %r is below background_rate %r'
+                             % (contender_rate, background_rate))
+        self.adaptive = bool(contender_rate)
+        self.contender_rate, self.background_rate = float(contender_rate), float(background_rate)
+        self.budget, self.hold = float(budget), float(hold)
+        self.tick = 1.0 / (contender_rate if self.adaptive else rate)
+        self._next = {}          # server -> when it is due
+        self._until = {}         # contender -> until when it stays one
+
+    @property
+    def servers(self):
+        return sorted(self._next)
+
+    @property
+    def contenders(self):
+        return sorted(self._until) if self.adaptive else self.servers
+
+    def add(self, server, now):
+        """A new server: due at once (a contender until it has been sampled)."""
+        if server not in self._next:
+            self._next[server] = now
+            if self.adaptive:
+                self._until[server] = now + self.hold
+
+    def remove(self, server):
+        self._next.pop(server, None)
+        self._until.pop(server, None)
+
+    def describe(self):
+        if not self.adaptive:
+            return 'at %.3g Hz' % (1.0 / self.tick)
+        return 'contenders at %.3g Hz (%.3g Hz in all), the others at %.3g Hz' % (
+            self.contender_rate, self.budget, self.background_rate)
+
+    def interval(self, server):
+        """Seconds between two probes of ``server`` now."""
+        if not self.adaptive:
+            return self.tick
+        if server in self._until:
+            share = min(self.contender_rate, self.budget / max(1, len(self._until)))
+            return 1.0 / max(self.background_rate, share)
+        return 1.0 / self.background_rate
+
+    def rate(self):
+        """Probes per second now, all servers together."""
+        return sum(1.0 / self.interval(s) for s in self._next)
+
+    def update(self, contenders, now):
+        """The contenders now (``ContenderRule.select``): they become (or stay) contenders
+        for ``hold`` s; those whose hold has ended are demoted to the background, their
+        next probe within one background period, at a phase of their own (servers
+        demoted together are not probed together)."""
+        if not self.adaptive:
+            return
+        for server in contenders:
+            if server in self._next:
+                self.promote(server, now, at_once=False)
+        for server, until in list(self._until.items()):
+            if until <= now and server not in contenders:
+                del self._until[server]
+                self._next[server] = now + (server * GOLDEN) % 1.0 / self.background_rate
+
+    def promote(self, server, now, at_once=True):
+        """``server`` is a contender from now on (for ``hold`` s); ``at_once``: probe it
+        at the next tick (a fast re-check)."""
+        if not self.adaptive or server not in self._next:
+            return
+        was = server in self._until
+        self._until[server] = now + self.hold
+        if at_once and not was:
+            self._next[server] = now
+        elif not was:
+            self._next[server] = min(self._next[server], now + self.interval(server))
+
+    def due(self, now):
+        """The servers to probe at this tick (``now``), sorted; each one's next probe is
+        moved one interval on (from ``now`` when it fell more than one behind)."""
+        if not self.adaptive:
+            servers = self.servers
+            for server in servers:
+                self._next[server] = now + self.tick
+            return servers
+        due = []
+        for server, when in self._next.items():
+            if when <= now + self.tick / 2.0:
+                due.append(server)
+                step = self.interval(server)
+                self._next[server] = when + step if when + step > now else now + step
+        return sorted(due)
+
+
+def from_params(get, policy):
+    """The :class:`ProbePlan` and (adaptive plans) the :class:`ContenderRule` that
+    parameters ask for (``get(name)``: ``probe_rate``, ``contender_rate``,
+    ``background_rate``, ``contender_budget``, ``window``), around ``policy``'s margin
+    (a :class:`~server_select.core.policy.Policy`; 3 standard errors unless it has a z)."""
+    plan = ProbePlan(get('probe_rate'), get('contender_rate'), get('background_rate'),
+                     get('contender_budget'), hold=get('window'))
+    return plan, ContenderRule(policy.margin, policy.z or 3.0) if plan.adaptive else None

@@ -1,0 +1,247 @@
+"""Adaptive probing: contenders from intervals, probe rates, a far server that comes near,
+and the window with uneven sampling (core/probing.py, core/window.py)."""
+
+import collections
+import random
+
+import pytest
+
+from server_select.core.policy import Policy
+from server_select.core.probing import ContenderRule, ProbePlan, from_params
+from server_select.core.rankings import FleetRankings
+from server_select.core.window import EMPTY, LatencyWindow, PairStats
+
+MS = 1e-3
+
+
+def pair(value, se, n=10):
+    return PairStats(value, n, 0, value, se, 0)
+
+
+# -- which servers are contenders ---------------------------------------------------------
+
+def test_contenders_are_the_selected_and_the_servers_whose_interval_overlaps_it():
+    rule = ContenderRule(margin=0.3 * MS, z=3.0)
+    stats = {1: pair(5.0 * MS, 0.2 * MS), 2: pair(6.0 * MS, 0.2 * MS),   # 1 ms < 0.3 + 1.2
+             3: pair(7.0 * MS, 0.2 * MS),                                # 2 ms > 1.5 ms
+             4: pair(40.0 * MS, 0.2 * MS), 5: pair(4.0 * MS, 0.2 * MS)}  # 5 is better
+    assert rule.select(stats, 1) == {1, 2, 5}
+    # noisier windows: wider intervals, more contenders
+    noisy = dict((s, pair(p.value, 0.5 * MS)) for s, p in stats.items())
+    assert rule.select(noisy, 1) == {1, 2, 3, 5}
+
+
+def test_the_margin_alone_makes_a_contender_and_a_server_not_sampled_yet_is_one():
+    rule = ContenderRule(margin=2.0 * MS, z=0.0)
+    stats = {1: pair(5.0 * MS, 0.0), 2: pair(6.9 * MS, 0.0), 3: pair(7.1 * MS, 0.0), 4: EMPTY}
+    assert rule.select(stats, 1) == {1, 2, 4}
+
+
+def test_a_server_whose_window_holds_only_failures_is_no_contender_unless_selected():
+    rule = ContenderRule(margin=0.3 * MS)
+    dead = PairStats(None, 0, 3, None, None, 3)
+    stats = {1: pair(5.0 * MS, 0.1 * MS), 2: dead}
+    assert rule.select(stats, 1) == {1}
+    assert rule.select(stats, 2) == {1, 2}      # selected: still probed often
+
+
+def test_with_no_server_selected_the_best_one_is_the_reference():
+    rule = ContenderRule(margin=0.3 * MS)
+    stats = {1: pair(9.0 * MS, 0.1 * MS), 2: pair(3.0 * MS, 0.1 * MS), 3: pair(3.5 * MS, 0.1 * MS)}
+    assert rule.select(stats, -1) == {2, 3}
+    assert rule.select({}, -1) == set()
+
+
+def test_one_sample_has_the_reference_spread_and_lands_near_or_not():
+    rule = ContenderRule(margin=0.3 * MS, z=3.0)
+    # the reference: se 0.1 ms of 16 samples, a spread of 0.4 ms per sample
+    stats = {1: pair(5.0 * MS, 0.1 * MS, n=16), 2: PairStats(6.0 * MS, 1, 0, 6.0 * MS, 0.0, 0)}
+    assert rule.select(stats, 1) == {1, 2}              # 1 ms < 0.3 + 3 x 0.5
+    assert rule.near(stats, 1, 6.7 * MS) and not rule.near(stats, 1, 6.9 * MS)
+
+
+# -- probe plans --------------------------------------------------------------------------
+
+def run(plan, seconds, start=0.0, contenders=None):
+    """Tick ``plan`` for ``seconds``; counts of probes per server."""
+    counts = collections.Counter()
+    ticks = int(round(seconds / plan.tick))
+    for i in range(ticks):
+        now = start + i * plan.tick
+        if contenders is not None:
+            plan.update(contenders, now)
+        counts.update(plan.due(now))
+    return counts
+
+
+def test_a_uniform_plan_probes_every_server_every_tick_as_the_paper():
+    plan = ProbePlan(rate=1.0)
+    for server in (1, 2, 3):
+        plan.add(server, 0.0)
+    assert plan.tick == 1.0 and not plan.adaptive
+    assert run(plan, 10.0) == {1: 10, 2: 10, 3: 10}
+    assert plan.rate() == 3.0 and plan.contenders == [1, 2, 3]
+
+
+def test_contenders_at_their_rate_the_others_at_the_background_rate():
+    plan = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0, hold=1.5)
+    for server in range(1, 11):
+        plan.add(server, 0.0)
+    counts = run(plan, 20.0, contenders={1, 2})
+    steady = run(plan, 20.0, start=20.0, contenders={1, 2})
+    assert steady[1] == steady[2] == 200
+    assert all(9 <= steady[s] <= 11 for s in range(3, 11)), steady
+    assert plan.rate() == pytest.approx(20 + 0.5 * 8)
+    assert counts[1] >= 185 and counts[3] >= 10   # at first every server is learnt, at 2 Hz
+
+
+def test_many_contenders_share_the_budget_but_never_fall_below_the_background_rate():
+    plan = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0, hold=1.5)
+    for server in range(1, 6):
+        plan.add(server, 0.0)
+    counts = run(plan, 10.0, start=0.0, contenders=set(range(1, 6)))
+    assert all(38 <= counts[s] <= 42 for s in range(1, 6)), counts     # 4 Hz each
+    many = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0)
+    for server in range(1, 101):
+        many.add(server, 0.0)
+    assert many.interval(1) == 2.0 and many.rate() == pytest.approx(50.0)
+
+
+def test_probes_per_second_stay_within_20_plus_half_the_servers():
+    for servers in (10, 30, 50, 100):
+        plan = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0, hold=1.5)
+        for server in range(1, servers + 1):
+            plan.add(server, 0.0)
+        run(plan, 5.0, contenders={1, 2, 3})
+        counts = run(plan, 20.0, start=5.0, contenders={1, 2, 3})
+        assert sum(counts.values()) / 20.0 <= 20 + 0.5 * servers + 1, (servers, counts)
+
+
+def test_servers_demoted_together_are_not_probed_together():
+    plan = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0, hold=1.0)
+    for server in range(1, 101):
+        plan.add(server, 0.0)
+    run(plan, 1.0, contenders=set())
+    per_tick = []
+    for i in range(40):                          # two background periods
+        now = 1.0 + i * plan.tick
+        plan.update(set(), now)
+        per_tick.append(len(plan.due(now)))
+    assert 195 <= sum(per_tick) <= 200 and max(per_tick) <= 6, per_tick
+
+
+def test_a_promoted_server_is_probed_at_the_next_tick_and_demoted_after_its_hold():
+    plan = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0, hold=1.5)
+    for server in (1, 2):
+        plan.add(server, 0.0)
+    run(plan, 3.0, contenders={1})
+    assert plan.contenders == [1] and plan.interval(2) == 2.0
+    plan.promote(2, 3.0)
+    assert plan.due(3.0) == [1, 2] and plan.contenders == [1, 2]
+    counts = run(plan, 1.4, start=3.1, contenders={1})
+    assert counts[2] == 14                       # held for 1.5 s at 10 Hz
+    run(plan, 0.5, start=4.5, contenders={1})
+    assert plan.contenders == [1]
+
+
+def test_plans_from_parameters():
+    table = {'probe_rate': 4.0, 'contender_rate': 0.0, 'background_rate': 0.5,
+             'contender_budget': 20.0, 'window': 1.5}
+    plan, rule = from_params(table.get, Policy('hysteresis', 0.0003, 3.0, 3.0))
+    assert not plan.adaptive and rule is None and plan.tick == 0.25
+    table['contender_rate'] = 10.0
+    plan, rule = from_params(table.get, Policy('hysteresis', 0.0003, 3.0, 3.0))
+    assert plan.adaptive and plan.tick == 0.1 and plan.hold == 1.5
+    assert (rule.margin, rule.z) == (0.0003, 3.0)
+    with pytest.raises(ValueError):
+        ProbePlan(contender_rate=0.2, background_rate=0.5)
+
+
+# -- a far server that comes near, end to end in the pure parts ---------------------------
+
+def test_a_far_server_that_comes_near_is_noticed_within_two_background_periods():
+    """Server 3 is 40 ms away and comes to 2 ms (better than the selected 5 ms) at t = 20 s:
+    its next background probe lands near, the fast re-check makes it a contender at once,
+    and its window then fills at the contender rate."""
+    rng = random.Random(3)
+    truth = {1: 5.0 * MS, 2: 9.0 * MS, 3: 40.0 * MS, 4: 60.0 * MS}
+    window = LatencyWindow(1.5, keep=3, horizon=8.0)
+    rule = ContenderRule(margin=0.3 * MS, z=3.0)
+    plan = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0, hold=1.5)
+    for server in truth:
+        plan.add(server, 0.0)
+    noticed, samples_after = None, 0
+    now = 0.0
+    while now < 30.0:
+        if now >= 20.0:
+            truth[3] = 2.0 * MS
+        stats = window.robot_stats(1, truth, now, errors=False)
+        plan.update(rule.select(stats, 1), now)
+        for server in plan.due(now):
+            rtt = truth[server] + rng.gauss(0, 0.2 * MS)
+            window.add(1, server, now, True, rtt)
+            if server not in plan.contenders and rule.near(
+                    window.robot_stats(1, truth, now, errors=False), 1, rtt):
+                plan.promote(server, now)
+            if server == 3 and now >= 20.0:
+                samples_after += 1
+                if noticed is None and 3 in plan.contenders:
+                    noticed = now - 20.0
+        if 19.0 <= now < 20.0:
+            assert plan.contenders == [1], (now, plan.contenders)   # 3 in the background
+        now = round(now + plan.tick, 6)
+    assert noticed is not None and noticed <= 2 * 2.0, noticed
+    assert samples_after >= 10 * (10.0 - noticed - 2.0), samples_after
+
+
+# -- windows with uneven sampling ---------------------------------------------------------
+
+def test_a_rarely_probed_pair_keeps_its_newest_samples_up_to_the_horizon():
+    w = LatencyWindow(1.5, keep=3, horizon=8.0)
+    for t in (0.0, 2.0, 4.0, 6.0):                        # every 2 s: background
+        w.add(1, 9, t, True, 0.040)
+    for i in range(60):                                   # 10 Hz: a contender
+        w.add(1, 1, i * 0.1, True, 0.005 + 0.001 * (i % 2))
+    sparse, dense = w.stats(1, 9, 6.0), w.stats(1, 1, 5.9)
+    assert sparse.ok_count == 3 and dense.ok_count == 15   # 3 newest vs 1.5 s of samples
+    assert w.stats(1, 9, 13.9).ok_count == 1              # 2 s and 4 s are past 8 s
+    assert w.stats(1, 9, 14.1) == EMPTY                    # all past the horizon
+
+
+def test_a_sparse_pair_has_the_wider_standard_error_of_its_few_samples():
+    w = LatencyWindow(1.5, keep=3, horizon=8.0)
+    values = [0.005, 0.007, 0.006, 0.008, 0.004]
+    for i in range(15):
+        w.add(1, 1, 10.0 + i * 0.1, True, values[i % 5])
+    for i, t in enumerate((7.0, 9.0, 11.0)):
+        w.add(1, 2, t, True, values[i])
+    assert w.stats(1, 2, 11.4).se > 1.5 * w.stats(1, 1, 11.4).se
+
+
+def test_failed_samples_push_the_good_ones_out_of_a_sparse_window():
+    w = LatencyWindow(1.5, keep=2, horizon=8.0)
+    w.add(1, 2, 0.0, True, 0.010)
+    w.add(1, 2, 2.0, False, None)
+    assert w.stats(1, 2, 2.0).ok_count == 1
+    w.add(1, 2, 4.0, False, None)
+    assert w.stats(1, 2, 4.0).ok_count == 0 and w.stats(1, 2, 4.0).failed_count == 2
+
+
+def test_without_keep_the_window_is_the_papers_time_window():
+    w = LatencyWindow(1.5, keep=0, horizon=8.0)
+    assert w.horizon == 1.5
+    w.add(1, 2, 0.0, True, 0.010)
+    assert w.stats(1, 2, 1.6) == EMPTY
+    with pytest.raises(ValueError):
+        LatencyWindow(1.5, keep=2, horizon=1.0)
+
+
+def test_the_manager_ranks_a_rarely_probed_server_until_its_horizon():
+    r = FleetRankings(1.5, keep=3, horizon=8.0)
+    r.add(1, 1, 0.0, True, 0.005)
+    r.add(1, 2, 0.0, True, 0.040)
+    for i in range(1, 60):
+        r.add(1, 1, i * 0.1, True, 0.005)
+    assert r.rank(1, 5.9).ranking == [1, 2]
+    assert r.departures(5.9) == []
+    assert r.departures(8.1) == [1] and r.rank(1, 8.1).ranking == [1]
