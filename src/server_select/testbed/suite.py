@@ -52,8 +52,13 @@ VARIANTS = collections.OrderedDict([
     ('fleet_median', Variant('select', 'fleet', {'statistic': 'median'})),
     ('fleet_no_memory', Variant('select', 'fleet', {'task_memory': 0.0})),
     ('fleet_memory10', Variant('select', 'fleet', {'task_memory': 10.0})),
+    ('fleet_window1', Variant('select', 'fleet', {'window': 1.0})),
+    ('fleet_z4', Variant('select', 'fleet', {'margin_z': 4.0})),
+    ('fleet_20hz', Variant('select', 'fleet', {'contender_rate': 20.0,
+                                               'contender_budget': 40.0})),
 ])
-ON_REQUEST = ('fleet_2hz', 'fleet_trimmed', 'fleet_median', 'fleet_no_memory', 'fleet_memory10')
+ON_REQUEST = ('fleet_2hz', 'fleet_trimmed', 'fleet_median', 'fleet_no_memory', 'fleet_memory10',
+              'fleet_window1', 'fleet_z4', 'fleet_20hz')
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ON_REQUEST)
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server', 'search_sweep')
