@@ -53,8 +53,9 @@ def unit_text(role, args, loader, master, ros_ip=None, user=None, ros_home=None)
     if not urllib.parse.urlparse(master).hostname:
         raise ValueError('--master must be a URI such as http://192.168.1.10:11311, got %r'
                          % master)
+    # unbuffered: the journal gets each log line when it is written
     env = [('ROS_MASTER_URI', master)] + ([('ROS_IP', ros_ip)] if ros_ip else []) + \
-        ([('ROS_HOME', ros_home)] if ros_home else [])
+        ([('ROS_HOME', ros_home)] if ros_home else []) + [('PYTHONUNBUFFERED', '1')]
     lines = ['[Unit]',
              'Description=server_select %s %s' % (role, ' '.join(args)),
              'Wants=network-online.target',
@@ -111,7 +112,8 @@ def default_loader():
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='install_service',
+                                     description=__doc__.split('\n\n')[0])
     parser.add_argument('role', choices=ROLES)
     parser.add_argument('args', nargs='*', help='launch arguments, name:=value')
     parser.add_argument('--master', default=os.environ.get('ROS_MASTER_URI',

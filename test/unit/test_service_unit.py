@@ -13,7 +13,7 @@ def test_a_robot_unit_waits_for_the_master_and_restarts_always():
     text = unit_text('robot', ['robot_id:=3', 'profile:=fleet', 'servers:=[]'], LOADER, MASTER,
                      ros_ip='192.168.1.23', user='pi')
     env, cmd, keys = parse_unit(text)
-    assert env == {'ROS_MASTER_URI': MASTER, 'ROS_IP': '192.168.1.23'}
+    assert env == {'ROS_MASTER_URI': MASTER, 'ROS_IP': '192.168.1.23', 'PYTHONUNBUFFERED': '1'}
     assert cmd == [LOADER, 'roslaunch', '--wait', 'server_select', 'robot.launch',
                    'robot_id:=3', 'profile:=fleet', 'servers:=[]']
     assert (keys['User'], keys['Restart'], keys['KillSignal']) == ('pi', 'always', 'SIGINT')
