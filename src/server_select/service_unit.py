@@ -101,14 +101,13 @@ def parse_unit(text):
 
 
 def default_loader():
-    """``scripts/env_loader.sh`` of this package (source tree or install space)."""
-    import rospkg
-    here = rospkg.RosPack().get_path('server_select')
-    for candidate in (os.path.join(here, 'scripts', 'env_loader.sh'),
-                      os.path.join(here, '..', '..', 'lib', 'server_select', 'env_loader.sh')):
-        if os.path.exists(candidate):
-            return os.path.abspath(candidate)
-    raise RuntimeError('env_loader.sh not found under %s' % here)
+    """This package's ``env_loader.sh`` (source tree, devel or install space)."""
+    from roslib.packages import find_resource
+    found = find_resource('server_select', 'env_loader.sh')
+    if not found:
+        raise RuntimeError('env_loader.sh of server_select not found (is the package\'s '
+                           'setup.bash sourced?)')
+    return os.path.abspath(found[0])
 
 
 def main(argv=None):

@@ -8,7 +8,10 @@ tasks to, the median of the recent differences between a task's round trip and t
 server's probe latency at the time is its overhead; the baseline is the lowest overhead
 of any server. What a slow, loaded or queueing server adds above that is what makes it
 rank worse than its probes alone would; on the fastest server a task sample is, on
-average, its probe latency (a median: jitter does not bias it).
+average, its probe latency (a median: jitter does not bias it). Load-aware probes carry
+the server's expected wait and work already; the baseline is then what a task adds to
+that on the server where it adds least: the transfer of its payload, which every server's
+tasks pay alike.
 
 The overheads are the robot's own and forget: each holds the last ``keep`` differences.
 A server loaded from the start, the only one a robot ever used, is not told apart (there

@@ -77,7 +77,7 @@ class RobotNode(object):
         self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds),
                               self.selection.heading) \
             if param('load_aware') and mode == 'select' else None
-        self.passive = TaskSamples(self.robot_id, self.selection, self.load is None) \
+        self.passive = TaskSamples(self.robot_id, self.selection) \
             if self.selection.passive else None
         plan, rule = probing.from_params(param, self.policy)
         self.prober = Prober(self.robot_id, servers, plan, param('probe_timeout'),

@@ -17,13 +17,18 @@ class TaskSamples(object):
     :class:`~server_select.core.selection.Selection` and publishes each on
     ``task_samples`` (one LatencySamples per answered task).
 
-    With ``baseline`` a task's round trip enters less its kind's baseline (probes then
-    measure the network only); without (a load-aware robot, whose probe samples are round
-    trip + the server's wait), as it is: both then estimate a task's completion."""
+    A task's round trip enters less its kind's baseline, the least any server's tasks
+    take above its probes: the work a task needs on the fastest server when probes measure
+    the network only, and the transfer of the task's payload (a probe's is a few bytes)
+    when they are load-aware (round trip + the server's expected wait and work). A server
+    the robot has not sent tasks to is then compared with its current one on equal terms:
+    without the baseline, the server in use carried its payload's transfer in its task
+    samples and the others did not, and on near-equal servers the robot moved to the other
+    and back."""
 
-    def __init__(self, robot_id, selection, baseline=True):
+    def __init__(self, robot_id, selection):
         self.robot_id, self.selection = robot_id, selection
-        self.baseline, self._lock = TaskBaseline() if baseline else None, threading.Lock()
+        self.baseline, self._lock = TaskBaseline(), threading.Lock()
         self.pub = SealedPublisher(fleet(names.TASK_SAMPLES_TOPIC), LatencySamples,
                                    queue_size=100, tcp_nodelay=True)
         self.count = 0
@@ -31,8 +36,8 @@ class TaskSamples(object):
     def on_answer(self, kind, server, rtt):
         """A task of ``kind`` answered by ``server`` after ``rtt`` s (a TaskFlow hook)."""
         with self._lock:
-            sample = rtt if self.baseline is None else self.baseline.sample(
-                kind, server, rtt, self.selection.probe_latency(server))
+            sample = self.baseline.sample(kind, server, rtt,
+                                          self.selection.probe_latency(server))
             if sample is not None:
                 self.count += 1
         if sample is None:
