@@ -106,11 +106,6 @@ class Prober(object):
         if pub is not None:
             pub.unregister()
 
-    def rate(self):
-        """Probes per second now, all servers together (by the plan)."""
-        with self._lock:
-            return self.plan.rate()
-
     def start(self):
         self._timer = rospy.Timer(rospy.Duration(self.plan.tick), self.on_timer)
 
