@@ -232,8 +232,9 @@ def test_without_keep_the_window_is_the_papers_time_window():
     assert w.horizon == 1.5
     w.add(1, 2, 0.0, True, 0.010)
     assert w.stats(1, 2, 1.6) == EMPTY
+    assert LatencyWindow(10.0, keep=3, horizon=8.0).horizon == 10.0   # never below the window
     with pytest.raises(ValueError):
-        LatencyWindow(1.5, keep=2, horizon=1.0)
+        LatencyWindow(1.5, keep=-1, horizon=8.0)
 
 
 def test_the_manager_ranks_a_rarely_probed_server_until_its_horizon():

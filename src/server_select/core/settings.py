@@ -108,7 +108,7 @@ PARAMS = {
     'window_samples': Param(0, parse_count, "a pair's window also keeps its newest this many "
                             'samples, up to ~window_max old (for servers probed rarely)'),
     'window_max': Param(8.0, parse_positive, 'the oldest a sample kept by ~window_samples may '
-                        'be (s)'),
+                        'be (s, at least ~window)'),
     'publish_rate': Param(1.0, parse_positive, 'periodic selection flag rate (Hz)'),
     'update_rate': Param(10.0, parse_positive, 're-evaluation rate between samples (Hz)'),
     'hysteresis': Param(0.0, parse_non_negative, 'keep the current server while within this '

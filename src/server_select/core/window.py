@@ -161,20 +161,20 @@ class LatencyWindow(object):
     statistic is that of its own samples in it, and its standard error comes from their
     number, so a rarely sampled pair has a wide interval, not a made-up precise one. With
     ``keep`` > 0 a pair sampled less often than ``keep`` times a window also keeps its
-    newest ``keep`` samples, up to ``horizon`` s old: a server probed every few seconds
-    stays ranked (by what it last showed, with the error of that few) instead of
-    flickering in and out of the ranking between its probes. A sample is in the window at
-    time t when t - its time < ``window``, or when it is one of the pair's newest ``keep``
-    and t - its time < ``horizon``.
+    newest ``keep`` samples, up to ``horizon`` s old (at least ``window``): a server
+    probed every few seconds stays ranked (by what it last showed, with the error of that
+    few) instead of flickering in and out of the ranking between its probes. A sample is
+    in the window at time t when t - its time < ``window``, or when it is one of the
+    pair's newest ``keep`` and t - its time < ``horizon``.
     """
 
     def __init__(self, window, statistic='mean', tau=1.0, robust=False, keep=0, horizon=None):
         if not window > 0:
             raise ValueError('window must be positive, got %r' % (window,))
-        horizon = window if horizon is None or not keep else horizon
-        if not (isinstance(keep, int) and keep >= 0 and horizon >= window):
-            raise ValueError('keep must be a count >= 0 and horizon >= window, got %r, %r'
-                             % (keep, horizon))
+        if not (isinstance(keep, int) and keep >= 0):
+            raise ValueError('keep must be a count >= 0, got %r' % (keep,))
+        # never shorter than the window (e.g. ~window 10 s with ~window_max 8 s)
+        horizon = window if horizon is None or not keep else max(window, horizon)
         self.keep, self.horizon = keep, float(horizon)
         if statistic not in STATISTICS:
             raise ValueError('unknown statistic %r (expected one of %s)'
