@@ -15,6 +15,7 @@ import sys
 import threading
 import unittest
 
+import rosgraph
 import rosnode
 import rospy
 import rostest
@@ -22,6 +23,7 @@ from rosgraph_msgs.msg import Log
 
 from server_select.core import names
 from server_select.core.params import parse_id_list
+from server_select.msg import SelectionFlag
 
 from fleet_recorder import FleetRecorder
 
@@ -65,6 +67,31 @@ class FleetTest(unittest.TestCase):
             self.assertEqual(len(flag.ranking), len(flag.mean_latency))
             self.assertEqual(list(flag.mean_latency), sorted(flag.mean_latency))
             self.assertTrue(all(0 < m < 1.0 for m in flag.mean_latency), flag.mean_latency)
+
+    def test_each_robot_hears_its_own_flags_only(self):
+        """Fleet profile: the manager sends robot r's flags on robot_<r>/server_select_flag,
+        latched, and no robot listens on the shared topic (only recorders do)."""
+        if not self.direct or self.mode == 'fixed':
+            return
+        master = rosgraph.Master(rospy.get_name())
+        listeners = {}
+        for robot in self.robots:
+            topic = '/' + names.robot_topic(robot, names.SELECTION_TOPIC)
+            got = []
+            sub = rospy.Subscriber(topic, SelectionFlag, got.append)   # latched: at once
+            self.assertTrue(self.rec.wait_for(lambda: got, 20.0), 'no flag on %s' % topic)
+            sub.unregister()
+            self.assertEqual(set(f.robot_id for f in got), {robot}, topic)
+            pubs, subs, _ = master.getSystemState()
+            self.assertEqual(dict(pubs).get(topic), ['/manager'], topic)
+            listeners[robot] = set(dict(subs).get(topic, ())) - {rospy.get_name()}
+            self.assertEqual(len(listeners[robot]), 1, (topic, listeners[robot]))
+        shared = set(dict(master.getSystemState()[1]).get('/' + names.SELECTION_TOPIC, ()))
+        robot_nodes = set.union(*listeners.values())
+        self.assertEqual(len(robot_nodes), len(self.robots), listeners)
+        self.assertEqual(shared & robot_nodes, set(), shared)
+        print('flags: each robot listens on its own topic only (%s); the shared topic has '
+              '%d listener(s), no robot' % (sorted(robot_nodes), len(shared)))
 
     def test_robot_nodes_are_where_the_launch_file_put_them(self):
         expected = rospy.get_param('~robot_nodes', '').split()

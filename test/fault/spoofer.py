@@ -5,7 +5,8 @@
 
 registers as node NAME (default spoofer; ``manager`` takes the manager's name, and the
 master shuts the real one down), publishes at 20 Hz a 0.1 us round trip for robot 1 /
-SERVER on latency_R1S<SERVER>, a flag sending robot 1 to SERVER, and, for every sort task
+SERVER on latency_R1S<SERVER>, a flag sending robot 1 to SERVER (on the shared flag topic and
+on robot 1's own), and, for every sort task
 robot 1 sends, a "result" claiming the addressed server with wrong data (all unsigned);
 prints what it sent as one line of JSON.
 """
@@ -27,7 +28,8 @@ def main():
     rospy.init_node(sys.argv[3] if len(sys.argv) > 3 else 'spoofer', disable_signals=True)
     sent = {'samples': 0, 'flags': 0, 'results': 0}
     samples = rospy.Publisher(names.sample_topic(1, server), LatencySample, queue_size=10)
-    flags = rospy.Publisher(names.SELECTION_TOPIC, SelectionFlag, queue_size=10)
+    flags = [rospy.Publisher(topic, SelectionFlag, queue_size=10) for topic in
+             (names.SELECTION_TOPIC, names.robot_topic(1, names.SELECTION_TOPIC))]
     results = rospy.Publisher(names.SORT_RESULT_TOPIC, numpy_msg(SortResult), queue_size=100)
 
     def forge(task):
@@ -43,8 +45,9 @@ def main():
         sample = LatencySample(robot_id=1, server_id=server, ok=True, rtt=1e-7)
         sample.header.stamp = rospy.Time.now()
         samples.publish(sample)
-        flags.publish(SelectionFlag(robot_id=1, server_id=server, ranking=[server],
-                                    mean_latency=[1e-7], sample_count=[1]))
+        for pub in flags:
+            pub.publish(SelectionFlag(robot_id=1, server_id=server, ranking=[server],
+                                      mean_latency=[1e-7], sample_count=[1]))
         sent['samples'] += 1
         sent['flags'] += 1
         time.sleep(0.05)

@@ -12,8 +12,10 @@ robot is ranked. A size that is not ranked within ``--limit`` s is reported as s
 what the manager used meanwhile. ``--profile fleet`` runs the manager(s) with the fleet
 profile's defaults (window 1.5 s, the hysteresis policy and its robust errors, passive
 samples and task memory; the robot and server lists stay fixed) and ``--rate`` sets the
-simulated probe rounds per robot and second (the fleet probes at 4 Hz). Nothing is
-asserted.
+simulated probe rounds per robot and second (the fleet probes at 4 Hz). ``--flag-stream``
+(default: the profile's) sends the flags on the shared ``server_select_flag``, which every
+robot hears, or on each robot's own topic: the flags and flag bytes that reach a robot per
+second are printed. Nothing is asserted.
 """
 
 import itertools
@@ -32,8 +34,9 @@ from server_select.bench.harness import PY, Roscore, node_pid
 from server_select.bench.scale_sim import group_table
 from server_select.core.procs import measure, stop_groups, wait_until
 from server_select.core.seal import make_key
+from server_select.core.settings import default
 from server_select.core.stats import summarize
-from server_select.core.tables import fmt as _fmt, markdown_table
+from server_select.core.tables import fmt, markdown_table
 
 SIZES = '2x3,10x10,50x50,100x50,200x100,500x100'
 GROUPED = '200x100:4,500x500:10,1000x1000:20'
@@ -46,11 +49,12 @@ def _node(module, args, log):
                                 start_new_session=True)
 
 
-def _managers(layout, robots, servers, groups, log, profile='paper', key=None):
+def _managers(layout, robots, servers, groups, log, profile='paper', key=None,
+              flag_stream='shared'):
     """The nodes under test: {node name: process}."""
     ids = ','.join(map(str, range(1, servers + 1)))
-    common = ["_robot_node:='*'", '_discover:=false', '_profile:=%s' % profile] + \
-        (['_fleet_key:=%s' % key] if key else [])
+    common = ["_robot_node:='*'", '_discover:=false', '_profile:=%s' % profile,
+              '_flag_stream:=%s' % flag_stream] + (['_fleet_key:=%s' % key] if key else [])
     if layout != 'grouped':
         return {'/manager': _node('manager', common + [
             '_robots:=%s' % ','.join(map(str, range(1, robots + 1))), '_servers:=%s' % ids,
@@ -66,7 +70,8 @@ def _managers(layout, robots, servers, groups, log, profile='paper', key=None):
     return nodes
 
 
-def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0, key=None):
+def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0, key=None,
+          flag_stream='shared'):
     """The simulated robots' processes: {node name: (process, its result file)}."""
     per = -(-robots // sims)
     started = {}
@@ -75,7 +80,8 @@ def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0, ke
         cmd = PY + ['server_select.bench.scale_sim', '--first', str(first), '--count',
                     str(min(per, robots - first + 1)), '--servers', str(servers),
                     '--layout', layout, '--until', repr(until), '--out', out,
-                    '--groups', str(groups), '--rate', repr(rate)] + \
+                    '--groups', str(groups), '--rate', repr(rate),
+                    '--flag-stream', flag_stream] + \
             (['--fleet-key', key] if key else [])
         with open(log, 'a') as stream:
             started['/scale_sim_%d' % first] = (subprocess.Popen(
@@ -90,45 +96,64 @@ def _usage(pid):
                 'rss_mb': proc.memory_info().rss / 2.0 ** 20}
 
 
-def _progress(outs):
-    """(latest first-full-ranking time over every robot, or None while one has none yet;
-    the sample-to-flag delays) from the simulated robots' result files so far."""
-    ranked, robots, delays = [], 0, []
+def _results(outs):
+    """The simulated robots' result files so far (None while one is not written yet)."""
+    results = []
     for out in outs:
         try:
             with open(out) as stream:
-                data = json.load(stream)
-        except FileNotFoundError:          # not written yet
-            return None, delays
-        ranked += list(data['ranked'].values())
-        robots += data['robots']
-        delays += data['delays']
+                results.append(json.load(stream))
+        except FileNotFoundError:
+            return None
+    return results
+
+
+def _progress(outs):
+    """(latest first-full-ranking time over every robot, or None while one has none yet;
+    the sample-to-flag delays) from the simulated robots' result files so far."""
+    results = _results(outs)
+    if results is None:
+        return None, []
+    ranked = [t for data in results for t in data['ranked'].values()]
+    robots = sum(data['robots'] for data in results)
+    delays = [d for data in results for d in data['delays']]
     return (max(ranked) if len(ranked) == robots and ranked else None), delays
 
 
+def _received(outs):
+    """(flags, bytes) that reached the simulated robots so far."""
+    return [sum(d[k] for d in _results(outs) or []) for k in ('received', 'received_bytes')]
+
+
 def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, profile='paper',
-            rate=1.0, key=None):
+            rate=1.0, key=None, flag_stream='shared'):
     """One size: the simulated robots registered, the manager(s) started; once every robot
     is ranked (at most ``limit`` s) the managers measured for ``measure_s`` s, then (at most
     ``limit`` s more) until a flag change was timed; the row of figures."""
     log = os.path.join(tmp, 'scale.log')
     # the latest the simulated robots run, should this process die without stopping them
     until = time.time() + 120.0 + 2 * limit + measure_s
-    started_sims = _sims(tmp, robots, servers, sims, layout, until, log, groups, rate, key)
+    started_sims = _sims(tmp, robots, servers, sims, layout, until, log, groups, rate, key,
+                         flag_stream)
     outs = [out for _, out in started_sims.values()]
     row = {'robots': robots, 'servers': servers, 'layout': layout, 'groups': groups,
-           'profile': profile, 'rate': rate, 'signed': bool(key)}
+           'profile': profile, 'rate': rate, 'signed': bool(key), 'flag_stream': flag_stream}
     managers = {}
     try:
         _registered(started_sims, log, 'a simulated robot')
         started = time.time()
-        managers = _managers(layout, robots, servers, groups, log, profile, key)
+        managers = _managers(layout, robots, servers, groups, log, profile, key, flag_stream)
         _registered(managers, log, 'a manager')
         pids = [_pid(n) for n in managers]
         master = _master_pid()
         wait_until(lambda: _progress(outs)[0] is not None,
                    max(0.0, started + limit - time.time()), period=0.2)
+        before, began = _received(outs), time.time()
         usage = measure(pids + [master], measure_s)
+        time.sleep(0.6)       # the result files are rewritten every 0.5 s
+        after, span = _received(outs), time.time() - began
+        row['flags_per_robot_s'] = (after[0] - before[0]) / span / robots
+        row['flag_bytes_per_robot_s'] = (after[1] - before[1]) / span / robots
         totals = [_usage(p) for p in pids]
         for name in ('threads', 'fds', 'rss_mb'):      # (key: the fleet key's file)
             row[name] = sum(t[name] for t in totals)
@@ -172,10 +197,6 @@ def _master_pid():
     return None
 
 
-def fmt(value, spec='%.0f'):
-    return _fmt(value, spec)
-
-
 def _layout(row):
     if row['layout'] == 'grouped':
         text = 'grouped: %d x %d servers' % (row['groups'], row['servers'] // row['groups'])
@@ -188,17 +209,36 @@ def _layout(row):
 
 
 def table(rows):
-    header = ['robots x servers', 'samples', 'every robot ranked after', 'sample-to-flag p50 ms',
-              'p99 ms', 'changes', 'managers CPU % (busiest)', 'threads', 'fds', 'RSS MiB',
-              'rosmaster CPU %']
+    header = ['robots x servers', 'samples', 'flags', 'every robot ranked after',
+              'sample-to-flag p50 ms', 'p99 ms', 'changes', 'managers CPU % (busiest)',
+              'threads', 'fds', 'RSS MiB', 'rosmaster CPU %', 'flags to a robot /s',
+              'flag bytes to a robot /s']
     body = [['%d x %d' % (r['robots'], r['servers']), _layout(r),
+             'per robot' if r.get('flag_stream') == 'robot' else 'shared',
              'never within %.0f s' % r['limit'] if r['ranked_s'] is None
              else '%.1f s' % r['ranked_s'],
              fmt(r['delay_p50_ms'], '%.1f'), fmt(r['delay_p99_ms'], '%.1f'), str(r['changes']),
-             '%s (%s)' % (fmt(r.get('manager_cpu')), fmt(r.get('manager_cpu_max'))),
+             '%s (%s)' % (fmt(r.get('manager_cpu'), '%.0f'),
+                          fmt(r.get('manager_cpu_max'), '%.0f')),
              fmt(r.get('threads'), '%d'), fmt(r.get('fds'), '%d'),
-             fmt(r.get('rss_mb')), fmt(r.get('master_cpu'))] for r in rows]
+             fmt(r.get('rss_mb'), '%.0f'), fmt(r.get('master_cpu'), '%.0f'),
+             fmt(r.get('flags_per_robot_s'), '%.1f'),
+             fmt(r.get('flag_bytes_per_robot_s'), '%.0f')] for r in rows]
     return markdown_table(header, body)
+
+
+def _sizes(args):
+    """(robots, servers, layout, groups) of every run asked for."""
+    runs = []
+    for size in args.sizes.split(','):
+        robots, servers = map(int, size.lower().split('x'))
+        runs += [(robots, servers, layout, 1) for layout in args.layouts.split(',')
+                 if layout != 'pair' or robots * servers <= args.pair_max]
+    for size in filter(None, args.grouped_sizes.split(',')):
+        shape, groups = size.split(':')
+        robots, servers = map(int, shape.lower().split('x'))
+        runs.append((robots, servers, 'grouped', int(groups)))
+    return runs
 
 
 def main(argv=None):
@@ -220,27 +260,22 @@ def main(argv=None):
     parser.add_argument('--signed', default='off', help='off, on or off,on: the samples and '
                         "flags unsigned and / or signed with a fleet key (each size both ways "
                         'with off,on)')
+    parser.add_argument('--flag-stream', default='',
+                        help="shared, robot or shared,robot (default: the profile's)")
     args = parser.parse_args(argv)
-    runs = []
-    for size in args.sizes.split(','):
-        robots, servers = map(int, size.lower().split('x'))
-        runs += [(robots, servers, layout, 1) for layout in args.layouts.split(',')
-                 if layout != 'pair' or robots * servers <= args.pair_max]
-    for size in filter(None, args.grouped_sizes.split(',')):
-        shape, groups = size.split(':')
-        robots, servers = map(int, shape.lower().split('x'))
-        runs.append((robots, servers, 'grouped', int(groups)))
+    streams = (args.flag_stream or default('flag_stream', args.profile)).split(',')
     rows = []
-    for (robots, servers, layout, groups), signed in itertools.product(
-            runs, args.signed.split(',')):
+    for (robots, servers, layout, groups), signed, stream in itertools.product(
+            _sizes(args), args.signed.split(','), streams):
         with tempfile.TemporaryDirectory(prefix='bench_scale') as tmp, Roscore(tmp):
-            print('scale: %d x %d %s%s' % (robots, servers, layout, ' signed' * (signed == 'on')),
-                  file=sys.stderr, flush=True)
+            print('scale: %d x %d %s%s, flags %s' % (
+                robots, servers, layout, ' signed' * (signed == 'on'), stream),
+                file=sys.stderr, flush=True)
             key = os.path.join(tmp, 'fleet.key') if signed == 'on' else None
             if key:
                 make_key(key)
             row = run_one(robots, servers, layout, min(args.sims, robots), args.limit,
-                          args.measure, tmp, groups, args.profile, args.rate, key)
+                          args.measure, tmp, groups, args.profile, args.rate, key, stream)
             row['limit'] = args.limit
             rows.append(row)
             print(table([row]).splitlines()[-1], file=sys.stderr, flush=True)

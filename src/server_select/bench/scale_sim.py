@@ -9,6 +9,9 @@ server its flag selects, which must move its flag elsewhere: the time from that 
 publication to the flag that shows the move is the sample-to-flag delay. Results go to
 ``--out`` as JSON, rewritten every half second while it runs (so the benchmark can wait for
 "every robot ranked" and "a change measured"); it runs until SIGINT / SIGTERM or ``--until``.
+``--flag-stream robot``: each robot hears its own ``robot_<r>/server_select_flag``, as a
+fleet-profile robot does; ``shared``: every robot hears ``server_select_flag`` (each flag
+of every robot). The flags and their bytes that would reach the robots are counted.
 
 ``--layout grouped``: the servers form ``--groups`` equal groups; each robot follows the
 top manager's ``group_assignments`` and sends batches for its group's servers plus every
@@ -17,6 +20,7 @@ group's servers, from its group's manager.
 """
 
 import argparse
+import io
 import json
 import os
 import random
@@ -56,7 +60,8 @@ def group_table(servers, groups):
 
 
 class SimulatedRobots(object):
-    def __init__(self, robots, servers, layout, change_every, groups=1, sealer=None):
+    def __init__(self, robots, servers, layout, change_every, groups=1, sealer=None,
+                 flag_stream='shared'):
         self.robots, self.servers, self.layout = robots, servers, layout
         self.sealer = sealer         # a fleet key's Sealer: samples leave signed
         self.change_every, self.groups = change_every, groups
@@ -72,9 +77,15 @@ class SimulatedRobots(object):
         self.changed = {}            # robot -> when its flag last changed (SETTLED)
         self.delays = []
         self.flags = 0
+        self.received = [0, 0]       # flags that reached this process, their bytes
+        self.size = 0                # bytes of a flag on the wire, last measured
         self.rng = random.Random(robots[0])
-        self.sub = rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, self.on_flag,
-                                    queue_size=10000, tcp_nodelay=True)
+        topics = [names.SELECTION_TOPIC] if flag_stream == 'shared' else \
+            [names.robot_topic(r, names.SELECTION_TOPIC) for r in robots]
+        # a shared topic reaches the process once; each robot's node would get it alone
+        self.copies = len(robots) if flag_stream == 'shared' else 1
+        self.subs = [rospy.Subscriber(topic, SelectionFlag, self.on_flag, queue_size=10000,
+                                      tcp_nodelay=True) for topic in topics]
         if layout == 'grouped':
             self.groups_sub = rospy.Subscriber(names.GROUPS_TOPIC, GroupAssignments,
                                                self.on_groups, queue_size=10)
@@ -102,9 +113,15 @@ class SimulatedRobots(object):
     def on_flag(self, flag):
         now = time.time()
         robot = flag.robot_id
-        if robot not in self.robots:
-            return
         with self.lock:
+            if self.received[0] % (50 * self.copies) == 0:    # one flag in 50 measured
+                buf = io.BytesIO()
+                flag.serialize(buf)
+                self.size = len(buf.getvalue()) + 4    # + TCPROS's length prefix
+            self.received[0] += self.copies
+            self.received[1] += self.copies * self.size
+            if robot not in self.robots:
+                return
             self.flags += 1
             if len(flag.ranking) == self.full(robot) and robot not in self.ranked:
                 self.ranked[robot] = now
@@ -187,7 +204,8 @@ class SimulatedRobots(object):
     def result(self):
         with self.lock:
             return {'ranked': dict(self.ranked), 'delays': list(self.delays),
-                    'flags': self.flags, 'robots': len(self.robots)}
+                    'flags': self.flags, 'robots': len(self.robots),
+                    'received': self.received[0], 'received_bytes': self.received[1]}
 
     def write(self, out):
         """The result so far, replacing ``out`` at once (a reader sees whole files only)."""
@@ -208,6 +226,7 @@ def main(argv=None):
     parser.add_argument('--rate', type=float, default=1.0, help='probe rounds per robot and s')
     parser.add_argument('--out', required=True)
     parser.add_argument('--fleet-key', help='sign the samples with this key file')
+    parser.add_argument('--flag-stream', choices=('shared', 'robot'), default='shared')
     args = parser.parse_args(argv)
     rospy.init_node('scale_sim_%d' % args.first, disable_signals=True)
     stop = threading.Event()
@@ -215,7 +234,8 @@ def main(argv=None):
         signal.signal(sig, lambda *_: stop.set())
     sealer = Sealer(load_key(args.fleet_key), rospy.get_name()) if args.fleet_key else None
     sim = SimulatedRobots(list(range(args.first, args.first + args.count)), args.servers,
-                          args.layout, args.change_every, args.groups, sealer)
+                          args.layout, args.change_every, args.groups, sealer,
+                          args.flag_stream)
     sim.run(args.until, args.rate, stop, args.out)
     rospy.signal_shutdown('done')
 

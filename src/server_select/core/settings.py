@@ -35,6 +35,10 @@ PARAMS = {
                      'every server, or on the addressed server\'s own topic'),
     'sample_stream': Param('pair', one_of('pair', 'robot'), 'probe samples on one topic per '
                            '(robot, server) pair, or one batch per probe round per robot'),
+    'flag_stream': Param('shared', one_of('shared', 'robot'), 'flags on one topic for every '
+                         'robot, or each on its robot\'s own latched topic '
+                         '(robot_<r>/server_select_flag; a copy still on the shared one for '
+                         'recorders)'),
     'discover': Param(False, parse_bool, 'also probe the servers the manager announces'),
     'groups': Param(REQUIRED, parse_groups, 'server groups {group id: [server ids]}; the '
                     'first server of a group is its representative'),
@@ -177,7 +181,8 @@ PARAMS = {
 # parameter set explicitly always wins. ``paper`` is the paper as written.
 PROFILES = {
     'paper': {},
-    'fleet': {'routing': 'direct', 'sample_stream': 'robot', 'discover': True,
+    'fleet': {'routing': 'direct', 'sample_stream': 'robot', 'flag_stream': 'robot',
+              'discover': True,
               'robots': [], 'servers': [],
               # the scenario suite's winner (docs/evaluation.md, "The scenario suite")
               'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,

@@ -46,6 +46,10 @@ class ManagerNode(object):
           empty: robots are whoever sends samples, servers whatever they probe)
         - ``~sample_stream`` (``pair``; (fleet) ``robot``): samples on ``latency_R<r>S<s>``
           per pair, or batches on ``latency_samples``.
+        - ``~flag_stream`` (``shared``; (fleet) ``robot``): every flag on
+          ``server_select_flag``, or each on its robot's own latched
+          ``robot_<r>/server_select_flag`` (and on ``server_select_flag`` only while a
+          recorder listens there).
         - ``~discover`` (false; (fleet) true): publish the servers found in the master on
           ``fleet_servers`` every ``~discovery_period`` s (2.0).
         - ``~window`` (s, 5.0), ``~publish_rate`` (Hz, 1.0), ``~update_rate`` (Hz, 10.0)
@@ -69,7 +73,8 @@ class ManagerNode(object):
           or ``latency_samples`` (server_select/LatencySamples); ``task_samples``
           (server_select/LatencySamples, ``~passive``).
     :ROS Publishers:
-        - ``server_select_flag`` (server_select/SelectionFlag)
+        - ``server_select_flag`` (server_select/SelectionFlag); (fleet) each robot's
+          ``robot_<r>/server_select_flag``
         - ``fleet_servers`` (server_select/FleetServers, latched; with ``~discover``)
     """
 

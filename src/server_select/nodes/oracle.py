@@ -23,7 +23,8 @@ class OracleNode(object):
         - ``~robots`` (list of int, required)
         - ``~publish_rate`` (Hz, 1.0), ``~update_rate`` (Hz, 20.0)
     :ROS Publishers:
-        - ``server_select_flag`` (server_select/SelectionFlag)
+        - ``server_select_flag`` (server_select/SelectionFlag); with ``~profile`` fleet
+          each robot's ``robot_<r>/server_select_flag`` (``~flag_stream``)
     """
 
     def __init__(self):

@@ -16,6 +16,7 @@ from server_select.core.selection import Selection
 from server_select.core.task_flow import LOCAL, NO_SERVER
 from server_select.msg import SelectionFlag
 from server_select.ros.camera import TopicSource
+from server_select.ros.flags import flag_topic
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.load import RobotLoad
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
@@ -54,7 +55,8 @@ class RobotNode(object):
         - ``data``, ``task_image``, or per server ``server_<s>/data``, ... (fleet)
         - ``task_report`` (server_select/TaskReport), ``found_targets`` (FoundTarget)
     :ROS Subscribers:
-        - ``server_select_flag``; ``processed_data``, ``processed_image``, or
+        - ``server_select_flag``, or (fleet) its own ``robot_<robot_id>/server_select_flag``;
+          ``processed_data``, ``processed_image``, or
           ``robot_<robot_id>/processed_data``, ... (fleet); ``detections``,
           ``found_targets``; ``fleet_servers`` (``~discover``) or ``group_assignments``
     :ROS Services: ``~known_targets`` (server_select/KnownTargets); calls ``latency_S<s>``
@@ -140,8 +142,9 @@ class RobotNode(object):
 
     def start(self):
         self._start_after = time.monotonic() + self.start_delay
-        self.flag_sub = rospy.Subscriber(fleet(names.SELECTION_TOPIC), SelectionFlag, self.on_flag,
-                                         queue_size=100, tcp_nodelay=True)
+        self.flag_sub = rospy.Subscriber(flag_topic(self.robot_id, param('flag_stream')),
+                                         SelectionFlag, self.on_flag, queue_size=100,
+                                         tcp_nodelay=True)
         if self.search is not None:
             self.search.start()
         if self.camera is not None:

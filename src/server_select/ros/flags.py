@@ -6,23 +6,42 @@ import rospy
 
 from server_select.core import names
 from server_select.msg import SelectionFlag
-from server_select.ros.node import fleet
+from server_select.ros.node import fleet, param
 from server_select.ros.seal import SealedPublisher
+
+
+def flag_topic(robot, stream):
+    """The topic ``robot``'s flags reach it on: the shared ``server_select_flag``, or with
+    ``~flag_stream`` ``robot`` its own ``robot_<r>/server_select_flag``."""
+    return fleet(names.SELECTION_TOPIC if stream == 'shared'
+                 else names.robot_topic(robot, names.SELECTION_TOPIC))
 
 
 class FlagPublisher(object):
     """``server_select_flag`` for many robots, sent when asked or when it changes.
 
     A robot's flag counts as changed when its selected server or the set of servers it
-    ranks differs from the last one published for it.
+    ranks differs from the last one published for it. With ``~flag_stream`` ``robot``
+    (fleet profile) each flag goes to its robot alone, on the robot's own latched topic
+    (a robot that connects late gets its last flag at once), and a copy goes on the shared
+    topic, which no robot then hears: it costs a write only for each recorder listening.
     """
 
     def __init__(self, source, queue_size=100):
         self.source = source     # 'manager', 'oracle': for the log
+        self.stream = param('flag_stream')
         self._lock = threading.Lock()
         self._published = {}     # robot -> (selected, frozenset of ranked servers)
+        self._own = {}           # robot -> its own topic's publisher (flag_stream robot)
         self.pub = SealedPublisher(fleet(names.SELECTION_TOPIC), SelectionFlag,
                                    queue_size=queue_size)
+
+    def _robot_pub(self, robot):
+        pub = self._own.get(robot)
+        if pub is None:     # advertised at the robot's first flag (one master call)
+            pub = self._own[robot] = SealedPublisher(
+                flag_topic(robot, self.stream), SelectionFlag, queue_size=2, latch=True)
+        return pub
 
     def offer(self, robot, ranking, only_on_change, choose=None):
         """Publish ``robot``'s flag for ``ranking`` (a
@@ -41,7 +60,12 @@ class FlagPublisher(object):
                                  mean_latency=ranking.means, sample_count=ranking.counts,
                                  excluded=ranking.excluded)
             flag.header.stamp = rospy.Time.now()
-            self.pub.publish(flag)
+            if self.stream == 'robot':
+                self._robot_pub(robot).publish(flag)
+                if self.pub.get_num_connections():
+                    self.pub.publish(flag)      # for recorders
+            else:
+                self.pub.publish(flag)
         if previous != selected:
             rospy.loginfo('%s: robot %d -> server %s (ranking %s, ms %s)', self.source, robot,
                           selected if selected != SelectionFlag.NO_SERVER else 'none',

@@ -85,7 +85,8 @@ class SuiteRun(HostRun):
             variant, ids = VARIANTS[name], ','.join(str(r) for r in robots_of[name])
             if variant.mode == 'oracle':
                 self.launch(manager, 'oracle.launch', 'scenario:=%s' % self.scenario.source,
-                            't0:=%.6f' % self.tb.t0, 'robots:=%s' % ids, 'name:=%s' % name)
+                            't0:=%.6f' % self.tb.t0, 'robots:=%s' % ids, 'name:=%s' % name,
+                            'profile:=%s' % variant.profile)
             elif variant.mode == 'select':
                 self.launch(manager, 'manager.launch', 'name:=manager_%s' % name,
                             'profile:=%s' % variant.profile, 'robots:=%s' % ids,
