@@ -11,7 +11,7 @@ import server_select.msg
 from server_select.bench.seal_cost import messages
 from server_select.core.seal import Sealer, Verifier
 from server_select.msg import (FleetServers, GroupAssignments, LatencySample, OrbResult,
-                               SelectionFlag, ServerGroup, SortResult)
+                               SelectionFlag, ServerAnnouncement, ServerGroup, SortResult)
 from server_select.ros.seal import check, sealed
 
 KEY = b'k' * 32
@@ -29,7 +29,7 @@ def wire(msg, cls):
 def every_message():
     made = [make() for _, make in messages()]
     made += [LatencySample(robot_id=1, server_id=2, ok=True, rtt=1e-3),
-             FleetServers(servers=[1, 2, 3]),
+             FleetServers(servers=[1, 2, 3]), ServerAnnouncement(server_id=2, lease=6.0),
              GroupAssignments(groups=[ServerGroup(group_id=1, servers=[1, 2])], robot_id=[1],
                               group_id=[1]),
              OrbResult(robot_id=1, task_id=2, server_id=3, ok=True)]

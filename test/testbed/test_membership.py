@@ -1,8 +1,8 @@
 """Servers that join and leave a running fleet (fleet profile), on the testbed.
 
 server3 is launched at 20 s on its own host, nearer to the robot than any other; server2
-(selected until then) is stopped cleanly at 38 s. Nothing is restarted: the manager finds
-server3 in the master, the robot probes it, and the flag follows. Needs root and TUN, as
+(selected until then) is stopped cleanly at 38 s. Nothing is restarted: server3 announces
+itself, the manager lists it, the robot probes it, and the flag follows. Needs root and TUN, as
 the other testbed tests (reported as skipped elsewhere).
 """
 

@@ -41,6 +41,20 @@ def test_a_server_with_no_sample_left_in_the_window_has_left():
     assert r.rank(1, 8.0).excluded == []
 
 
+def test_a_server_that_left_the_fleet_leaves_every_ranking_at_once():
+    r = FleetRankings(1.5, statistic='mean', task_memory=5.0, keep=3, horizon=8.0)
+    for robot in (1, 2, 3):
+        r.add(robot, 1, 0.0, True, 0.001)
+        if robot != 3:
+            r.add(robot, 2, 0.0, True, 0.002)
+    assert r.forget_server(2) == [1, 2]
+    assert r.rank(1, 0.1).ranking == [1] and r.rank(2, 0.1).ranking == [1]
+    assert r.forget_server(2) == []
+    assert r.departures(100.0) == [1, 2, 3]    # server 1's samples aged out; no error
+    r.add(1, 2, 101.0, True, 0.002)            # back in the fleet: ranked again
+    assert r.rank(1, 101.0).ranking == [2]
+
+
 def test_add_says_when_a_flag_may_change():
     r = FleetRankings(5.0)
     assert r.add(1, 1, 0.0, True, 0.002)          # a new server

@@ -109,7 +109,9 @@ class FleetRankings(object):
         with self._lock:
             while self._due and self._due[0][0] <= now:
                 _, robot, server = heapq.heappop(self._due)
-                newest = self._last_good[(robot, server)]
+                newest = self._last_good.get((robot, server))
+                if newest is None:
+                    continue        # the server left the fleet (forget_server)
                 if newest + self.window.horizon <= now:
                     del self._last_good[(robot, server)]    # the next good one re-enters
                     robots.add(robot)
@@ -117,6 +119,20 @@ class FleetRankings(object):
                     heapq.heappush(self._due, (newest + self.window.horizon, robot, server))
             members = set(self.fixed_robots) if not self.learn_robots else None
         return sorted(r for r in robots if members is None or r in members)
+
+    def forget_server(self, server):
+        """``server`` left the fleet: out of every ranking now, not once its samples have
+        aged out of the window. The robots that ranked it (to be ranked again)."""
+        self.window.forget_server(server)
+        with self._lock:
+            robots = sorted(r for r, heard in self._servers.items() if server in heard)
+            for robot in robots:
+                self._servers[robot].discard(server)
+                self._last_good.pop((robot, server), None)
+        if self.cost is not None:
+            for robot in robots:
+                self.cost.forget((robot, server))
+        return robots
 
     def robots(self):
         """The robots that take part (those heard from, or the fixed list)."""

@@ -8,6 +8,7 @@ node's default", and the evaluation takes its defaults from it.
 import collections
 
 from server_select.core.groups import parse_groups
+from server_select.core.leases import LEASE_PERIODS
 from server_select.core.policy import POLICIES
 from server_select.core.params import (one_of, parse_bool, parse_count, parse_id,
                                        parse_members, parse_mode, parse_names, parse_non_negative,
@@ -39,7 +40,8 @@ PARAMS = {
                          'robot, or each on its robot\'s own latched topic '
                          '(robot_<r>/server_select_flag; a copy still on the shared one for '
                          'recorders)'),
-    'discover': Param(False, parse_bool, 'also probe the servers the manager announces'),
+    'discover': Param(False, parse_bool, 'robot: also probe the servers the manager lists; '
+                      'manager: list the servers that announce themselves'),
     'groups': Param(REQUIRED, parse_groups, 'server groups {group id: [server ids]}; the '
                     'first server of a group is its representative'),
     'group': Param(None, parse_id, 'grouped: this manager ranks the robots of group {group}'),
@@ -49,8 +51,8 @@ PARAMS = {
                                 "count only from the manager of the robot's group"),
     'group_margin': Param(0.001, parse_non_negative, 'a robot moves to a nearer group only '
                           'when its representative is nearer by this (s)'),
-    'discovery_period': Param(2.0, parse_positive, "period of the manager's look for "
-                              'servers in the master (s)'),
+    'announce_period': Param(2.0, parse_positive, "period of a server's announcement on "
+                             'server_announcements (s); its lease is %d periods' % LEASE_PERIODS),
     'mode': Param('select', parse_mode, 'select (follow the manager), fixed or local'),
     'fixed_server': Param(None, parse_id, 'target in fixed mode (default: first server)'),
     'probe_rate': Param(1.0, parse_positive, 'probes per second to each server (Hz)'),

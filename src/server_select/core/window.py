@@ -222,6 +222,12 @@ class LatencyWindow(object):
     def _prune(self, pair, now):
         pair.prune(now - self.window, self.keep, now - self.horizon)
 
+    def forget_server(self, server_id):
+        """Drop every sample of ``server_id`` (a server that left the fleet)."""
+        with self._lock:
+            for key in [k for k in self._pairs if k[1] == server_id]:
+                del self._pairs[key]
+
     def robot_stats(self, robot_id, servers, now, errors=True):
         """``{server_id: PairStats}`` for each of ``servers``."""
         return dict((s, self.stats(robot_id, s, now, errors)) for s in servers)

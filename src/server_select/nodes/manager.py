@@ -12,7 +12,7 @@ from server_select.core.window import RTT_RANGE, valid_rtt
 from server_select.msg import LatencySample, LatencySamples
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.graph import publisher_of
-from server_select.ros.membership import GroupAssignmentsListener, ServerDiscovery
+from server_select.ros.membership import GroupAssignmentsListener, ServerRegistry
 from server_select.ros.node import fleet, param, run
 from server_select.ros.senders import SenderGate, node_pattern
 
@@ -50,8 +50,9 @@ class ManagerNode(object):
           ``server_select_flag``, or each on its robot's own latched
           ``robot_<r>/server_select_flag`` (and on ``server_select_flag`` only while a
           recorder listens there).
-        - ``~discover`` (false; (fleet) true): publish the servers found in the master on
-          ``fleet_servers`` every ``~discovery_period`` s (2.0).
+        - ``~discover`` (false; (fleet) true): list the servers that announce themselves
+          on ``server_announcements`` (with a lease of 3 x ``~announce_period``, 2 s) on
+          ``fleet_servers``, the first list ``~announce_period`` s after the start.
         - ``~window`` (s, 5.0), ``~publish_rate`` (Hz, 1.0), ``~update_rate`` (Hz, 10.0)
         - ``~policy`` (``mean``), ``~statistic`` (``mean``), ``~hysteresis`` (s, 0.0),
           ``~dwell``, ``~margin_z``, ``~latency_bound``, ``~ewma_tau``, ``~fail_fast``: the
@@ -71,7 +72,8 @@ class ManagerNode(object):
     :ROS Subscribers:
         - ``latency_R<r>S<s>`` (server_select/LatencySample) for every robot r and server s,
           or ``latency_samples`` (server_select/LatencySamples); ``task_samples``
-          (server_select/LatencySamples, ``~passive``).
+          (server_select/LatencySamples, ``~passive``); ``server_announcements``
+          (server_select/ServerAnnouncement, ``~discover``).
     :ROS Publishers:
         - ``server_select_flag`` (server_select/SelectionFlag); (fleet) each robot's
           ``robot_<r>/server_select_flag``
@@ -103,7 +105,7 @@ class ManagerNode(object):
         self._settling = Settling(param('window'))   # servers a robot was just moved to
         self._slice = 0
         self.group = param('group')       # grouped: robots get their servers elsewhere
-        self.discovery = ServerDiscovery(param('discovery_period')) \
+        self.discovery = ServerRegistry(param('announce_period'), self.on_leave) \
             if param('discover') and self.group is None else None
         self.assignments = None
         if self.group is not None:      # a group's manager: members from the top manager
@@ -216,6 +218,14 @@ class ManagerNode(object):
     def warn(self, topic, msg, why):
         rospy.logwarn_throttle(5.0, 'manager: ignored a sample on %s published by %s: %s'
                                % (topic, publisher_of(msg), why))
+
+    def on_leave(self, servers):
+        """Servers left the fleet (``~discover``): out of every ranking at once."""
+        robots = set()
+        for server in servers:
+            robots.update(self.rankings.forget_server(server))
+        for robot in sorted(robots):
+            self.update(robot, only_on_change=True)
 
     def on_periodic(self, _event):
         """Every robot's flag once per ``1/~publish_rate`` s, a slice of the robots at a

@@ -8,6 +8,7 @@ import rospy
 from server_select.core import names
 from server_select.core.params import ParamError
 from server_select.core.procs import usable_cpus
+from server_select.ros.membership import ServerAnnouncer
 from server_select.ros.node import fleet, live_param, param, run
 from server_select.ros.plugins import PluginHandler
 from server_select.ros.server_work import ServerWork
@@ -55,6 +56,8 @@ class ServerNode(object):
         - ``~scale_factor`` (1.2), ``~min_neighbors`` (5), ``~min_size`` (24 px): cascade settings.
         - ``~max_image_pixels`` (int, 16777216): larger frames get an error result.
         - ``~jpeg_quality`` (80): of the annotated frame sent back for a compressed task.
+        - ``~announce_period`` (s, 2): period of its announcement on
+          ``server_announcements`` (latched; a lease of 3 periods; "leaving" at shutdown).
         - ``~task_plugins`` ([]): more task types, ``module:Class`` of
           :class:`~server_select.ros.plugins.TaskPlugin` (e.g. ``server_select.tasks.orb:Orb``).
     :ROS Services:
@@ -62,6 +65,7 @@ class ServerNode(object):
     :ROS Subscribers:
         - ``data`` (server_select/SortTask), ``task_image`` (server_select/ImageTask)
     :ROS Publishers:
+        - ``server_announcements`` (server_select/ServerAnnouncement, latched)
         - ``processed_data`` (server_select/SortResult): one result per sort task addressed here.
         - ``processed_image`` (server_select/ImageResult): one result per frame addressed here,
           with the annotated frame.
@@ -79,6 +83,7 @@ class ServerNode(object):
         self._known_robots = set()
         self._pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='routes')
         # every task type, built in or plug-in, is served the same way
+        self.announcer = ServerAnnouncer(self.server_id, param('announce_period'))
         self.handlers = [PluginHandler(self.server_id, kind, self.work.submit,
                                        self.queue_size, direct, work=self._work)
                          for kind in server_kinds(param, workers)]
@@ -95,6 +100,7 @@ class ServerNode(object):
         # Advertised last: a robot that can probe us finds our task topics wired already.
         self.probe_srv = rospy.Service(
             fleet(names.probe_service(self.server_id)), LatencyProbe, self.on_probe)
+        self.announcer.start()
         rospy.loginfo('server %d: probe service %s, tasks on %s',
                       self.server_id, self.probe_srv.resolved_name,
                       ', '.join(t for h in self.handlers for t in h.endpoint.topics))
@@ -138,6 +144,7 @@ class ServerNode(object):
             handler.endpoint.prepare(robot)
 
     def on_shutdown(self):
+        self.announcer.leave()
         self.work_timer.shutdown()
         self.summary_timer.shutdown()
         self._pool.shutdown(wait=False)

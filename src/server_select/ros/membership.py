@@ -1,67 +1,121 @@
 """Servers that come and go at run time (fleet profile).
 
-The master already knows every server: each hosts a ``latency_S<s>`` probe service. The
-manager looks there every ``~discovery_period`` s (one master call per period for the
-whole fleet, rather than one per robot) and publishes the ids, latched, on
-``fleet_servers`` when they change; robots with ``~discover`` probe what it lists on top
-of their static ``~servers``. A server that shuts down unregisters its service and is
-dropped from the list; one that dies without unregistering is dropped by the robots'
-health (failed probes) and leaves the manager's rankings when its window is empty.
+Every server announces itself, latched, on ``server_announcements`` every
+``~announce_period`` s with a lease of a few periods (:mod:`server_select.core.leases`),
+and says when it leaves. The manager keeps the leases and publishes the members' ids,
+latched, on ``fleet_servers`` when they change; robots with ``~discover`` probe what it
+lists on top of their static ``~servers``. Nobody asks the master: a server that shuts
+down leaves the list at once, one that dies or hangs when its lease ends (its robots'
+health ejects it before that).
 """
 
 import threading
+import warnings
 
-import rosgraph
 import rospy
 
 from server_select.core import names
 from server_select.core.groups import probe_set
-from server_select.msg import FleetServers, GroupAssignments
+from server_select.core.leases import LEASE_PERIODS, Leases
+from server_select.msg import FleetServers, GroupAssignments, ServerAnnouncement
+from server_select.ros.graph import publisher_of
 from server_select.ros.senders import SenderGate
 from server_select.ros.node import fleet
 from server_select.ros import seal
 from server_select.ros.seal import SealedPublisher
 
 
-class ServerDiscovery(object):
-    """Manager side: the probe services in the master, published on ``fleet_servers``."""
+class ServerAnnouncer(object):
+    """Server side: "server ``server_id`` is in the fleet" every ``period`` s, and "it
+    leaves" at :meth:`leave`."""
 
-    def __init__(self, period, system_state=None):
-        self.period = period
-        self._system_state = system_state or (
-            lambda: rosgraph.Master(rospy.get_name()).getSystemState())
-        self.servers = None
+    def __init__(self, server_id, period):
+        self.server_id, self.period = server_id, period
         self.pub = self.timer = None
+
+    def start(self):
+        with warnings.catch_warnings():     # synchronous on purpose: the leaving
+            warnings.simplefilter('ignore')  # announcement is written before the node ends
+            self.pub = SealedPublisher(fleet(names.ANNOUNCE_TOPIC), ServerAnnouncement,
+                                       latch=True)
+        self.announce()
+        self.timer = rospy.Timer(rospy.Duration(self.period), self.announce)
+
+    def announce(self, _event=None, lease=None):
+        msg = ServerAnnouncement(server_id=self.server_id, lease=LEASE_PERIODS * self.period
+                                 if lease is None else lease)
+        msg.header.stamp = rospy.Time.now()
+        self.pub.publish(msg)
+
+    def leave(self):
+        if self.timer is not None:
+            self.timer.shutdown()
+            self.announce(lease=0.0)
+
+
+class ServerRegistry(object):
+    """Manager side: the servers whose announcements hold a lease, published on
+    ``fleet_servers`` when they change (and, with a fleet key, again every second: a
+    latched copy older than ``~fleet_key_max_age`` would be refused by a robot that
+    connects late). The first list goes out ``grace`` s after the start, when every
+    running server has been heard (a restarted manager must not tell the robots that
+    the fleet is empty)."""
+
+    def __init__(self, grace, on_leave=None, clock=None):
+        self.leases = Leases()
+        self.on_leave = on_leave      # on_leave(servers): they left the list
+        self._clock = clock or rospy.get_time
+        self.grace, self._since = grace, None
+        self.senders = SenderGate('manager', 'a server')
+        self._lock = threading.Lock()
+        self.servers = None
+        self.pub = self.sub = self.timer = None
 
     def start(self):
         self.pub = SealedPublisher(fleet(names.SERVERS_TOPIC), FleetServers, queue_size=1,
                                    latch=True)
-        self.look()
-        self.timer = rospy.Timer(rospy.Duration(self.period), self.look)
+        self._since = self._clock()
+        self.sub = rospy.Subscriber(fleet(names.ANNOUNCE_TOPIC), ServerAnnouncement,
+                                    self.on_announcement, queue_size=1000)
+        self.timer = rospy.Timer(rospy.Duration(1.0), self.on_check)
 
-    def look(self, _event=None):
-        try:
-            _, _, services = self._system_state()
-        except (rosgraph.MasterError, OSError) as error:
-            rospy.logwarn_throttle(30.0, 'manager: cannot list the servers in the master: %s'
-                                   % error)
+    def on_announcement(self, msg):
+        if not self.senders.admits(msg, 'a server announcement'):
             return
-        ns = fleet('')
-        found = sorted(s for s in (names.probe_server_id(name, ns) for name, nodes in services
-                                   if nodes) if s is not None)
-        if found != self.servers:
-            if self.servers is not None:
+        node = publisher_of(msg)
+        try:
+            changed, other = self.leases.renew(msg.server_id, node, self._clock(), msg.lease)
+        except ValueError as error:
+            rospy.logwarn_throttle(5.0, 'manager: ignored an announcement of server %d by %s: '
+                                   '%s' % (msg.server_id, node, error))
+            return
+        if other is not None:
+            rospy.logwarn_throttle(5.0, 'manager: server %d announced by %s and by %s: the '
+                                   'latest counts' % (msg.server_id, other, node))
+        if changed:
+            self.publish()
+
+    def on_check(self, _event):
+        self.leases.expire(self._clock())
+        self.publish(again=seal.enabled())
+
+    def publish(self, again=False):
+        with self._lock:
+            found = self.leases.members()
+            if (found == self.servers and not again) or \
+                    self._clock() < self._since + self.grace:
+                return
+            left = sorted(set(self.servers or ()) - set(found))
+            if self.servers is not None and found != self.servers:
                 rospy.loginfo('manager: servers in the fleet now %s (joined %s, left %s)',
                               found, sorted(set(found) - set(self.servers)),
                               sorted(set(self.servers) - set(found)))
             self.servers = found
-        elif not seal.enabled():
-            return
-        # with a fleet key, the list again at every look: a latched copy older than
-        # ~fleet_key_max_age would be refused by a robot that connects late
-        msg = FleetServers(servers=found)
-        msg.header.stamp = rospy.Time.now()
-        self.pub.publish(msg)
+            msg = FleetServers(servers=found)
+            msg.header.stamp = rospy.Time.now()
+            self.pub.publish(msg)
+        if left and self.on_leave is not None:
+            self.on_leave(left)
 
     def shutdown(self):
         if self.timer is not None:
