@@ -140,7 +140,7 @@ def test_profiles_only_name_known_parameters():
     for profile in PROFILES.values():
         assert set(profile) <= set(PARAMS)
     assert default('routing') == 'broadcast' and default('routing', 'fleet') == 'direct'
-    assert default('sample_stream', 'fleet') == 'robot' and default('window') == 5.0
+    assert default('sample_stream', 'fleet') == 'view' and default('window') == 5.0
     assert default('policy') == 'mean' and default('policy', 'fleet') == 'hysteresis'
 
 

@@ -201,7 +201,8 @@ def _layout(row):
     if row['layout'] == 'grouped':
         text = 'grouped: %d x %d servers' % (row['groups'], row['servers'] // row['groups'])
     else:
-        text = 'per pair' if row['layout'] == 'pair' else 'per robot'
+        text = {'pair': 'per pair', 'view': "robots' own rankings"}.get(row['layout'],
+                                                                        'per robot')
     profile, rate = row.get('profile', 'paper'), row.get('rate', 1.0)
     if (profile, rate) != ('paper', 1.0):
         text += ' (%s profile, %g Hz)' % (profile, rate)

@@ -2,8 +2,11 @@
 
 Robots ``first .. first+count-1`` each send ``--rate`` probe rounds a second (1) for servers
 ``1..servers`` (``--layout robot``: one ``latency_samples`` batch; ``pair``: one
-``latency_R<r>S<s>`` sample per server), with round trips that give every robot a
-different, well separated nearest server. Once every robot of this process has a flag
+``latency_R<r>S<s>`` sample per server; ``view``: the robot's own ranking of them on
+``robot_rankings``, as a fleet-profile robot sends it at ``~view_rate``), with round trips
+that give every robot a different, well separated nearest server, and a wait of 0
+(load-aware robots with idle servers: a server made slow is slower on the network, and a
+robot leaves it at once). Once every robot of this process has a flag
 ranking all servers, one robot every ``--change-every`` s gets a 10 s round trip for the
 server its flag selects, which must move its flag elsewhere: the time from that sample's
 publication to the flag that shows the move is the sample-to-flag delay. Results go to
@@ -33,7 +36,8 @@ import rospy
 from server_select.core import names
 from server_select.core.groups import probe_set
 from server_select.core.seal import Sealer, load_key
-from server_select.msg import GroupAssignments, LatencySample, LatencySamples, SelectionFlag
+from server_select.msg import (GroupAssignments, LatencySample, LatencySamples, RobotRanking,
+                               SelectionFlag)
 from server_select.ros.seal import sealed
 
 SLOW = 10.0
@@ -75,21 +79,21 @@ class SimulatedRobots(object):
         self.triggers = {}           # robot -> (publication time, server made slow)
         self.last_trigger = {}       # robot -> when it was last triggered (QUIET)
         self.changed = {}            # robot -> when its flag last changed (SETTLED)
-        self.delays = []
-        self.flags = 0
-        self.received = [0, 0]       # flags that reached this process, their bytes
-        self.size = 0                # bytes of a flag on the wire, last measured
+        self.delays, self.flags = [], 0
+        # flags that reached the robots, their bytes; a flag's bytes on the wire
+        self.received, self.size = [0, 0], 0
         self.rng = random.Random(robots[0])
-        topics = [names.SELECTION_TOPIC] if flag_stream == 'shared' else \
-            [names.robot_topic(r, names.SELECTION_TOPIC) for r in robots]
         # a shared topic reaches the process once; each robot's node would get it alone
-        self.copies = len(robots) if flag_stream == 'shared' else 1
+        topics, self.copies = ([names.SELECTION_TOPIC], len(robots)) if flag_stream == \
+            'shared' else ([names.robot_topic(r, names.SELECTION_TOPIC) for r in robots], 1)
         self.subs = [rospy.Subscriber(topic, SelectionFlag, self.on_flag, queue_size=10000,
                                       tcp_nodelay=True) for topic in topics]
         if layout == 'grouped':
             self.groups_sub = rospy.Subscriber(names.GROUPS_TOPIC, GroupAssignments,
                                                self.on_groups, queue_size=10)
-        if layout in ('robot', 'grouped'):
+        if layout == 'view':
+            self.pub = rospy.Publisher(names.RANKINGS_TOPIC, RobotRanking, queue_size=10000)
+        elif layout in ('robot', 'grouped'):
             self.pub = rospy.Publisher(names.SAMPLES_TOPIC, LatencySamples, queue_size=10000)
         else:
             self.pubs = dict(((r, s), rospy.Publisher(names.sample_topic(r, s), LatencySample,
@@ -144,9 +148,16 @@ class SimulatedRobots(object):
         noise = 2e-4 if self.groups == 1 else 2e-5           # below the steps
         rtts = [SLOW if s == slow else base_rtt(robot, s, self.servers, self.groups) +
                 noise * self.rng.random() for s in servers]
-        if self.layout in ('robot', 'grouped'):
-            msg = LatencySamples(robot_id=robot, server_id=servers, ok=[True] * len(rtts),
-                                 rtt=rtts)
+        if self.layout != 'pair':
+            if self.layout == 'view':   # the robot's own ranking, as a robot sends it
+                order = sorted(range(len(servers)), key=lambda i: rtts[i])
+                msg = RobotRanking(robot_id=robot, ranking=[servers[i] for i in order],
+                                   mean_latency=[rtts[i] for i in order],
+                                   error=[noise] * len(order), sample_count=[3] * len(order),
+                                   wait=[0.0] * len(order))
+            else:
+                msg = LatencySamples(robot_id=robot, server_id=servers,
+                                     ok=[True] * len(rtts), rtt=rtts, wait=[0.0] * len(rtts))
             msg.header.stamp = rospy.Time.now()
             sending()
             self.pub.publish(sealed(msg, self.sealer))
@@ -219,7 +230,8 @@ def main(argv=None):
     parser.add_argument('--first', type=int, required=True)
     parser.add_argument('--count', type=int, required=True)
     parser.add_argument('--servers', type=int, required=True)
-    parser.add_argument('--layout', choices=('robot', 'pair', 'grouped'), required=True)
+    parser.add_argument('--layout', choices=('robot', 'pair', 'grouped', 'view'),
+                        required=True)
     parser.add_argument('--groups', type=int, default=1)
     parser.add_argument('--until', type=float, required=True, help='epoch s to stop at')
     parser.add_argument('--change-every', type=float, default=0.5)

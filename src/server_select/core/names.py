@@ -14,6 +14,7 @@ FOUND_TARGETS_TOPIC = 'found_targets'
 KNOWN_TARGETS_SERVICE = '~known_targets'
 SAMPLES_TOPIC = 'latency_samples'       # fleet profile: one batch per robot probe round
 TASK_SAMPLES_TOPIC = 'task_samples'     # ~passive: robots' answered tasks as samples
+RANKINGS_TOPIC = 'robot_rankings'       # ~sample_stream view: each robot's own ranking
 SERVERS_TOPIC = 'fleet_servers'         # fleet profile: the servers the manager lists
 ANNOUNCE_TOPIC = 'server_announcements'  # each server's own, latched: "I am in the fleet"
 GROUPS_TOPIC = 'group_assignments'      # grouped deployments: robots to server groups

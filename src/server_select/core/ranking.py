@@ -44,3 +44,44 @@ def rank_servers(pair_stats, fail_fast=0):
         errors=[pair_stats[s].se or 0.0 for s in ranking],
         waits=[pair_stats[s].wait for s in ranking],
     )
+
+
+def view_key(ranking, policy, current):
+    """What of a robot's own ``ranking`` its manager needs to hear at once: the order, the
+    servers left out, and which server ``policy`` picks from ``current`` (the server the
+    robot's flag selects; None: none). A robot sends its ranking when this changes."""
+    return tuple(ranking.ranking), tuple(ranking.excluded), policy.choose(ranking, current)
+
+
+def from_view(ranking, means, errors, counts, waits, excluded):
+    """A :class:`Ranking` from a robot's message (parallel arrays; ``waits`` may be empty,
+    NaN: not known). ValueError says what is wrong with it."""
+    ranking = [int(s) for s in ranking]
+    n = len(ranking)
+    if not len(means) == len(errors) == len(counts) == n or len(waits) not in (0, n):
+        raise ValueError('arrays of %d servers, %d latencies, %d errors, %d counts, %d waits'
+                         % (n, len(means), len(errors), len(counts), len(waits)))
+    if len(set(ranking)) < n or set(ranking) & set(excluded):
+        raise ValueError('a server is named twice in ranking %s, excluded %s'
+                         % (ranking, list(excluded)))
+    means = [float(m) for m in means]
+    if not all(0.0 < m < float('inf') for m in means) or \
+            any(b < a for a, b in zip(means, means[1:])):
+        raise ValueError('latencies %s are not positive and ascending' % means)
+    waits = [None if w != w else float(w) for w in waits] if len(waits) else [None] * n
+    return Ranking(selected=ranking[0] if ranking else NO_SERVER, ranking=ranking,
+                   means=means, counts=[int(c) for c in counts],
+                   excluded=[int(s) for s in excluded], errors=[float(e) for e in errors],
+                   waits=waits)
+
+
+def only(ranking, wanted):
+    """``ranking`` with only the servers for which ``wanted(server)`` is true."""
+    keep = [i for i, s in enumerate(ranking.ranking) if wanted(s)]
+    return Ranking(selected=ranking.ranking[keep[0]] if keep else NO_SERVER,
+                   ranking=[ranking.ranking[i] for i in keep],
+                   means=[ranking.means[i] for i in keep],
+                   counts=[ranking.counts[i] for i in keep],
+                   excluded=[s for s in ranking.excluded if wanted(s)],
+                   errors=[ranking.errors[i] for i in keep] if ranking.errors else None,
+                   waits=[ranking.waits[i] for i in keep] if ranking.waits else None)

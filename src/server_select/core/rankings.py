@@ -24,25 +24,15 @@ from server_select.core.ranking import NO_SERVER, latency, rank_servers
 from server_select.core.window import LatencyWindow
 
 
-class FleetRankings(object):
-    """Samples in, :class:`~server_select.core.ranking.Ranking` per robot out. Thread-safe."""
+class Members(object):
+    """Which robots and servers take part: fixed lists, or (empty) whoever comes."""
 
-    def __init__(self, window, robots=(), servers=(), statistic='mean', tau=1.0,
-                 fail_fast=0, robust=False, task_memory=0.0, keep=0, horizon=None):
-        self.window = LatencyWindow(window, statistic, tau, robust, keep, horizon)
-        # task samples' cost above the probes, remembered (core/passive.py; 0: off)
-        self.cost = TaskCost(task_memory) if task_memory > 0 else None
-        self.fail_fast = fail_fast
+    def __init__(self, robots=(), servers=()):
         self.fixed_robots = list(robots)          # empty: learned
         self.fixed_servers = list(servers)        # empty: learned
         self._robot_set, self._server_set = set(robots), set(servers)
         self.learn_robots, self.learn_servers = not robots, not servers
         self._lock = threading.Lock()
-        self._servers = {}                        # robot -> set of servers heard for it
-        self._selected = {}                       # robot -> server its last flag selected
-        self._aware = set()                       # robots whose samples say their wait
-        self._last_good = {}                      # (robot, server) -> its newest good sample
-        self._due = []      # heap: (when that sample leaves the window, robot, server)
 
     def set_members(self, robots, servers):
         """Fix the robots and servers (a group manager: what the top manager assigned to
@@ -66,6 +56,23 @@ class FleetRankings(object):
         if not self.learn_servers and server not in self._server_set:
             return 'server %d is not one of ~servers %s' % (server, self.fixed_servers)
         return None
+
+
+class FleetRankings(Members):
+    """Samples in, :class:`~server_select.core.ranking.Ranking` per robot out. Thread-safe."""
+
+    def __init__(self, window, robots=(), servers=(), statistic='mean', tau=1.0,
+                 fail_fast=0, robust=False, task_memory=0.0, keep=0, horizon=None):
+        Members.__init__(self, robots, servers)
+        self.window = LatencyWindow(window, statistic, tau, robust, keep, horizon)
+        # task samples' cost above the probes, remembered (core/passive.py; 0: off)
+        self.cost = TaskCost(task_memory) if task_memory > 0 else None
+        self.fail_fast = fail_fast
+        self._servers = {}                        # robot -> set of servers heard for it
+        self._selected = {}                       # robot -> server its last flag selected
+        self._aware = set()                       # robots whose samples say their wait
+        self._last_good = {}                      # (robot, server) -> its newest good sample
+        self._due = []      # heap: (when that sample leaves the window, robot, server)
 
     def add(self, robot, server, now, ok, rtt, probe=True, wait=None):
         """Record a sample, a probe's or (``probe`` False) an answered task's (ValueError

@@ -10,9 +10,9 @@ work in the robot. In ``select`` mode the robot's own evidence comes first: serv
 import threading
 import time
 
-from server_select.core.passive import TaskCost
 from server_select.core.policy import Chooser, Policy
 from server_select.core.ranking import NO_SERVER, rank_servers
+from server_select.core.rankings import FleetRankings
 from server_select.core.task_flow import LOCAL
 from server_select.core.window import LatencyWindow
 
@@ -24,24 +24,26 @@ class Selection(object):
 
     def __init__(self, robot_id, servers, mode, fixed_server=None, health=None, window=5.0,
                  policy=None, manager_timeout=3.0, clock=time.monotonic, statistic=None,
-                 tau=1.0, passive=False, task_memory=0.0, keep=0, horizon=None):
+                 tau=1.0, passive=False, task_memory=0.0, keep=0, horizon=None, fail_fast=0):
         if mode not in MODES:
             raise ValueError('unknown mode %r' % (mode,))
         self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
         self.fixed_server = fixed_server
-        self._aware = False         # its probes say the servers' waits (load-aware)
         self.health = health
         policy = policy or Policy()
         self.manager_timeout = manager_timeout
-        self.window = LatencyWindow(window, statistic or policy.statistic(), tau, policy.robust,
-                                    keep, horizon)
+        # the robot's samples, kept as the manager keeps every robot's (its own view)
+        self.rankings = FleetRankings(window, [robot_id], (), statistic or policy.statistic(),
+                                      tau, fail_fast, policy.robust,
+                                      task_memory if passive else 0.0, keep, horizon)
+        self.window = self.rankings.window
         # probes only, what a task sample is compared with: a window of its own only when
         # task samples share the main one (``passive``)
         self.passive = passive
         self.probes = LatencyWindow(window, keep=keep, horizon=horizon) if passive \
             else self.window
-        self.cost = TaskCost(task_memory) if passive and task_memory > 0 else None
         self._chooser = Chooser(policy)
+        self.on_change = None      # on_change(): a sample may have changed view()
         self._clock = clock
         self._lock = threading.Lock()
         self._flag = None          # (receive time, selected, ranking) of the last good flag
@@ -76,22 +78,25 @@ class Selection(object):
                 self.servers.remove(server)
         if self.health is not None:
             self.health.remove(server)
-        if self.cost is not None:
-            self.cost.forget(server)
+        self.rankings.forget_server(server)
 
     def on_sample(self, server, ok, rtt, probe=True, wait=None):
         """One of the robot's own samples: a probe, or (``probe`` False) an answered task
         with ``~passive`` (ValueError for an impossible round trip); ``wait``: the part of a
-        load-aware probe's ``rtt`` that is the server's wait."""
+        load-aware probe's ``rtt`` that is the server's wait. True when the robot's own
+        ranking may have changed because of it (:meth:`FleetRankings.add`)."""
         now = self._clock()
-        if wait is not None:
-            self._aware = True
-        value = rtt if self.cost is None else self.cost.enter(server, now, ok, rtt, probe)
-        if ok and not probe and self.cost is not None and self._aware:
-            wait = self.cost.above_probes(server, value)    # a task's queueing and work
-        self.window.add(self.robot_id, server, now, ok, value, wait)
+        changed = self.rankings.add(self.robot_id, server, now, ok, rtt, probe, wait)
         if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
+        if changed and self.on_change is not None:
+            self.on_change()
+        return changed
+
+    def view(self):
+        """The robot's own ranking of the servers it has samples of, as the manager ranks a
+        robot from its samples (what ``~sample_stream view`` sends it)."""
+        return self.rankings.rank(self.robot_id, self._clock())
 
     def contenders(self, rule):
         """The servers that ``rule`` (a :class:`~server_select.core.probing.ContenderRule`)
@@ -113,6 +118,11 @@ class Selection(object):
             servers = list(self.servers)
         return rule.near(self.window.robot_stats(self.robot_id, servers, now, errors=False),
                          heading, value)
+
+    def flag_selects(self):
+        """The server the last flag selected, fresh or not (None: no flag yet)."""
+        with self._lock:
+            return self._flag[1] if self._flag is not None else None
 
     def probe_latency(self, server):
         """The mean of the robot's probes of ``server`` in the window (None: none)."""

@@ -34,8 +34,12 @@ PARAMS = {
                      'written, or the fleet layout (PROFILES)'),
     'routing': Param('broadcast', one_of('broadcast', 'direct'), 'tasks on one topic for '
                      'every server, or on the addressed server\'s own topic'),
-    'sample_stream': Param('pair', one_of('pair', 'robot'), 'probe samples on one topic per '
-                           '(robot, server) pair, or one batch per probe round per robot'),
+    'sample_stream': Param('pair', one_of('pair', 'robot', 'view'), 'probe samples on one '
+                           'topic per (robot, server) pair, one batch per probe round per '
+                           'robot, or (view) the robot\'s own ranking when it changes (its '
+                           'batches still go out for recorders)'),
+    'view_rate': Param(1.0, parse_positive, 'sample_stream view: the robot\'s ranking also '
+                       'goes to the manager this often when unchanged (Hz)'),
     'flag_stream': Param('shared', one_of('shared', 'robot'), 'flags on one topic for every '
                          'robot, or each on its robot\'s own latched topic '
                          '(robot_<r>/server_select_flag; a copy still on the shared one for '
@@ -183,7 +187,7 @@ PARAMS = {
 # parameter set explicitly always wins. ``paper`` is the paper as written.
 PROFILES = {
     'paper': {},
-    'fleet': {'routing': 'direct', 'sample_stream': 'robot', 'flag_stream': 'robot',
+    'fleet': {'routing': 'direct', 'sample_stream': 'view', 'flag_stream': 'robot',
               'discover': True,
               'robots': [], 'servers': [],
               # the scenario suite's winner (docs/evaluation.md, "The scenario suite")

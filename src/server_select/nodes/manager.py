@@ -9,7 +9,9 @@ from server_select.core.params import ParamError
 from server_select.core.policy import Chooser, Settling, from_params
 from server_select.core.rankings import FleetRankings
 from server_select.core.window import RTT_RANGE, valid_rtt
-from server_select.msg import LatencySample, LatencySamples
+from server_select.core.ranking import from_view
+from server_select.core.views import ViewRankings
+from server_select.msg import LatencySample, LatencySamples, RobotRanking
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.graph import publisher_of
 from server_select.ros.membership import GroupAssignmentsListener, ServerRegistry
@@ -18,6 +20,7 @@ from server_select.ros.senders import SenderGate, node_pattern
 
 
 SLICES = 10     # the periodic flags go out in this many slices of the robots
+STALE_VIEWS = 3.0   # a robot's own ranking counts for this many of its periods
 
 
 class ManagerNode(object):
@@ -44,8 +47,11 @@ class ManagerNode(object):
         - ``~profile`` (``paper``): ``fleet`` sets the defaults marked (fleet) below.
         - ``~robots``, ``~servers`` (lists of int; required in the paper profile; (fleet)
           empty: robots are whoever sends samples, servers whatever they probe)
-        - ``~sample_stream`` (``pair``; (fleet) ``robot``): samples on ``latency_R<r>S<s>``
-          per pair, or batches on ``latency_samples``.
+        - ``~sample_stream`` (``pair``; (fleet) ``view``): samples on ``latency_R<r>S<s>``
+          per pair, batches on ``latency_samples`` (``robot``), or each robot's own ranking
+          on ``robot_rankings`` (``view``: the robot keeps its samples as this node would;
+          this node keeps the policy's state, spreads moves and flags; a ranking older
+          than 3 / ``~view_rate`` s counts as none).
         - ``~flag_stream`` (``shared``; (fleet) ``robot``): every flag on
           ``server_select_flag``, or each on its robot's own latched
           ``robot_<r>/server_select_flag`` (and on ``server_select_flag`` only while a
@@ -71,7 +77,8 @@ class ManagerNode(object):
           to it (``group_assignments``), and ignores the others' samples.
     :ROS Subscribers:
         - ``latency_R<r>S<s>`` (server_select/LatencySample) for every robot r and server s,
-          or ``latency_samples`` (server_select/LatencySamples); ``task_samples``
+          or ``latency_samples`` (server_select/LatencySamples), or ``robot_rankings``
+          (server_select/RobotRanking); ``task_samples``
           (server_select/LatencySamples, ``~passive``); ``server_announcements``
           (server_select/ServerAnnouncement, ``~discover``).
     :ROS Publishers:
@@ -85,12 +92,16 @@ class ManagerNode(object):
     def __init__(self):
         self.stream = param('sample_stream')
         self.policy, statistic = from_params(param)
-        self.rankings = FleetRankings(param('window'), param('robots'), param('servers'),
-                                      statistic, param('ewma_tau'), param('fail_fast'),
-                                      self.policy.robust,
-                                      param('task_memory') if param('passive') else 0.0,
-                                      param('window_samples'), param('window_max'))
-        self.passive = param('passive')
+        if self.stream == 'view':    # the robots rank for themselves
+            self.rankings = ViewRankings(STALE_VIEWS / param('view_rate'), param('robots'),
+                                         param('servers'))
+        else:
+            self.rankings = FleetRankings(param('window'), param('robots'), param('servers'),
+                                          statistic, param('ewma_tau'), param('fail_fast'),
+                                          self.policy.robust,
+                                          param('task_memory') if param('passive') else 0.0,
+                                          param('window_samples'), param('window_max'))
+        self.passive = param('passive') and self.stream != 'view'  # (views hold the tasks)
         for name in ('robots', 'servers'):
             if self.stream == 'pair' and not getattr(self.rankings, 'fixed_' + name):
                 raise ParamError('~%s: expected a non-empty list of ids (an empty one needs '
@@ -126,6 +137,10 @@ class ManagerNode(object):
                                  self.on_sample, callback_args=(r, s), queue_size=100,
                                  tcp_nodelay=True)
                 for r in self.rankings.fixed_robots for s in self.rankings.fixed_servers]
+        elif self.stream == 'view':
+            self.sample_subs = [rospy.Subscriber(fleet(names.RANKINGS_TOPIC), RobotRanking,
+                                                 self.on_view, queue_size=1000,
+                                                 tcp_nodelay=True)]
         else:
             self.sample_subs = [rospy.Subscriber(fleet(names.SAMPLES_TOPIC), LatencySamples,
                                                  self.on_batch, queue_size=1000,
@@ -140,11 +155,10 @@ class ManagerNode(object):
         self.timers = [
             rospy.Timer(rospy.Duration(1.0 / (self.publish_rate * SLICES)), self.on_periodic),
             rospy.Timer(rospy.Duration(1.0 / self.update_rate), self.on_check)]
-        rospy.loginfo('manager: robots %s, servers %s, window %.3g s of %s, policy %s, '
-                      'samples %s%s', self.rankings.fixed_robots or 'as they come',
-                      self.rankings.fixed_servers or 'as probed', self.rankings.window.window,
-                      self.rankings.window.statistic, self.policy.describe(),
-                      'per pair' if self.stream == 'pair' else 'in one batch per robot round',
+        rospy.loginfo('manager: robots %s, servers %s, policy %s, %s%s',
+                      self.rankings.fixed_robots or 'as they come',
+                      self.rankings.fixed_servers or 'as probed', self.policy.describe(),
+                      self.describe_input(),
                       ' and answered tasks' if self.passive else '')
 
     def on_sample(self, sample, pair):
@@ -157,6 +171,33 @@ class ManagerNode(object):
             self.warn(names.sample_topic(*pair), sample, why)
         else:
             self.take(pair[0], pair[1], sample.ok, sample.rtt, rospy.get_time())
+
+    def describe_input(self):
+        if self.stream == 'view':
+            return "the robots' own rankings"
+        return 'window %.3g s of %s, samples %s' % (
+            self.rankings.window.window, self.rankings.window.statistic,
+            'per pair' if self.stream == 'pair' else 'in one batch per robot round')
+
+    def on_view(self, msg):
+        """A robot's own ranking (``~sample_stream view``)."""
+        robot = msg.robot_id
+        if self.group is not None and self.rankings.robot_refusal(robot):
+            return      # a robot of another group
+        if not self.senders.admits(msg, lambda: 'a ranking on %s' % names.RANKINGS_TOPIC,
+                                   robot):
+            return
+        why = self.refuse(msg, robot)
+        try:
+            ranking = from_view(msg.ranking, msg.mean_latency, msg.error, msg.sample_count,
+                                msg.wait, msg.excluded) if why is None else None
+        except ValueError as error:
+            why = str(error)
+        if why:
+            self.warn(names.RANKINGS_TOPIC, msg, why)
+            return
+        self.rankings.take(robot, rospy.get_time(), ranking)
+        self.update(robot, only_on_change=True)
 
     def on_assignments(self, groups, assigned):
         """The top manager's table: this group's servers and robots."""

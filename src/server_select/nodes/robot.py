@@ -27,6 +27,7 @@ from server_select.ros.routing import ROUTES
 from server_select.ros.senders import SenderGate
 from server_select.ros.task_kinds import stream_kinds
 from server_select.ros.task_stream import TaskStream
+from server_select.ros.view import RankingSender
 from server_select.tasks.image import Frames
 
 
@@ -51,7 +52,8 @@ class RobotNode(object):
           ``~manager_node`` or, grouped, ``~group_manager_node``; ``~start_delay``;
           capacity (``~load_aware``, ``~max_in_flight``, ``~retry_budget``, ``~spread``)
     :ROS Publishers:
-        - ``latency_R<robot_id>S<s>`` or ``latency_samples`` (fleet); ``task_samples``
+        - ``latency_R<robot_id>S<s>`` or ``latency_samples`` (fleet); ``task_samples``;
+          ``robot_rankings`` (its own ranking, ``~sample_stream view``: fleet)
         - ``data``, ``task_image``, or per server ``server_<s>/data``, ... (fleet)
         - ``task_report`` (server_select/TaskReport), ``found_targets`` (FoundTarget)
     :ROS Subscribers:
@@ -87,6 +89,8 @@ class RobotNode(object):
                              load_of=self.load.on_answer if self.load else None,
                              announce=self.load.announcement if self.load else None,
                              contenders=(rule, self.selection) if rule else None)
+        self.view = RankingSender(self.robot_id, self.selection, self.policy, param('view_rate')) \
+            if param('sample_stream') == 'view' and mode == 'select' else None
         self.start_delay = param('start_delay')
         self.summary_period = param('summary_period')
         manager = param('manager_node')   # None: flags from any node
@@ -118,7 +122,7 @@ class RobotNode(object):
                          self.policy, param('manager_timeout'), statistic=statistic,
                          tau=param('ewma_tau'), passive=param('passive') and mode == 'select',
                          task_memory=param('task_memory'), keep=param('window_samples'),
-                         horizon=param('window_max'))
+                         horizon=param('window_max'), fail_fast=param('fail_fast'))
 
     def _stream(self, kind, rate, mode):
         timeout = param('task_timeout')
@@ -154,8 +158,9 @@ class RobotNode(object):
             for server in self.prober.servers:    # task topics connected before the first task
                 stream.add_server(server)
         self.prober.start()
-        if self.announcements is not None:
-            self.announcements.start()
+        for part in (self.announcements, self.view):
+            if part is not None:
+                part.start()
         self.timers = [rospy.Timer(rospy.Duration(self.summary_period),
                                    lambda _e: rospy.loginfo(self.summary())),
                        rospy.Timer(rospy.Duration(0.5), self.on_decision_timer)]
@@ -264,6 +269,8 @@ class RobotNode(object):
         for stream in self.streams:
             stream.shutdown()
         self.prober.shutdown()
+        if self.view is not None:
+            self.view.shutdown()
         rospy.loginfo(self.summary())
 
 

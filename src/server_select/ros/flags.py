@@ -62,8 +62,7 @@ class FlagPublisher(object):
             flag.header.stamp = rospy.Time.now()
             if self.stream == 'robot':
                 self._robot_pub(robot).publish(flag)
-                if self.pub.get_num_connections():
-                    self.pub.publish(flag)      # for recorders
+                self.pub.publish(flag)      # for recorders: costs nothing without one
             else:
                 self.pub.publish(flag)
         if previous != selected:

@@ -45,8 +45,9 @@ class Prober(object):
     Each server is probed from a worker thread over a persistent connection, every call
     bounded by ``timeout``; a server whose previous probe is still running gets a failed
     sample instead of a second call. ``stream`` ``pair`` publishes each sample on
-    ``latency_R<r>S<s>`` (the paper); ``robot`` publishes one ``latency_samples`` batch per
-    round, when its last probe has ended. Servers can be added and removed at run time.
+    ``latency_R<r>S<s>`` (the paper); ``robot`` and ``view`` publish one ``latency_samples``
+    batch per round, when its last probe has ended (``view``: for recorders; the manager
+    hears the robot's own ranking instead). Servers can be added and removed at run time.
     ``answered`` is the set of servers that have answered at least once;
     ``on_sample(server, ok, rtt, error, wait)`` hears every sample. With ``load_of``, each
     answer's load goes to ``load_of(server, response)``, which returns the *wait* at that
@@ -71,7 +72,7 @@ class Prober(object):
         self._inflight = {}
         self._pubs, self._proxies = {}, {}
         self._batch_pub = SealedPublisher(fleet(names.SAMPLES_TOPIC), LatencySamples,
-                                          queue_size=10) if stream == 'robot' else None
+                                          queue_size=10) if stream != 'pair' else None
         self._pool = concurrent.futures.ThreadPoolExecutor(
             max_workers=max(16, len(servers)), thread_name_prefix='probe')
         self._timer = None

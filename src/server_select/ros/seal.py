@@ -121,4 +121,6 @@ class SealedPublisher(rospy.Publisher):
     without one)."""
 
     def publish(self, msg):
+        if not self.impl.is_latch and not self.impl.has_connections():
+            return      # nobody listens: no seal to make (rospy would drop it too)
         super(SealedPublisher, self).publish(seal(msg))

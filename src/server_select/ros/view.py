@@ -1,0 +1,60 @@
+"""A robot's own ranking, sent to the manager (``~sample_stream view``, fleet profile)."""
+
+import threading
+
+import rospy
+
+from server_select.core import names
+from server_select.core.ranking import view_key
+from server_select.msg import RobotRanking
+from server_select.ros.node import fleet
+from server_select.ros.seal import SealedPublisher
+
+
+class RankingSender(object):
+    """Publishes ``selection.view()`` on ``robot_rankings`` when what the manager needs of
+    it changes (:func:`~server_select.core.ranking.view_key`: the order, the servers left
+    out, the policy's pick from the flagged server), checked whenever a sample may have
+    changed it, and every ``1/rate`` s regardless (a restarted manager, fresh means)."""
+
+    def __init__(self, robot_id, selection, policy, rate):
+        self.robot_id, self.selection, self.policy = robot_id, selection, policy
+        self.period = 1.0 / rate
+        self._lock = threading.Lock()
+        self._key = None
+        self.sent = 0
+        self.pub = self.timer = None
+
+    def start(self):
+        self.pub = SealedPublisher(fleet(names.RANKINGS_TOPIC), RobotRanking, queue_size=10,
+                                   tcp_nodelay=True)
+        self.selection.on_change = self.changed
+        self.timer = rospy.Timer(rospy.Duration(self.period), lambda _e: self.send(True))
+
+    def changed(self):
+        """A sample may have changed the robot's ranking."""
+        self.send(False)
+
+    def send(self, always):
+        if self.pub is None:
+            return
+        with self._lock:
+            ranking = self.selection.view()
+            key = view_key(ranking, self.policy, self.selection.flag_selects())
+            if key == self._key and not always:
+                return
+            self._key = key
+            # samples of the server picked, or of one below it, may change the pick
+            self.selection.rankings.selected(self.robot_id, key[2])
+            msg = RobotRanking(robot_id=self.robot_id, ranking=ranking.ranking,
+                               mean_latency=ranking.means, error=ranking.errors,
+                               sample_count=ranking.counts, excluded=ranking.excluded,
+                               wait=[float('nan') if w is None else w for w in ranking.waits]
+                               if any(w is not None for w in ranking.waits) else [])
+            msg.header.stamp = rospy.Time.now()
+            self.pub.publish(msg)
+            self.sent += 1
+
+    def shutdown(self):
+        if self.timer is not None:
+            self.timer.shutdown()
