@@ -14,7 +14,7 @@ DEMO_DURATION ?= 30
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
-  bench-scale bench-routing bench-hedging bench-capacity bench-master bench-seal bench-probes \
+  bench-scale bench-routing bench-hedging bench-capacity bench-master bench-fleet bench-seal bench-probes \
   test check unit-test testbed-test fault-test catkin-test rostest lint docs help clean
 all: build
 
@@ -29,7 +29,7 @@ help:
 	@echo 'make evaluate-suite  every scenario, every variant, side by side (about 45 min)'
 	@echo 'make bench           the papers tables and throughput (bench-scale, bench-routing,'
 	@echo '                     bench-hedging, bench-capacity, bench-master, bench-memory, bench-emulator,'
-	@echo '                     bench-seal, bench-probes)'
+	@echo '                     bench-seal, bench-probes, bench-fleet)'
 	@echo 'make unit-test, testbed-test, fault-test, catkin-test, rostest T=x.test, lint: parts of make test'
 	@echo 'make docs            docs/parameters.md from the parameter table and the launch files'
 	@echo 'make clean           remove build/ and .venv'
@@ -140,6 +140,11 @@ bench-probes: build
 # (20 robots, 5 servers, the manager on this host; ~4 min).
 bench-master: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.master_calls --out results/bench
+
+# A fleet of real nodes on this host (10x5, 30x10, 60x15), every probe sample to the
+# manager vs robots' own rankings: CPU and RSS per role, bytes in and flag bytes (~12 min).
+bench-fleet: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.fleet_nodes --out results/bench
 
 # Signed fleet messages: us to seal and check a flag, a batch, a result (no master).
 bench-seal: build

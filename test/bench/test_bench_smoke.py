@@ -41,13 +41,13 @@ def test_every_benchmark_runs_and_reports(tmp_path):
 def test_the_scale_benchmark_runs_and_reports(tmp_path):
     """`make bench-scale` in a tiny configuration: flat per robot and grouped."""
     proc = subprocess.run([sys.executable, '-m', 'server_select.bench.scale', '--sizes', '3x4',
-                           '--layouts', 'robot,pair', '--grouped-sizes', '4x4:2', '--limit',
+                           '--layouts', 'robot,pair,view', '--grouped-sizes', '4x4:2', '--limit',
                            '6', '--measure', '2', '--signed', 'on', '--out', str(tmp_path)],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                           universal_newlines=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:]
     rows = json.loads((tmp_path / 'scale.json').read_text())
-    assert [r['layout'] for r in rows] == ['robot', 'pair', 'grouped']
+    assert [r['layout'] for r in rows] == ['robot', 'pair', 'view', 'grouped']
     assert all(r['signed'] for r in rows)
     # signed samples (a fleet key): every robot ranked, flags moved by the slow samples
     for row in rows:
@@ -69,6 +69,23 @@ def test_the_master_call_benchmark_counts_calls(tmp_path):
     assert any(c['method'] == 'getPid' and c['caller'] == '/manager' and c['count'] > 0
                for c in run['calls']), run['calls']
     assert 'per node' in proc.stdout
+
+
+def test_the_fleet_of_real_nodes_benchmark_measures_each_role(tmp_path):
+    """`make bench-fleet` in a tiny configuration: both layouts, every role measured."""
+    proc = subprocess.run([sys.executable, '-m', 'server_select.bench.fleet_nodes',
+                           '--sizes', '2x2', '--seconds', '3', '--out', str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:]
+    rows = json.loads((tmp_path / 'fleet_nodes.json').read_text())
+    assert [r['layout'] for r in rows] == ['samples', 'views']
+    for row in rows:
+        assert row['all_flagged'] and (row['manager_processes'], row['robot_processes'],
+                                       row['server_processes']) == (1, 2, 2), row
+        assert row['manager_in_msgs_s'] > 0 and row['flag_bytes_per_robot_s'] > 0, row
+        assert all(finite(row[k]) for k in ('manager_cpu', 'robot_rss', 'flag_size')), row
+    assert 'at 1,000 robots' in proc.stdout
 
 
 def test_the_seal_benchmark_runs_and_reports(tmp_path):

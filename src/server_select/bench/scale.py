@@ -231,7 +231,7 @@ def table(rows):
 def _sizes(args):
     """(robots, servers, layout, groups) of every run asked for."""
     runs = []
-    for size in args.sizes.split(','):
+    for size in filter(None, args.sizes.split(',')):
         robots, servers = map(int, size.lower().split('x'))
         runs += [(robots, servers, layout, 1) for layout in args.layouts.split(',')
                  if layout != 'pair' or robots * servers <= args.pair_max]

@@ -4,9 +4,10 @@ Robots ``first .. first+count-1`` each send ``--rate`` probe rounds a second (1)
 ``1..servers`` (``--layout robot``: one ``latency_samples`` batch; ``pair``: one
 ``latency_R<r>S<s>`` sample per server; ``view``: the robot's own ranking of them on
 ``robot_rankings``, as a fleet-profile robot sends it at ``~view_rate``), with round trips
-that give every robot a different, well separated nearest server, and a wait of 0
-(load-aware robots with idle servers: a server made slow is slower on the network, and a
-robot leaves it at once). Once every robot of this process has a flag
+that give every robot a different, well separated nearest server (a view also says a
+wait of 0 for each, as load-aware robots with idle servers do: a server made slow is
+slower on the network, and the manager moves the robot at once). Once every robot of
+this process has a flag
 ranking all servers, one robot every ``--change-every`` s gets a 10 s round trip for the
 server its flag selects, which must move its flag elsewhere: the time from that sample's
 publication to the flag that shows the move is the sample-to-flag delay. Results go to
@@ -157,7 +158,7 @@ class SimulatedRobots(object):
                                    wait=[0.0] * len(order))
             else:
                 msg = LatencySamples(robot_id=robot, server_id=servers,
-                                     ok=[True] * len(rtts), rtt=rtts, wait=[0.0] * len(rtts))
+                                     ok=[True] * len(rtts), rtt=rtts)
             msg.header.stamp = rospy.Time.now()
             sending()
             self.pub.publish(sealed(msg, self.sealer))
