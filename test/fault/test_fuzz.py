@@ -19,12 +19,13 @@ from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 
 from server_select.core.procs import wait_until
 from server_select.msg import (Detection, Detections, FoundTarget, ImageResult, ImageTask,
-                               LatencySample, LatencySamples, OrbTask, SelectionFlag,
-                               SortResult, SortTask)
+                               LatencySample, LatencySamples, OrbTask, RobotRanking,
+                               SelectionFlag, ServerAnnouncement, SortResult, SortTask)
 from server_select.nodes.manager import ManagerNode
 from server_select.nodes.robot import RobotNode
 from server_select.nodes.server import ServerNode
 from server_select.ros.camera import TopicSource
+from server_select.ros.membership import ServerRegistry
 from server_select.ros.plugins import PluginHandler
 from server_select.ros.routing import ResultRoutes
 from server_select.ros.server_work import ServerWork
@@ -136,6 +137,50 @@ def test_manager_sample_batches(nodes, robot, samples, ragged, sender):
     window = nodes['manager'].rankings.window
     for means in window.robot_stats(robot, [1, 2], rospy.get_time()).values():
         assert means.mean is None or (math.isfinite(means.mean) and means.mean >= 0)
+
+
+@pytest.fixture(scope='module')
+def view_manager(nodes):
+    """A manager that takes the robots' own rankings (the fleet profile's), and the server
+    list it keeps from announcements."""
+    rospy.set_param('~sample_stream', 'view')
+    try:
+        manager = ManagerNode()
+    finally:
+        rospy.set_param('~sample_stream', 'pair')
+    registry = ServerRegistry(0.0, manager.on_leave)
+    registry.start()
+    yield manager, registry
+    registry.shutdown()
+
+
+@FUZZ
+@given(robot=st.one_of(st.sampled_from([1, 2]), uint32),
+       entries=st.lists(st.tuples(uint32, floats, floats, uint32), max_size=5),
+       waits=st.lists(floats, max_size=6), excluded=st.lists(uint32, max_size=3),
+       sender=st.one_of(st.none(), senders))
+def test_manager_robot_rankings(view_manager, robot, entries, waits, excluded, sender):
+    """A robot's own ranking: any ids (repeated too), NaN, infinite or descending
+    latencies, arrays of any length, any publisher."""
+    manager, _ = view_manager
+    servers, means, errors, counts = (list(x) for x in zip(*entries)) if entries else \
+        ([], [], [], [])
+    manager.on_view(sent_by(RobotRanking(robot_id=robot, ranking=servers, mean_latency=means,
+                                         error=errors, sample_count=counts, wait=waits,
+                                         excluded=excluded),
+                            sender if sender is not None else '/robot%d' % robot))
+    ranking = manager.rankings.rank(robot, rospy.get_time())
+    assert all(math.isfinite(m) and m > 0 for m in ranking.means)
+    assert ranking.means == sorted(ranking.means)
+
+
+@FUZZ
+@given(server=uint32, lease=floats, sender=senders)
+def test_manager_server_announcements(view_manager, server, lease, sender):
+    _, registry = view_manager
+    registry.on_announcement(sent_by(ServerAnnouncement(server_id=server, lease=lease), sender))
+    registry.on_check(None)
+    assert all(isinstance(s, int) for s in registry.leases.members())
 
 
 @FUZZ

@@ -34,20 +34,27 @@ def test_a_view_is_checked_and_read_as_the_manager_ranks():
     ([1], [float('nan')], [0.0], [1], [], []),                 # not a latency
     ([1], [-1.0], [0.0], [1], [], []),
     ([1], [0.001], [0.0], [1], [0.0, 0.0], []),                # waits of another length
+    ([1], [0.001], [float('nan')], [1], [], []),               # not an error
+    ([1], [0.001], [0.0], [1], [-1.0], []),                    # not a wait
 ])
 def test_a_view_that_cannot_be_a_ranking_is_refused(bad):
     with pytest.raises(ValueError):
         from_view(*bad)
 
 
-def test_the_view_key_changes_with_the_order_the_exclusions_and_the_policys_pick():
+def test_the_view_key_changes_with_the_servers_the_exclusions_and_the_policys_pick():
     policy = Policy('hysteresis', margin=0.0003)
-    a = ranking([1, 2], [0.0010, 0.0011])
-    assert view_key(a, policy, 2) == ((1, 2), (), 2)       # within the margin: kept
-    assert view_key(ranking([1, 2], [0.0010, 0.0020]), policy, 2) == ((1, 2), (), 1)
-    assert view_key(a, policy, None) != view_key(ranking([2, 1], [0.001, 0.0011]), policy,
-                                                 None)
-    assert view_key(a, policy, 1) != view_key(ranking([1, 2], [0.001, 0.0011], [3]), policy, 1)
+    a = ranking([1, 2, 3], [0.0010, 0.0011, 0.0012])
+    assert view_key(a, policy, 2) == ({1, 2, 3}, set(), 2)     # within the margin: kept
+    assert view_key(ranking([1, 2], [0.0010, 0.0020]), policy, 2)[2] == 1
+    # the order below the pick is not news; a new best is, when nothing is flagged yet
+    assert view_key(a, policy, 1) == view_key(ranking([1, 3, 2], [0.001, 0.0011, 0.0012]),
+                                              policy, 1)
+    assert view_key(a, policy, None) != view_key(ranking([2, 1, 3], [0.001, 0.0011, 0.0012]),
+                                                 policy, None)
+    assert view_key(a, policy, 1) != view_key(ranking([1, 2, 3], [0.001, 0.0011, 0.0012], [4]),
+                                              policy, 1)
+    assert view_key(a, policy, 1) != view_key(ranking([1, 2], [0.001, 0.0011]), policy, 1)
 
 
 def test_only_keeps_the_wanted_servers_in_order():

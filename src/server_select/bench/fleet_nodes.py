@@ -15,6 +15,7 @@ S servers). Nothing is asserted.
 
 import json
 import os
+import signal
 import struct
 import subprocess
 import sys
@@ -103,7 +104,13 @@ def run_one(robots, servers, layout, seconds, task_rate, work):
         counter.close()
         stop_group(fleet)
         log.close()
-        # the next fleet's nodes take these names: none of these may linger
+        # the next fleet's nodes take these names: none of these may linger (roslaunch
+        # starts each node in a process group of its own; a loaded host may outlast its
+        # shutdown timeout)
+        for node in nodes:
+            pid = _pid(node)
+            if pid is not None:
+                os.kill(pid, signal.SIGKILL)
         wait_until(lambda: not any(_pid(n) for n in nodes), 30.0, period=0.5)
     row = {'robots': robots, 'servers': servers, 'layout': layout, 'all_flagged': up,
            'seconds': span}

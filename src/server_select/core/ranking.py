@@ -47,10 +47,13 @@ def rank_servers(pair_stats, fail_fast=0):
 
 
 def view_key(ranking, policy, current):
-    """What of a robot's own ``ranking`` its manager needs to hear at once: the order, the
-    servers left out, and which server ``policy`` picks from ``current`` (the server the
-    robot's flag selects; None: none). A robot sends its ranking when this changes."""
-    return tuple(ranking.ranking), tuple(ranking.excluded), policy.choose(ranking, current)
+    """What of a robot's own ``ranking`` its manager needs to hear at once: the servers
+    ranked, those left out, and which server ``policy`` picks from ``current`` (the server
+    the robot's flag selects; None: none), which is what the manager decides from. A robot
+    sends its ranking when this changes; the order below the pick (on near-equal servers it
+    changes with every sample) goes with the periodic ranking."""
+    return (frozenset(ranking.ranking), frozenset(ranking.excluded),
+            policy.choose(ranking, current))
 
 
 def from_view(ranking, means, errors, counts, waits, excluded):
@@ -68,11 +71,15 @@ def from_view(ranking, means, errors, counts, waits, excluded):
     if not all(0.0 < m < float('inf') for m in means) or \
             any(b < a for a, b in zip(means, means[1:])):
         raise ValueError('latencies %s are not positive and ascending' % means)
+    errors = [float(e) for e in errors]
+    if not all(0.0 <= e < float('inf') for e in errors):
+        raise ValueError('standard errors %s are not finite and >= 0' % errors)
     waits = [None if w != w else float(w) for w in waits] if len(waits) else [None] * n
+    if not all(w is None or 0.0 <= w < float('inf') for w in waits):
+        raise ValueError('waits %s are not finite and >= 0 (or NaN: not known)' % waits)
     return Ranking(selected=ranking[0] if ranking else NO_SERVER, ranking=ranking,
                    means=means, counts=[int(c) for c in counts],
-                   excluded=[int(s) for s in excluded], errors=[float(e) for e in errors],
-                   waits=waits)
+                   excluded=[int(s) for s in excluded], errors=errors, waits=waits)
 
 
 def only(ranking, wanted):

@@ -2,8 +2,8 @@
 
 Each robot keeps its own samples exactly as the manager would (the same window, task
 memory and ``~fail_fast``: :class:`~server_select.core.rankings.FleetRankings` for one
-robot) and sends its ranking when the order, the servers left out, or the policy's pick
-changes, and every ``1/~view_rate`` s. The manager then costs O(servers) per *change*
+robot) and sends its ranking when the servers it ranks, those left out, or the policy's
+pick change, and every ``1/~view_rate`` s. The manager then costs O(servers) per *change*
 rather than O(1) per *sample*: it scales with robots, not with probes. What only it can
 do stays with it: the policy's state per robot, spreading robots that would move at
 once (``~spread``), group membership, and the flags a recorder sees.

@@ -13,9 +13,10 @@ from server_select.ros.seal import SealedPublisher
 
 class RankingSender(object):
     """Publishes ``selection.view()`` on ``robot_rankings`` when what the manager needs of
-    it changes (:func:`~server_select.core.ranking.view_key`: the order, the servers left
-    out, the policy's pick from the flagged server), checked whenever a sample may have
-    changed it, and every ``1/rate`` s regardless (a restarted manager, fresh means)."""
+    it changes (:func:`~server_select.core.ranking.view_key`: the servers ranked, those
+    left out, the policy's pick from the flagged server), checked whenever a sample may
+    have changed it, and every ``1/rate`` s regardless (a restarted manager, fresh means,
+    the order below the pick)."""
 
     def __init__(self, robot_id, selection, policy, rate):
         self.robot_id, self.selection, self.policy = robot_id, selection, policy

@@ -56,9 +56,11 @@ VARIANTS = collections.OrderedDict([
     ('fleet_z4', Variant('select', 'fleet', {'margin_z': 4.0})),
     ('fleet_20hz', Variant('select', 'fleet', {'contender_rate': 20.0,
                                                'contender_budget': 40.0})),
+    # every probe sample to the manager, which ranks (the robots' own rankings: fleet)
+    ('fleet_samples', Variant('select', 'fleet', {'sample_stream': 'robot'})),
 ])
 ON_REQUEST = ('fleet_2hz', 'fleet_trimmed', 'fleet_median', 'fleet_no_memory', 'fleet_memory10',
-              'fleet_window1', 'fleet_z4', 'fleet_20hz')
+              'fleet_window1', 'fleet_z4', 'fleet_20hz', 'fleet_samples')
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ON_REQUEST)
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server', 'search_sweep')
