@@ -13,7 +13,6 @@ rows scale the measured per-node rates to 1,000 robots (the flag sizes as measur
 S servers). Nothing is asserted.
 """
 
-import json
 import os
 import signal
 import struct
@@ -175,9 +174,7 @@ def main(argv=None):
                                     tmp))
                 print(table(rows[-1:]).splitlines()[-1], file=sys.stderr, flush=True)
         rospy.signal_shutdown('done')
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, 'fleet_nodes.json'), 'w') as stream:
-        json.dump(rows, stream, indent=2)
+    cli.write(args.out, 'fleet_nodes.json', rows)
     print(table(rows))
 
 

@@ -280,9 +280,7 @@ def main(argv=None):
             row['limit'] = args.limit
             rows.append(row)
             print(table([row]).splitlines()[-1], file=sys.stderr, flush=True)
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, 'scale.json'), 'w') as stream:
-        json.dump(rows, stream, indent=2)
+    cli.write(args.out, 'scale.json', rows)
     print(table(rows))
 
 

@@ -33,6 +33,7 @@ class Members(object):
         self._robot_set, self._server_set = set(robots), set(servers)
         self.learn_robots, self.learn_servers = not robots, not servers
         self._lock = threading.Lock()
+        self._heard = {}          # robot -> what is known of it (a subclass's)
 
     def set_members(self, robots, servers):
         """Fix the robots and servers (a group manager: what the top manager assigned to
@@ -48,6 +49,15 @@ class Members(object):
         if not self.learn_robots and robot not in self._robot_set:
             return 'robot %d is not one of ~robots %s' % (robot, self.fixed_robots)
         return None
+
+    def robots(self):
+        """The robots that take part (those heard from, or the fixed list)."""
+        with self._lock:
+            return list(self.fixed_robots) if not self.learn_robots else sorted(self._heard)
+
+    def heard(self, robot):
+        with self._lock:
+            return robot in self._heard
 
     def refusal(self, robot, server):
         """Why a sample of (``robot``, ``server``) is not taken (or None)."""
@@ -68,7 +78,7 @@ class FleetRankings(Members):
         # task samples' cost above the probes, remembered (core/passive.py; 0: off)
         self.cost = TaskCost(task_memory) if task_memory > 0 else None
         self.fail_fast = fail_fast
-        self._servers = {}                        # robot -> set of servers heard for it
+        self._servers = self._heard               # robot -> set of servers heard for it
         self._selected = {}                       # robot -> server its last flag selected
         self._aware = set()                       # robots whose samples say their wait
         self._last_good = {}                      # (robot, server) -> its newest good sample
@@ -140,15 +150,6 @@ class FleetRankings(Members):
             for robot in robots:
                 self.cost.forget((robot, server))
         return robots
-
-    def robots(self):
-        """The robots that take part (those heard from, or the fixed list)."""
-        with self._lock:
-            return list(self.fixed_robots) if not self.learn_robots else sorted(self._servers)
-
-    def heard(self, robot):
-        with self._lock:
-            return robot in self._servers
 
     def servers(self, robot, now):
         """``robot``'s servers: the fixed list, or those with a sample in the window."""

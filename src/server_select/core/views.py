@@ -29,7 +29,7 @@ class ViewRankings(Members):
     def __init__(self, stale, robots=(), servers=()):
         Members.__init__(self, robots, servers)
         self.stale = float(stale)
-        self._views = {}      # robot -> (receive time, Ranking of its member servers)
+        self._views = self._heard   # robot -> (receive time, Ranking of its member servers)
         self._due = []        # heap: (when a robot's view goes stale, robot)
 
     def take(self, robot, now, ranking):
@@ -58,15 +58,6 @@ class ViewRankings(Members):
                     robots.add(robot)
             members = set(self.fixed_robots) if not self.learn_robots else None
         return sorted(r for r in robots if members is None or r in members)
-
-    def robots(self):
-        """The robots that take part (those heard from, or the fixed list)."""
-        with self._lock:
-            return list(self.fixed_robots) if not self.learn_robots else sorted(self._views)
-
-    def heard(self, robot):
-        with self._lock:
-            return robot in self._views
 
     def forget_server(self, server):
         """``server`` left the fleet: out of every ranking now. The robots that ranked it."""
