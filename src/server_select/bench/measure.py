@@ -73,8 +73,10 @@ def bench_probe_vs_echo(tiny, log):
 
 def started(listener, kind, log):
     """Wait for the fleet's first answered task of ``kind`` (selection made, the work's
-    files loaded): figures are of the steady state."""
-    if not listener.wait_for_answer(kind):
+    files loaded): figures are of the steady state. Up to 120 s: a first camera frame
+    detected by a robot that runs at the lowest priority beside busy tests (make test's
+    background) once took over 40 s."""
+    if not listener.wait_for_answer(kind, timeout=120.0):
         raise RuntimeError('the bench fleet answered no %s task (see %s)' % (kind, log))
 
 
