@@ -148,7 +148,7 @@ def run_once(variant, kind, rate, args, work, name):
                        'mode:=%s' % ('fixed' if variant == 'static' else 'select'),
                        'fixed_server:=%d' % fixed[robot], 'task_timeout:=%g' % TIMEOUT,
                        'start_delay:=5', *(robot_args(kind, rate, args.frames) +
-                                           args.robot_args.split()))
+                                           args.robot_args.split()), stage=0)
     done = capacity_report.detections(bag, t0) if kind == 'image' else None
     # each server's tasks/s by its share (frames: the CPU a frame takes is the work; a sort
     # task's is mostly message handling, which is not modelled: no overload figure)

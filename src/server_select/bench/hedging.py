@@ -59,7 +59,7 @@ def run_once(args, work, index):
             run.launch('robot%d' % robot, 'robot.launch', 'robot_id:=%d' % robot,
                        'servers:=1,2', 'task_rate:=%g' % args.rate,
                        'task_timeout:=%g' % TIMEOUT, 'start_delay:=3',
-                       'hedge:=%s' % ('true' if setting == 'on' else 'false'))
+                       'hedge:=%s' % ('true' if setting == 'on' else 'false'), stage=0)
     start = data['duration'] - args.seconds            # the last --seconds of the run
     reports = [r for r in bag_analysis.load(bag).reports if r.t > start]
     return dict((setting, figures([r for r in reports if r.robot == robot]))

@@ -46,7 +46,7 @@ def run_once(routing, kind, servers, seconds, work):
         for robot in (1, 2):
             run.launch('robot%d' % robot, 'robot.launch', 'robot_id:=%d' % robot,
                        'servers:=%s' % ids, 'mode:=fixed', 'fixed_server:=1',
-                       'routing:=%s' % routing, 'start_delay:=2', *KINDS[kind])
+                       'routing:=%s' % routing, 'start_delay:=2', *KINDS[kind], stage=0)
     link = link_bytes(work, name)
     reports = [r for r in bag_analysis.load(bag).reports if r.robot == 1]
     up = sum(v['bytes'] for k, v in link.items() if k.startswith('robot1>'))

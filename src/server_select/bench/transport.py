@@ -40,7 +40,7 @@ def run_once(transport, args, work):
                    'image_source:=search:%s' % package_file('config', 'search_area.yaml'),
                    'frame_rate:=%g' % args.fps, 'image_transport:=%s' % transport,
                    'jpeg_quality:=%d' % args.quality, 'task_timeout:=%g' % TIMEOUT,
-                   'start_delay:=2')
+                   'start_delay:=2', stage=0)
     link = link_bytes(work, transport)
     duration = data['duration']
     reports = bag_analysis.load(bag).reports

@@ -52,8 +52,3 @@ class Leases(object):
         """The servers holding a lease, ascending."""
         with self._lock:
             return sorted(self._until)
-
-    def holder(self, server):
-        """The node that announced ``server`` last (None: not a member)."""
-        with self._lock:
-            return self._holder.get(server)

@@ -62,9 +62,7 @@ class FlagPublisher(object):
             flag.header.stamp = rospy.Time.now()
             if self.stream == 'robot':
                 self._robot_pub(robot).publish(flag)
-                self.pub.publish(flag)      # for recorders: costs nothing without one
-            else:
-                self.pub.publish(flag)
+            self.pub.publish(flag)      # (robot stream: for recorders; free without one)
         if previous != selected:
             rospy.loginfo('%s: robot %d -> server %s (ranking %s, ms %s)', self.source, robot,
                           selected if selected != SelectionFlag.NO_SERVER else 'none',

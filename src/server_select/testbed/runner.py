@@ -75,15 +75,18 @@ class HostRun(object):
     def record(self, bag, *args):
         """``rosbag record ARGS`` into ``bag`` on the manager host; stopped after the nodes."""
         return self.popen(self.scenario.manager.name, ['rosbag', 'record', '--tcpnodelay',
-                                                       '-O', bag] + list(args), 'rosbag', 1)
+                                                       '-O', bag] + list(args), 'rosbag', 2)
 
-    def launch(self, host, name, *args):
+    def launch(self, host, name, *args, stage=1):
+        """``roslaunch server_select NAME ARGS`` on ``host``. At the end robots (stage 0)
+        stop first, then the other nodes: a robot's last task never meets a server that
+        is shutting down (it would be answered busy and count as failed)."""
         return self.popen(host, ['roslaunch', '--wait', 'server_select', name] + list(args)
-                          + ['output:=log'], host)
+                          + ['output:=log'], host, stage)
 
     def start_master(self):
         manager = self.scenario.manager.name
-        self.popen(manager, ['roscore', '-p', str(MASTER_PORT)], 'roscore', stage=2)
+        self.popen(manager, ['roscore', '-p', str(MASTER_PORT)], 'roscore', stage=3)
         up = wait_until(lambda: self.tb.run(manager, ['rostopic', 'list'], env=self.env(manager),
                                             timeout=10).returncode == 0, 30.0, period=0.3)
         if not up:
@@ -122,7 +125,7 @@ class HostRun(object):
                         'task_timeout:=%g' % options.task_timeout,
                         'start_delay:=%g' % options.start_delay,
                         'manager_node:=%s' % ('/oracle' if mode == 'oracle' else '/manager'),
-                        *_given(options, 'probe_rate'))
+                        *_given(options, 'probe_rate'), stage=0)
 
     def server_lifetime(self, server, options):
         """A server that starts late or stops early (the scenario's ``start`` / ``stop``):

@@ -118,7 +118,7 @@ class SuiteRun(HostRun):
                     'fixed_server:=%d' % options.fixed_server,
                     'manager_node:=/%s' % (name if variant.mode == 'oracle' else
                                            'manager_' + name),
-                    *_args(params, accepted))
+                    *_args(params, accepted), stage=0)
 
     def robot_cpu(self):
         """``{robot id: CPU %}``: user + system time of each robot node over its life."""
