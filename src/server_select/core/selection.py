@@ -119,6 +119,11 @@ class Selection(object):
         return rule.near(self.window.robot_stats(self.robot_id, servers, now, errors=False),
                          heading, value)
 
+    def viewed(self, pick):
+        """The robot's view was sent picking ``pick``: from now on the samples of ``pick``,
+        and those that beat it, are the ones that may change the view."""
+        self.rankings.selected(self.robot_id, pick)
+
     def flag_selects(self):
         """The server the last flag selected, fresh or not (None: no flag yet)."""
         with self._lock:

@@ -37,10 +37,13 @@ class FlagPublisher(object):
                                    queue_size=queue_size)
 
     def _robot_pub(self, robot):
+        """``robot``'s own topic's publisher, advertised at its first flag (one master call,
+        made outside the flags' lock: robots that start together do not queue behind it;
+        two threads that race both advertise, and rospy shares the topic between them)."""
         pub = self._own.get(robot)
-        if pub is None:     # advertised at the robot's first flag (one master call)
-            pub = self._own[robot] = SealedPublisher(
-                flag_topic(robot, self.stream), SelectionFlag, queue_size=2, latch=True)
+        if pub is None:
+            pub = self._own.setdefault(robot, SealedPublisher(
+                flag_topic(robot, self.stream), SelectionFlag, queue_size=2, latch=True))
         return pub
 
     def offer(self, robot, ranking, only_on_change, choose=None):
@@ -50,6 +53,7 @@ class FlagPublisher(object):
         published before (None at first); default: the ranking's best.
         :meth:`selected` then tells the server chosen."""
         ranked = frozenset(ranking.ranking)
+        own = self._robot_pub(robot) if self.stream == 'robot' else None
         with self._lock:
             previous, previous_ranked = self._published.get(robot, (None, None))
             selected = choose(previous) if choose else ranking.selected
@@ -60,8 +64,8 @@ class FlagPublisher(object):
                                  mean_latency=ranking.means, sample_count=ranking.counts,
                                  excluded=ranking.excluded)
             flag.header.stamp = rospy.Time.now()
-            if self.stream == 'robot':
-                self._robot_pub(robot).publish(flag)
+            if own is not None:
+                own.publish(flag)
             self.pub.publish(flag)      # (robot stream: for recorders; free without one)
         if previous != selected:
             rospy.loginfo('%s: robot %d -> server %s (ranking %s, ms %s)', self.source, robot,

@@ -45,8 +45,7 @@ class RankingSender(object):
             if key == self._key and not always:
                 return
             self._key = key
-            # samples of the server picked, or of one below it, may change the pick
-            self.selection.rankings.selected(self.robot_id, key[2])
+            self.selection.viewed(key[2])
             msg = RobotRanking(robot_id=self.robot_id, ranking=ranking.ranking,
                                mean_latency=ranking.means, error=ranking.errors,
                                sample_count=ranking.counts, excluded=ranking.excluded,
