@@ -206,6 +206,24 @@ def test_expected_completion_counts_the_robots_own_tasks_sent_since_the_report()
     assert board.expected(1, 'image') is None
 
 
+def test_a_task_with_no_queue_takes_the_median_probe_round_trip_plus_the_work():
+    clock = Clock()
+    board = LoadBoard({'image': 1.0}, clock=clock)
+    board.update(1, Load(3, 1, 1, 2.4, {}), rtt=0.002)
+    assert board.unqueued(1, 'image') is None        # nobody has done a frame yet
+    board.update(2, Load(0, 0, 1, 0.0, {'image': 0.7}))
+    assert board.unqueued(2, 'image') is None        # no round trip yet
+    for rtt in (0.002, 0.090, 0.004):                # a probe waited for a quota period
+        board.update(1, Load(3, 1, 1, 2.4, {'image': 0.6}), rtt=rtt)
+    # the queue (2.4 s of backlog) is left out: what an answer takes at best
+    assert board.unqueued(1, 'image') == pytest.approx(0.003 + 0.6)   # median of 4
+    clock.now += 2.5
+    assert board.unqueued(1, 'image') is None        # the report is stale
+    board.forget(1)
+    board.update(1, Load(0, 0, 1, 0.0, {'image': 0.6}))
+    assert board.unqueued(1, 'image') is None        # forgotten with its round trips
+
+
 def test_the_retry_budget_is_a_share_of_recent_tasks_plus_a_reserve():
     clock = Clock()
     budget = RetryBudget(ratio=0.1, window=10.0, reserve=2, clock=clock)

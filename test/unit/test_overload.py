@@ -33,6 +33,36 @@ def test_each_attempt_tells_the_server_how_long_its_robot_still_waits():
     assert w.budgets == [pytest.approx(2.0), pytest.approx(1.4)]
 
 
+def test_a_fresh_deadline_is_what_each_server_is_given_within_the_timeout():
+    fresh = {3: 0.9, 1: None, 2: 5.0}    # server 1: nothing known yet
+    w = World(candidates=(3, 1, 2), timeout=2.0, first=0.5)
+    w.flow.deadlines.fresh = fresh.get
+    w.flow.send_next('s1')
+    w.clock.now += 0.6
+    w.flow.tick()                      # re-sent to server 1: the rest of the timeout
+    w.clock.now += 0.6
+    w.flow.tick()                      # and to server 2: the timeout is less than 5 s
+    assert [s for _, s in w.published] == [3, 1, 2]
+    assert w.budgets == [pytest.approx(0.9), pytest.approx(1.4), pytest.approx(0.8)]
+
+
+def test_a_busy_fresh_frame_goes_on_only_where_the_load_says_it_is_done_in_time():
+    fresh = {3: 1.4, 1: 1.4, 2: 1.4, 4: None}
+    w = World(candidates=(3, 1, 2))
+    w.flow.deadlines.fresh = fresh.get
+    w.flow.deadlines.expected = {3: 2.0, 1: 2.1, 2: 0.8}.get   # backlog + work there, s
+    w.flow.send_next('s1')
+    assert busy_status(w, 1, 3) == RETRIED
+    assert [s for _, s in w.published] == [3, 2]        # server 1 is as far behind as 3
+    outcome = busy(w, 1, 2).outcome                      # and then nobody is left in time
+    assert not outcome.ok and outcome.error.startswith('server 2 busy')
+    assert [s for _, s in w.published] == [3, 2] and w.flow.resent == 1
+    # a server whose load is not known, or a task without a freshness deadline, goes on
+    w.candidates = [3, 4]
+    w.flow.send_next('s2')
+    assert busy_status(w, 2, 3) == RETRIED and w.published[-1][1] == 4
+
+
 def test_a_busy_answer_sends_the_task_on_and_blames_nobody():
     w = World(candidates=(3, 1))
     w.flow.send_next('s1')

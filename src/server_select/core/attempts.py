@@ -12,13 +12,19 @@ class AttemptClock(object):
     ``expected(server)``, when given, is what the server's load says a task there takes
     (round trip + backlog + work, s; None: unknown): the deadline is then at least
     ``load_factor`` times that, so that a server that is slow because it is busy, and
-    says so, is not taken for dead."""
+    says so, is not taken for dead.
+
+    ``fresh(server)``, when given, is how long after an attempt reaches a server its answer
+    is still worth having (s; None: unknown): the server is given that deadline (within the
+    task's) and answers busy when its queue cannot meet it, so a stale frame is shed there
+    rather than queued; after a busy answer such a task goes on only where the load says it
+    can be done in time (:meth:`too_busy`)."""
 
     def __init__(self, timeout, factor=5.0, floor=0.25, first=1.0, keep=100, min_samples=5,
-                 expected=None, load_factor=2.0):
+                 expected=None, load_factor=2.0, fresh=None):
         self.timeout, self.factor, self.floor = float(timeout), float(factor), float(floor)
         self.first, self.keep, self.min_samples = float(first), keep, min_samples
-        self.expected, self.load_factor = expected, float(load_factor)
+        self.expected, self.load_factor, self.fresh = expected, float(load_factor), fresh
         self._lock = threading.Lock()
         self._rtts = collections.defaultdict(lambda: collections.deque(maxlen=self.keep))
 
@@ -51,3 +57,16 @@ class AttemptClock(object):
         seconds = rtts[min(len(rtts) - 1, int(quantile * len(rtts)))]
         expected = self.expected(server) if self.expected is not None else None
         return seconds if expected is None else max(seconds, self.load_factor * expected)
+
+    def budget(self, server, remaining):
+        """The deadline (s from now) an attempt on ``server`` gives it: the ``remaining``
+        time of the task, or less when a fresh answer is wanted sooner."""
+        fresh = self.fresh(server) if self.fresh is not None else None
+        return remaining if fresh is None else min(remaining, fresh)
+
+    def too_busy(self, server):
+        """Whether ``server``'s load says a task sent there now cannot be done within its
+        freshness deadline (False when either is unknown)."""
+        fresh = self.fresh(server) if self.fresh is not None else None
+        expected = self.expected(server) if fresh is not None and self.expected else None
+        return expected is not None and expected > fresh

@@ -17,6 +17,9 @@ import time
 # A server whose others' tasks take more than this share of its workers' time is ranked as
 # if at this share: past it the queue only grows, and how fast is the deadlines' business.
 MAX_UTILIZATION = 0.95
+# Probe round trips kept per server for :meth:`LoadBoard.unqueued` (their median: a probe
+# of a server short of CPU now and then waits for its next quota period).
+RTTS_KEPT = 9
 
 
 def queueing(utilization, work, workers=1):
@@ -53,10 +56,14 @@ class LoadBoard(object):
         self._clock = clock
         self._lock = threading.Lock()
         self._reports = {}       # server -> [Load, time, tasks sent since]
+        self._rtts = {}          # server -> its last probes' round trips
 
-    def update(self, server, load):
+    def update(self, server, load, rtt=None):
+        """``load``, the newest report of ``server``; ``rtt``, the probe's round trip (s)."""
         with self._lock:
             self._reports[server] = [load, self._clock(), collections.Counter()]
+            if rtt is not None:
+                self._rtts.setdefault(server, collections.deque(maxlen=RTTS_KEPT)).append(rtt)
 
     def sent(self, server, kind):
         """One of the robot's tasks went to ``server`` (it is in no report yet)."""
@@ -68,6 +75,7 @@ class LoadBoard(object):
     def forget(self, server):
         with self._lock:
             self._reports.pop(server, None)
+            self._rtts.pop(server, None)
 
     def _fresh(self, server):
         report = self._reports.get(server)
@@ -106,3 +114,12 @@ class LoadBoard(object):
             load, _, since = report
             extra = sum(self._work(load, k) * n for k, n in since.items())
             return load.backlog + extra / max(1, load.workers) + self._work(load, kind)
+
+    def unqueued(self, server, kind):
+        """Seconds a ``kind`` task at ``server`` takes with no queue: the median of its
+        last probes' round trips + its work (None: no fresh report, no round trip, or no
+        server has done a ``kind`` task yet)."""
+        with self._lock:
+            report, rtts = self._fresh(server), self._rtts.get(server)
+            work = self._work(report[0], kind) if report is not None and rtts else 0.0
+            return statistics.median(rtts) + work if work > 0 else None

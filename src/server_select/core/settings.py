@@ -105,6 +105,10 @@ PARAMS = {
     'max_in_flight': Param(0, parse_count, 'tasks of a stream out at once; a send finding '
                            'them all out waits for one to end, the newest frame winning '
                            '(0: no limit)'),
+    'fresh_factor': Param(0.0, parse_non_negative, 'load-aware: a camera frame is worth an '
+                          'answer until the next frame is due, and at least this many times '
+                          'the round trip + work of the server it goes to; one that server '
+                          'cannot start in time is refused busy (0: the task timeout)'),
     'retry_budget': Param(0.1, parse_non_negative, 're-sends and hedges: at most this share '
                           'of the tasks sent in the last 10 s, plus 2 (0: no limit)'),
     'spread': Param(False, parse_bool, 'a warranted move away from a ranked server is taken '
@@ -197,7 +201,7 @@ PROFILES = {
               'contender_rate': 10.0, 'window_samples': 3,
               'fail_fast': 2, 'hedge': True,
               # capacity: docs/design.md, "Capacity and overload"
-              'load_aware': True, 'max_in_flight': 1, 'spread': True},
+              'load_aware': True, 'max_in_flight': 1, 'spread': True, 'fresh_factor': 2.0},
 }
 
 

@@ -147,13 +147,16 @@ class TaskFlow(object):
         pending.attempts.append((server, now))
         pending.deadline = min(pending.started + self.timeout,
                                now + self.deadlines.seconds(server))
-        self._publish(pending.request, server, pending.started + self.timeout - now)
+        self._publish(pending.request, server,
+                      self.deadlines.budget(server, pending.started + self.timeout - now))
 
-    def _next(self, pending, hedge=False):
+    def _next(self, pending, hedge=False, busy=False):
         """Send ``pending`` to the next candidate it has not tried (a re-send, or a
-        ``hedge``); False if there is none."""
+        ``hedge``); False if there is none. After a ``busy`` answer, a task with a freshness
+        deadline goes only where the load says it can be done in time."""
         tried = set(s for s, _ in pending.attempts)
-        untried = [s for s in self._candidates() if s not in tried and s != LOCAL]
+        untried = [s for s in self._candidates() if s not in tried and s != LOCAL
+                   and not (busy and self.deadlines.too_busy(s))]
         if not untried:
             return False
         if self.budget is not None and not self.budget.spend(reserve=not hedge):
@@ -199,7 +202,7 @@ class TaskFlow(object):
                     self._on_failure(answered_by, error)
                 if busy and self._gives_way():
                     error += '; a newer task waits'
-                elif self._next(pending):
+                elif self._next(pending, busy=busy):
                     return Resolution(RETRIED, None)
                 del self._pending[task_id]
         if ok:

@@ -125,7 +125,7 @@ class RobotNode(object):
                          horizon=param('window_max'), fail_fast=param('fail_fast'))
 
     def _stream(self, kind, rate, mode):
-        timeout = param('task_timeout')
+        timeout, fresh = param('task_timeout'), param('fresh_factor')
         return TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready, dict(
             timeout=timeout, candidates=self.selection.candidates, on_failure=self.on_failure,
             on_success=self.health.task_ok, ids=self._task_ids,
@@ -139,7 +139,9 @@ class RobotNode(object):
                                    floor=param('retry_floor'),
                                    first=timeout / 2.0 if self.load else 1.0,
                                    expected=self.load.expected(kind.kind) if self.load
-                                   else None),
+                                   else None,
+                                   fresh=self.load.fresh_for(kind.kind, fresh, 1.0 / rate)
+                                   if self.load and kind.newest_wins and fresh > 0 else None),
             on_answer=functools.partial(self.passive.on_answer, kind.kind)
             if self.passive else None), local=mode == 'local',
             expected_publisher=self.server_node, route=ROUTES[param('routing')], load=self.load)

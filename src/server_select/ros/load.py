@@ -33,9 +33,10 @@ class RobotLoad(object):
         self._clock = clock
         self._lock = threading.Lock()      # sends from task threads, probes from others
 
-    def on_answer(self, server, response):
-        """A probe answer of ``server`` (the Prober's ``load_of``): its wait (s)."""
-        self.board.update(server, load_of(response))
+    def on_answer(self, server, response, rtt=None):
+        """A probe answer of ``server`` that took ``rtt`` s (the Prober's ``load_of``): its
+        wait (s)."""
+        self.board.update(server, load_of(response), rtt)
         return self.board.wait(server)
 
     def sent(self, server, kind):
@@ -56,6 +57,15 @@ class RobotLoad(object):
         """``(server) -> seconds``: backlog + work of a ``kind`` task there (None: unknown),
         what an attempt's deadline follows."""
         return lambda server: self.board.expected(server, kind)
+
+    def fresh_for(self, kind, factor, period):
+        """``(server) -> seconds``: how long a ``kind`` task (a camera frame, one every
+        ``period`` s) is worth waiting for at a server: until the next frame is due, and at
+        least ``factor`` x (round trip + work) there with no queue (None: unknown)."""
+        def seconds(server):
+            unqueued = self.board.unqueued(server, kind)
+            return None if unqueued is None else max(period, factor * unqueued)
+        return seconds
 
     def forget(self, server):
         self.board.forget(server)

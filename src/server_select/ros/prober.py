@@ -50,7 +50,7 @@ class Prober(object):
     hears the robot's own ranking instead). Servers can be added and removed at run time.
     ``answered`` is the set of servers that have answered at least once;
     ``on_sample(server, ok, rtt, error, wait)`` hears every sample. With ``load_of``, each
-    answer's load goes to ``load_of(server, response)``, which returns the *wait* at that
+    answer's load goes to ``load_of(server, response, rtt)``, which returns the *wait* at that
     server (s, what a task of this robot would wait for there; None: unknown), carried in
     the sample and in the batch's ``wait`` (a load-aware robot ranks by rtt + wait);
     ``announce(server)`` gives the ``(task kinds, rates)`` a probe of it carries.
@@ -154,7 +154,7 @@ class Prober(object):
                           % (response.server_id, response.seq), batch)
             return
         self.answered.add(server)
-        wait = self.load_of(server, response) if self.load_of is not None else None
+        wait = self.load_of(server, response, rtt) if self.load_of is not None else None
         self._publish(server, seq, stamp, rtt, '', batch, wait)
 
     def _publish(self, server, seq, stamp, rtt, error, batch, wait=None):
