@@ -71,14 +71,28 @@ class Recorder(object):
         return dict((robot, self._counts(robot, last[robot])) for robot in robots)
 
     def _counts(self, robot, last):
-        reports = [r.msg for r in self.of(self.reports, robot) if r.msg.task_id <= last]
-        counts = collections.Counter(m.task_id for m in reports)
-        failed = [m for m in reports if not m.ok]
-        return {'tasks': last,
-                'failed': len(failed),
-                'never answered': sum(1 for i in range(1, last + 1) if counts[i] == 0),
-                'duplicates': sum(1 for n in counts.values() if n > 1),
-                'errors': collections.Counter(m.error.split(' (')[0] for m in failed)}
+        return counts([r.msg for r in self.of(self.reports, robot) if r.msg.task_id <= last],
+                      last)
+
+
+def counts(reports, last=None):
+    """Counts of one robot run's task reports (its task ids count from 1): tasks (up to
+    ``last``, None: the highest id reported), failed, never answered, duplicates, errors."""
+    last = max((m.task_id for m in reports), default=0) if last is None else last
+    seen = collections.Counter(m.task_id for m in reports)
+    failed = [m for m in reports if not m.ok]
+    return {'tasks': last,
+            'failed': len(failed),
+            'never answered': sum(1 for i in range(1, last + 1) if seen[i] == 0),
+            'duplicates': sum(1 for n in seen.values() if n > 1),
+            'errors': collections.Counter(m.error.split(' (')[0] for m in failed)}
+
+
+def _kill(pid, sig):
+    try:
+        os.kill(pid, sig)
+    except ProcessLookupError:
+        pass
 
 
 class Fleet(object):
@@ -87,6 +101,7 @@ class Fleet(object):
     def __init__(self, log, **args):
         self.log, self.args = log, args
         self.extra = []
+        self.signalled = set()   # pids: a stopped node cannot tell its pid any more
 
     def __enter__(self):
         with open(self.log, 'a') as stream:
@@ -99,6 +114,8 @@ class Fleet(object):
         return self
 
     def __exit__(self, *exc):
+        for pid in self.signalled:
+            _kill(pid, signal.SIGCONT)
         for proc in self.extra:
             stop_group(proc)
         stop_group(self.proc)
@@ -108,6 +125,8 @@ class Fleet(object):
             pid = self.pid(node)
             if pid is not None:
                 os.kill(pid, signal.SIGKILL)
+        for pid in self.signalled:
+            _kill(pid, signal.SIGKILL)
         assert wait_until(lambda: not any(self.pid(n) for n in NODES), 10.0)
         return False
 
@@ -119,7 +138,13 @@ class Fleet(object):
             return None
 
     def signal(self, node, sig):
-        os.kill(self.pid(node), sig)
+        """Send ``sig`` to ``node``; returns its pid (kept: whatever happens, the node is
+        continued and killed when the fleet ends)."""
+        pid = self.pid(node)
+        assert pid is not None, '%s is not registered' % node
+        self.signalled.add(pid)
+        os.kill(pid, sig)
+        return pid
 
     def start(self, *argv):
         """Start one more process (a node run by hand); stopped with the fleet."""
@@ -132,6 +157,11 @@ class Fleet(object):
     def restart_server(self, server):
         return self.start('rosrun', 'server_select', 'server', '_server_id:=%d' % server,
                           '__name:=server%d' % server)
+
+    def restart_robot(self, robot):
+        rate = ['_task_rate:=%s' % self.args['task_rate']] if 'task_rate' in self.args else []
+        return self.start('rosrun', 'server_select', 'robot', '_robot_id:=%d' % robot,
+                          '_servers:=1,2,3', '__name:=robot%d' % robot, *rate)
 
     def restart_manager(self):
         return self.start('rosrun', 'server_select', 'manager', '_robots:=1,2',

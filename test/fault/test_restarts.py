@@ -1,6 +1,8 @@
 """A node started again under its own name while the old copy still runs (an orphaned
 node, a host that came back, a launch file started twice): the master tells the old copy
-to shut down, the newer one serves the name, and the robots lose no task.
+to shut down, the newer one serves the name, and the robots lose no task. A robot's old
+copy reports each task it still had out failed as it stops; the new copy's task ids count
+from 1 again (a new run).
 
 With rospy's defaults on Debian's ROS 1.15 both copies may exit (ros_comm #2018: the old
 node, shutting down, makes a master call that registers it again and bumps the new one;
@@ -8,15 +10,20 @@ rospy's log handler makes one at every log line while ``/rosout_disable_topics_g
 is unset, ros_comm #2067). Every node of the package sets that parameter at start.
 """
 
+import os
+import signal
 import time
 
 import pytest
 import rospy
 
 from server_select.core.procs import wait_until
+from server_select.core import names
+from server_select.core.outcome import STOPPED
+from server_select.msg import SortTask
 from server_select.srv import LatencyProbe
 
-from fleet import Fleet
+from fleet import Fleet, counts
 from test_faults import STABLE, TASK_TIMEOUT, answered, show, warm_up
 
 
@@ -72,3 +79,75 @@ def test_a_second_copy_of_a_node_takes_its_name(ros, node):
     assert taken and old_gone and works and still == new
     for outcome in outcomes.values():
         assert (outcome['failed'], outcome['never answered']) == (0, 0), outcome
+
+
+def runs_of(rec, robot, since):
+    """Robot ``robot``'s task reports split into the old copy's run and the new copy's (the
+    new run's ids count from 1 again: it starts at the first task 1 reported ``since``)."""
+    reports = rec.of(rec.reports, robot)
+    start = next((i for i, r in enumerate(reports) if r.time >= since and r.msg.task_id == 1),
+                 len(reports))
+    return [r.msg for r in reports[:start]], [r.msg for r in reports[start:]]
+
+
+def test_a_second_copy_of_a_robot_takes_its_name_and_no_task_is_lost(ros):
+    rec = ros['rec']
+    rec.clear()
+    with Fleet(ros['log'], **STABLE) as fleet:
+        warm_up(rec)
+        old = fleet.pid('/robot1')
+        t_start = time.monotonic()
+        fleet.restart_robot(1)
+        taken = wait_until(lambda: fleet.pid('/robot1') not in (None, old), 30.0)
+        t_taken = time.monotonic()
+        old_gone = wait_until(lambda: gone(old), 10.0)
+        new = fleet.pid('/robot1')
+        works = wait_until(lambda: sum(m.ok for m in runs_of(rec, 1, t_start)[1]) >= 10, 30.0)
+        last_new = max((m.task_id for m in runs_of(rec, 1, t_start)[1]), default=0)
+        other = rec.outcomes((2,), TASK_TIMEOUT)[2]      # waits for late reports
+        still = fleet.pid('/robot1')
+    before, after = runs_of(rec, 1, t_start)
+    old_run, new_run = counts(before), counts([m for m in after if m.task_id <= last_new],
+                                              last_new)
+    show('a second copy of /robot1 started while the first ran:', [{
+        'new copy serves the name after s': '%.2f' % (t_taken - t_start) if taken else 'never',
+        'old copy exited': old_gone, 'old pid': old, 'new pid': new, 'serving at the end': still,
+        'new copy answered 10 tasks': works}])
+    show('tasks:', [dict(run='robot 1, old copy', **old_run),
+                    dict(run='robot 1, new copy', **new_run), dict(run='robot 2', **other)])
+    assert taken and old_gone and works and still == new
+    # every task of the old copy reported once: answered, or failed because it stopped
+    assert (old_run['never answered'], old_run['duplicates']) == (0, 0), old_run
+    assert set(old_run['errors']) <= {STOPPED}, old_run
+    for run in (new_run, other):
+        assert (run['failed'], run['never answered'], run['duplicates']) == (0, 0, 0), run
+
+
+def test_a_robot_stopped_with_tasks_out_reports_each_of_them_failed_once(ros):
+    rec = ros['rec']
+    rec.clear()
+    with Fleet(ros['log'], **STABLE) as fleet:
+        warm_up(rec)
+        robot = fleet.pid('/robot1')
+        # nothing is answered: robot 1's tasks stay out
+        stopped = [fleet.signal('/server%d' % s, signal.SIGSTOP) for s in (1, 2, 3)]
+        try:
+            sent = []                         # robot 1's tasks on the wire from now on
+            wire = rospy.Subscriber('/' + names.SORT_TASK_TOPIC, SortTask,
+                                    lambda t: t.robot_id == 1 and sent.append(t.task_id))
+            out = wait_until(lambda: len(set(sent)) >= 3, 10.0)
+            wire.unregister()
+            os.kill(robot, signal.SIGINT)    # Ctrl-C
+            exited = wait_until(lambda: gone(robot), 15.0)
+        finally:
+            for pid in stopped:
+                os.kill(pid, signal.SIGCONT)
+        run = counts([r.msg for r in rec.of(rec.reports, 1)])
+    show('robot 1 stopped (SIGINT) while every server was stopped (SIGSTOP):',
+         [dict(exited=exited, **run)])
+    assert exited and out
+    assert (run['never answered'], run['duplicates']) == (0, 0), run
+    # the tasks still out, and those that found every server ejected meanwhile
+    assert run['errors'][STOPPED] >= 1, run
+    assert set(run['errors']) <= {STOPPED,
+                                  'no server selected'}, run

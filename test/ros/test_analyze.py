@@ -7,6 +7,7 @@ import rosbag
 import rospy
 from std_msgs.msg import String
 
+from server_select.core.outcome import STOPPED
 from server_select.msg import SelectionFlag, TaskReport
 from server_select.testbed import bag_analysis
 from server_select.testbed.analyze import main
@@ -70,3 +71,14 @@ def test_the_plots_say_what_they_show(tmp_path):
     assert panel['legend'] == ['ranked by (flags) S1', 'ranked by (flags) S2',
                                'selection changed',
                                'shaded: the server the flag selects (its colour)']
+
+
+def test_tasks_a_robot_still_had_out_when_it_stopped_are_left_out(tmp_path):
+    write_bag(tmp_path / 'plain.bag')
+    with rosbag.Bag(str(tmp_path / 'plain.bag'), 'a') as bag:
+        bag.write('/task_report', TaskReport(
+            robot_id=1, task_id=11, kind='sort', server_id=2, answered_by=-1, ok=False,
+            rtt=math.nan, attempts=1, error=STOPPED + ' (1 attempts: servers 2)'),
+            rospy.Time.from_sec(1006.0))
+    reports = bag_analysis.load(str(tmp_path / 'plain.bag')).reports
+    assert len(reports) == 10 and 11 not in [r.task for r in reports]

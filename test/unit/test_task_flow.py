@@ -258,3 +258,18 @@ def test_answers_of_tasks_sent_once_are_latency_samples_hedged_ones_are_not():
     w.clock.now += 0.001
     assert w.answer(task, 4).outcome.ok
     assert len(answers) == 20                     # the race's winner is not sampled
+
+
+def test_a_robot_that_stops_reports_each_task_still_out_failed_once():
+    w = World(candidates=(3, 4), timeout=2.0)
+    for stamp in ('s1', 's2', 's3'):
+        w.flow.send_next(stamp)
+    w.answer(2, 3)
+    w.clock.now += 0.6
+    w.flow.tick()                                 # task 1 and 3 re-sent to server 4
+    ended = w.flow.abandon('the robot stopped')
+    assert sorted(o.task_id for o in ended) == [1, 3] and len(w.flow) == 0
+    assert all(not o.ok and o.error.startswith('the robot stopped (2 attempts: servers')
+               for o in ended)
+    assert sorted(r.task_id for r in w.reports) == [1, 2, 3] and w.flow.failed == 2
+    assert w.answer(1, 4).status == 'late' and w.flow.abandon('again') == []

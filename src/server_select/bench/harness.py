@@ -11,6 +11,7 @@ import time
 import xmlrpc.client
 
 from server_select.core import names
+from server_select.core.outcome import cut_off
 from server_select.core.procs import stop_group, wait_until
 from server_select.ros.graph import node_pid as graph_node_pid
 
@@ -99,6 +100,8 @@ class ReportListener(object):
                                     queue_size=10000)
 
     def on_report(self, msg):
+        if cut_off(msg.error):      # a robot stopped with it out: the run's end, not a result
+            return
         with self.lock:
             self.reports.append((time.monotonic(), msg))
 

@@ -6,6 +6,16 @@ import collections
 
 NO_SERVER = -1      # TaskReport.NO_SERVER, SelectionFlag.NO_SERVER: no server
 LOCAL = -2          # TaskReport.LOCAL: the robot did the work itself
+# The error of a task the robot still had out when it stopped (Ctrl-C, the end of a run, a
+# newer copy taking its name): reported so that no task goes unsaid, but the run's end cut
+# it off, so the evaluation leaves it out of a run's figures (:func:`cut_off`).
+STOPPED = 'the robot stopped before an answer came'
+
+
+def cut_off(error):
+    """Whether a task report's ``error`` says the robot's stop cut the task off."""
+    return error.startswith(STOPPED)
+
 
 Outcome = collections.namedtuple(
     'Outcome', 'task_id kind stamp server_id answered_by ok error rtt attempts')
@@ -35,9 +45,10 @@ class Pending(object):
     def sent_at(self, server):
         return next((t for s, t in reversed(self.attempts) if s == server), None)
 
-    def servers(self):
-        """The servers it was sent to, as text."""
-        return ', '.join(str(s) for s, _ in self.attempts)
+    def unanswered(self, kind, why):
+        """How it ended without an answer: failed, ``why``, and the servers it was sent to."""
+        return self.outcome(kind, NO_SERVER, False, '%s (%d attempts: servers %s)' % (
+            why, len(self.attempts), ', '.join(str(s) for s, _ in self.attempts)), None)
 
     def outcome(self, kind, answered_by, ok, error, rtt):
         """How it ended (``rtt`` None: no answer)."""

@@ -235,9 +235,15 @@ class TaskFlow(object):
                         pending.deadline = pending.started + self.timeout
                 elif self.hedge is not None and not pending.hedged:
                     self._hedge(pending, now)
-        return [self._end(p.outcome(self.kind, NO_SERVER, False, '%s (%d attempts: servers %s)'
-                                    % (why, len(p.attempts), p.servers()), None))
-                for p, why in ended]
+        return [self._end(p.unanswered(self.kind, why)) for p, why in ended]
+
+    def abandon(self, why):
+        """Report every task still waiting for an answer failed, with ``why`` (the robot is
+        stopping: each task is reported once, none is left unsaid). Returns their Outcomes."""
+        with self._lock:
+            pending = list(self._pending.values())
+            self._pending.clear()
+        return [self._end(p.unanswered(self.kind, why)) for p in pending]
 
     def _gives_way(self):
         """Whether a newer task, held back, takes a late one's place (counted)."""

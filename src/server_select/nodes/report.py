@@ -5,6 +5,7 @@ import json
 import rospy
 
 from server_select.core import names
+from server_select.core.outcome import cut_off
 from server_select.core.params import parse_id_list
 from server_select.core.report import RunReport
 from server_select.msg import LatencySample, LatencySamples, SelectionFlag, TaskReport
@@ -60,6 +61,8 @@ class ReportNode(object):
             self.report.add_probe(batch.robot_id, server, ok, rtt)
 
     def on_task(self, report):
+        if cut_off(report.error):       # a robot stopped with it out: not the fleet's doing
+            return
         self.report.add_task(report.robot_id, report.ok, report.rtt, report.answered_by,
                              report.error)
 

@@ -8,11 +8,24 @@ import xmlrpc.client
 import rosgraph
 
 
-def node_pid(node_name, caller_id='/server_select_graph', master=None):
-    """The pid of ``node_name`` (its XML-RPC ``getPid``); rosgraph.MasterError if unknown."""
+class _TimedTransport(xmlrpc.client.Transport):
+    def __init__(self, timeout):
+        super(_TimedTransport, self).__init__()
+        self.timeout = timeout
+
+    def make_connection(self, host):
+        connection = super(_TimedTransport, self).make_connection(host)
+        connection.timeout = self.timeout
+        return connection
+
+
+def node_pid(node_name, caller_id='/server_select_graph', master=None, timeout=5.0):
+    """The pid of ``node_name`` (its XML-RPC ``getPid``); rosgraph.MasterError if unknown,
+    OSError when the node does not answer within ``timeout`` s (stopped or hung)."""
     master = master or rosgraph.Master(caller_id)
     uri = master.lookupNode(node_name)
-    code, message, pid = xmlrpc.client.ServerProxy(uri).getPid(caller_id)
+    proxy = xmlrpc.client.ServerProxy(uri, transport=_TimedTransport(timeout))
+    code, message, pid = proxy.getPid(caller_id)
     if code != 1:
         raise rosgraph.MasterError('getPid of %s: %s' % (node_name, message))
     return pid

@@ -3,6 +3,7 @@
 import os
 import signal
 import sys
+import time
 
 import rosgraph
 import rosgraph.names
@@ -108,6 +109,19 @@ def end_parent_launch():
     if not any(os.path.basename(a) == b'roslaunch' for a in argv[:2]):
         return False
     os.kill(parent, signal.SIGINT)
+    return True
+
+
+def flush(publisher, timeout=1.0):
+    """Wait, at most ``timeout`` s, until every message ``publisher`` queued has gone to its
+    subscribers' connections (rospy writes them from a thread per connection, and a node
+    that ends right after publishing loses what is still queued; rospy has no flush, so
+    this reads its connections' queues). True once flushed."""
+    end = time.monotonic() + timeout
+    while any(getattr(c, '_queue', None) for c in list(publisher.impl.connections)):
+        if time.monotonic() >= end:
+            return False
+        time.sleep(0.01)
     return True
 
 

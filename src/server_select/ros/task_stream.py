@@ -11,11 +11,12 @@ import rospy
 
 from server_select.core import names
 from server_select.core.stats import format_ms, summarize
+from server_select.core.outcome import STOPPED
 from server_select.core.task_flow import ENDED, RETRIED, TaskFlow
 from server_select.msg import TaskReport
 from server_select.ros.graph import publisher_of
 from server_select.ros.senders import SenderGate
-from server_select.ros.node import fleet
+from server_select.ros.node import fleet, flush
 from server_select.ros.routing import BroadcastRoute
 
 
@@ -162,7 +163,11 @@ class TaskStream(object):
             self.route.remove(server)
 
     def shutdown(self):
+        """Stop sending; a task still out is reported failed (each task is reported once,
+        also when the robot stops or a newer copy of it takes its name)."""
         for timer in self.timers:
             timer.shutdown()
+        if self.flow.abandon(STOPPED) and self.report_pub:
+            flush(self.report_pub)
         if self.route is not None:
             self.route.shutdown()

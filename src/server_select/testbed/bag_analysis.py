@@ -10,6 +10,7 @@ import math
 import os
 
 from server_select.testbed.scenario import Scenario
+from server_select.core.outcome import cut_off
 from server_select.core.settings import default
 from server_select.core.stats import summarize
 from server_select.core.tables import fmt, markdown_table
@@ -45,7 +46,7 @@ def load(bag_path):
             if name == 'server_select_flag':
                 flags.append(Flag(t, msg.robot_id, msg.server_id, list(msg.ranking),
                                   list(msg.mean_latency)))
-            elif name == 'task_report':
+            elif name == 'task_report' and not cut_off(msg.error):
                 reports.append(Report(t, msg.robot_id, msg.task_id, msg.ok, msg.rtt,
                                       msg.server_id, msg.answered_by, msg.error, msg.attempts))
             elif name.startswith('latency_R'):
