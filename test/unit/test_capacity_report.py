@@ -40,4 +40,13 @@ def test_failed_tasks_count_at_the_timeout_and_extra_sends_per_task():
     assert 'work' not in row and 'settled' not in row
     # from 21 s on: tasks 2 (server 1) and 3 (server 2) of robot 1: one switch in 9 s
     row = figures(Run({}, [], reports, [], []), None, 1.0, 10.0, 30.0, 5.0, settled=21.0)
-    assert row['settled'] == pytest.approx(60.0 / 9.0)
+    assert row['settled'] == pytest.approx(60.0 / 9.0) and 'settled_overload' not in row
+
+
+def test_the_overload_after_settling_leaves_out_what_came_before():
+    # server 1 sent 4 tasks/s (capacity 1) from 10 to 16 s, then 1 a second
+    reports = [report(10.0 + i / 4.0, 1, rtt=0.1, task=i) for i in range(24)] + [
+        report(16.0 + i, 1, rtt=0.1, task=24 + i) for i in range(14)]
+    row = figures(Run({}, [], reports, [], []), None, 1.0, 10.0, 30.0, 5.0, {1: 1.0},
+                  settled=20.0)
+    assert row['overloaded'] >= 6.0 and row['settled_overload'] == 0.0

@@ -19,7 +19,8 @@ COLUMNS = (('offered', 'offered /s', '%.2f', 1.0), ('sent', 'sent /s', '%.2f', 1
            ('work', 'server work /s', '%.2f', 1.0), ('wanted', 'work wanted %', '%.0f', 100.0),
            ('switches', 'switches /min /robot', '%.1f', 1.0),
            ('settled', 'settled switches /min /robot', '%.1f', 1.0),
-           ('overloaded', 'longest overload s', '%.0f', 1.0))
+           ('overloaded', 'longest overload s', '%.0f', 1.0),
+           ('settled_overload', 'settled longest overload s', '%.0f', 1.0))
 
 
 WORKED = re.compile(r'\[INFO\] \[([0-9.]+)\]: server ([0-9]+): .*?([0-9]+) tasks worked on')
@@ -90,7 +91,8 @@ def figures(run, done, offered, start, end, timeout, capacities=None, settled=No
     """The figures of one run: ``run`` a bag_analysis Run, ``done`` its detections (None:
     not frames), ``offered`` tasks/s the robots were asked to send, ``capacities`` each
     server's tasks/s; from scenario time ``settled`` on (None: no such figure), the
-    switches again: after a change the robots had to follow (a server came up)."""
+    switches and the longest overload again: after a change the robots had to follow (a
+    server came up)."""
     from server_select.testbed.bag_analysis import switches
     seconds = end - start
     reports = [r for r in run.reports if start <= r.t < end]
@@ -112,6 +114,8 @@ def figures(run, done, offered, start, end, timeout, capacities=None, settled=No
             1, len(set(r.robot for r in late)))
     if capacities:
         row['overloaded'] = overloaded(reports, capacities, timeout, start, end)
+        if settled is not None:
+            row['settled_overload'] = overloaded(reports, capacities, timeout, settled, end)
     if done is not None:
         answered = set((r.robot, r.task, r.answered_by) for r in run.reports if r.ok)
         mine = [d for d in done if start <= d[0] < end]
@@ -153,6 +157,7 @@ def plot(results, path):
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
+    from server_select.testbed.plots import plain_log_ticks
     kinds = list(results['kinds'])
     fig, axes = plt.subplots(2, len(kinds), figsize=(6 * len(kinds), 7), squeeze=False)
     for column, kind in enumerate(kinds):
@@ -174,6 +179,7 @@ def plot(results, path):
         bottom.set_title('%s tasks: mean round trip (failed at %g s)' % (kind, results['timeout']))
         bottom.set_ylabel('ms')
         bottom.set_yscale('log')
+        plain_log_ticks(bottom, minor=True)     # 1000, 2000, not 10^3, 2x10^3
         for axis in (top, bottom):
             axis.set_xlabel('offered tasks per s (all robots)')
             axis.grid(True, alpha=0.3)

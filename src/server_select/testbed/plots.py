@@ -32,10 +32,12 @@ def _changes(flags):
     return [f for f, before in zip(flags[1:], flags) if f.server != before.server]
 
 
-def _plain_log_ticks(ax):
+def plain_log_ticks(ax, minor=False):
+    """Plain labels on a log y axis (1, 10, 100), on its minor ticks too when ``minor`` (an
+    axis that spans less than a decade)."""
     from matplotlib.ticker import FuncFormatter
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: '%g' % v))
-    ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: ''))
+    ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: '%g' % v if minor else ''))
 
 
 def plot_task_rtt(runs, path):
@@ -66,7 +68,7 @@ def plot_task_rtt(runs, path):
         ax.set_xlabel(time_label(next(iter(runs.values()))))
         ax.set_ylabel('task round trip (ms, log)')
         ax.set_yscale('log')
-        _plain_log_ticks(ax)
+        plain_log_ticks(ax)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize='small')
     fig.tight_layout()
