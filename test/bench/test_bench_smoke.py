@@ -111,7 +111,10 @@ def test_the_probe_cost_benchmark_counts_probes(tmp_path):
     assert proc.returncode == 0, proc.stdout[-3000:]
     runs = json.loads((tmp_path / 'probe_cost.json').read_text())
     assert [r['variant'] for r in runs] == ['uniform', 'adaptive']
-    # uniform: every server at 4 Hz; adaptive: the nearest two at up to 10 Hz each
+    # uniform: every server at 4 Hz; adaptive: the nearest two at up to 10 Hz each, the
+    # others less often. Which two are nearest (2.0 and 2.3 ms against 4 ms and more) is
+    # blurred on a busy machine, so the smoke run checks the shares, not the rates.
     assert all(r['probes'] > 0 and r['cpu'] is not None for r in runs), runs
-    assert runs[1]['near'] > runs[0]['near'], runs
+    uniform, adaptive = (r['near'] / r['probes'] for r in runs)
+    assert adaptive > uniform, runs
     assert 'target probes/s' in proc.stdout
