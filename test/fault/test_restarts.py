@@ -10,6 +10,7 @@ rospy's log handler makes one at every log line while ``/rosout_disable_topics_g
 is unset, ros_comm #2067). Every node of the package sets that parameter at start.
 """
 
+import contextlib
 import os
 import signal
 import time
@@ -25,6 +26,16 @@ from server_select.srv import LatencyProbe
 
 from fleet import Fleet, counts
 from test_faults import STABLE, TASK_TIMEOUT, answered, show, warm_up
+
+
+@contextlib.contextmanager
+def warm_fleet(ros):
+    """The demo fleet, its tasks answered; yields (the recorder, cleared, and the fleet)."""
+    rec = ros['rec']
+    rec.clear()
+    with Fleet(ros['log'], **STABLE) as fleet:
+        warm_up(rec)
+        yield rec, fleet
 
 
 def gone(pid):
@@ -45,10 +56,7 @@ def probe_answers(probe):
 
 @pytest.mark.parametrize('node', ['/server2', '/manager'])
 def test_a_second_copy_of_a_node_takes_its_name(ros, node):
-    rec = ros['rec']
-    rec.clear()
-    with Fleet(ros['log'], **STABLE) as fleet:
-        warm_up(rec)
+    with warm_fleet(ros) as (rec, fleet):
         old = fleet.pid(node)
         t_start = time.monotonic()
         if node == '/manager':
@@ -91,10 +99,7 @@ def runs_of(rec, robot, since):
 
 
 def test_a_second_copy_of_a_robot_takes_its_name_and_no_task_is_lost(ros):
-    rec = ros['rec']
-    rec.clear()
-    with Fleet(ros['log'], **STABLE) as fleet:
-        warm_up(rec)
+    with warm_fleet(ros) as (rec, fleet):
         old = fleet.pid('/robot1')
         t_start = time.monotonic()
         fleet.restart_robot(1)
@@ -124,10 +129,7 @@ def test_a_second_copy_of_a_robot_takes_its_name_and_no_task_is_lost(ros):
 
 
 def test_a_robot_stopped_with_tasks_out_reports_each_of_them_failed_once(ros):
-    rec = ros['rec']
-    rec.clear()
-    with Fleet(ros['log'], **STABLE) as fleet:
-        warm_up(rec)
+    with warm_fleet(ros) as (rec, fleet):
         robot = fleet.pid('/robot1')
         # nothing is answered: robot 1's tasks stay out
         stopped = [fleet.signal('/server%d' % s, signal.SIGSTOP) for s in (1, 2, 3)]
