@@ -46,6 +46,20 @@ def test_a_fresh_deadline_is_what_each_server_is_given_within_the_timeout():
     assert w.budgets == [pytest.approx(0.9), pytest.approx(1.4), pytest.approx(0.8)]
 
 
+def test_a_frame_is_fresh_from_its_first_send_and_goes_nowhere_once_stale():
+    w = World(candidates=(3, 1, 2), timeout=5.0, first=0.5)
+    w.flow.deadlines.fresh = {3: 1.4, 1: 1.4, 2: 1.4}.get
+    w.flow.send_next('s1')
+    w.clock.now += 0.6                 # no answer from 3: re-sent to 1 with what is left
+    w.flow.tick()
+    assert [s for _, s in w.published] == [3, 1]
+    assert w.budgets == [pytest.approx(1.4), pytest.approx(0.8)]
+    w.clock.now += 0.9                 # 1.5 s after the first send: stale, sent nowhere
+    w.flow.tick()
+    assert [s for _, s in w.published] == [3, 1] and w.flow.resent == 1
+    assert len(w.flow) == 1            # a late answer from 1 is still taken
+
+
 def test_a_busy_fresh_frame_goes_on_only_where_the_load_says_it_is_done_in_time():
     fresh = {3: 1.4, 1: 1.4, 2: 1.4, 4: None}
     w = World(candidates=(3, 1, 2))

@@ -14,11 +14,11 @@ class AttemptClock(object):
     ``load_factor`` times that, so that a server that is slow because it is busy, and
     says so, is not taken for dead.
 
-    ``fresh(server)``, when given, is how long after an attempt reaches a server its answer
-    is still worth having (s; None: unknown): the server is given that deadline (within the
-    task's) and answers busy when its queue cannot meet it, so a stale frame is shed there
-    rather than queued; after a busy answer such a task goes on only where the load says it
-    can be done in time (:meth:`too_busy`)."""
+    ``fresh(server)``, when given, is how long after its first send a task's answer from
+    that server is still worth having (s; None: unknown): each attempt gives the server
+    what is left of it (within the task's deadline) and the server answers busy when its
+    queue cannot meet it, so a stale frame is shed there rather than queued; a re-send or
+    hedge goes only where the load says it can still be done in time (:meth:`too_busy`)."""
 
     def __init__(self, timeout, factor=5.0, floor=0.25, first=1.0, keep=100, min_samples=5,
                  expected=None, load_factor=2.0, fresh=None):
@@ -58,15 +58,19 @@ class AttemptClock(object):
         expected = self.expected(server) if self.expected is not None else None
         return seconds if expected is None else max(seconds, self.load_factor * expected)
 
-    def budget(self, server, remaining):
+    def budget(self, server, remaining, elapsed=0.0):
         """The deadline (s from now) an attempt on ``server`` gives it: the ``remaining``
-        time of the task, or less when a fresh answer is wanted sooner."""
+        time of the task, or less when a fresh answer is wanted sooner (freshness counts
+        from the task's first send, ``elapsed`` s ago, not from each attempt)."""
         fresh = self.fresh(server) if self.fresh is not None else None
-        return remaining if fresh is None else min(remaining, fresh)
+        return remaining if fresh is None else min(remaining, fresh - elapsed)
 
-    def too_busy(self, server):
-        """Whether ``server``'s load says a task sent there now cannot be done within its
-        freshness deadline (False when either is unknown)."""
+    def too_busy(self, server, elapsed=0.0):
+        """Whether a task first sent ``elapsed`` s ago, sent to ``server`` now, would be
+        answered too late: its freshness is spent, or what is left of it is less than the
+        server's load says the task takes there (False when its freshness is unknown)."""
         fresh = self.fresh(server) if self.fresh is not None else None
-        expected = self.expected(server) if fresh is not None and self.expected else None
-        return expected is not None and expected > fresh
+        if fresh is None:
+            return False
+        expected = self.expected(server) if self.expected is not None else None
+        return fresh - elapsed <= (expected or 0.0)

@@ -147,16 +147,17 @@ class TaskFlow(object):
         pending.attempts.append((server, now))
         pending.deadline = min(pending.started + self.timeout,
                                now + self.deadlines.seconds(server))
-        self._publish(pending.request, server,
-                      self.deadlines.budget(server, pending.started + self.timeout - now))
+        self._publish(pending.request, server, self.deadlines.budget(
+            server, pending.started + self.timeout - now, now - pending.started))
 
-    def _next(self, pending, hedge=False, busy=False):
+    def _next(self, pending, hedge=False):
         """Send ``pending`` to the next candidate it has not tried (a re-send, or a
-        ``hedge``); False if there is none. After a ``busy`` answer, a task with a freshness
-        deadline goes only where the load says it can be done in time."""
+        ``hedge``); False if there is none. A task with a freshness deadline goes only
+        where the load says it can still be done in time."""
         tried = set(s for s, _ in pending.attempts)
+        elapsed = self._clock() - pending.started
         untried = [s for s in self._candidates() if s not in tried and s != LOCAL
-                   and not (busy and self.deadlines.too_busy(s))]
+                   and not self.deadlines.too_busy(s, elapsed)]
         if not untried:
             return False
         if self.budget is not None and not self.budget.spend(reserve=not hedge):
@@ -202,7 +203,7 @@ class TaskFlow(object):
                     self._on_failure(answered_by, error)
                 if busy and self._gives_way():
                     error += '; a newer task waits'
-                elif self._next(pending, busy=busy):
+                elif self._next(pending):
                     return Resolution(RETRIED, None)
                 del self._pending[task_id]
         if ok:
