@@ -34,8 +34,15 @@ class BroadcastRoute(object):
     def publish(self, request, _server):
         self.pub.publish(request)
 
-    def wired(self, _server):
-        return self.pub.get_num_connections() > 0 and self.sub.get_num_connections() > 0
+    def wired(self, _server, node=None):
+        """Whether our result topic hears a server and our task topic reaches ``node`` (the
+        server's node name; None: unknown, any server will do). A robot started again under
+        its name is connected to one server after another: a task sent before the selected
+        one is connected is lost to it."""
+        if not (self.pub.get_num_connections() > 0 and self.sub.get_num_connections() > 0):
+            return False
+        # rospy names a publisher's connection by its subscriber's caller id
+        return node is None or node in [c.endpoint_id for c in list(self.pub.impl.connections)]
 
     def add(self, server):
         pass
@@ -74,7 +81,7 @@ class DirectRoute(object):
     def publish(self, request, server):
         self._pub(server).publish(request)
 
-    def wired(self, server):
+    def wired(self, server, _node=None):
         # The server makes our result publisher at our first task and waits for us to
         # connect (ResultRoutes), so only the task side can be checked beforehand.
         return self._pub(server).get_num_connections() > 0

@@ -47,6 +47,7 @@ class TaskStream(object):
                              check=kind.check, report=self._report, run_local=kind.run_local,
                              clock=time.monotonic, **flow_args)
         self.route = None if local else route(robot_id, kind, self.on_result)
+        self.node_of = expected_publisher
         self.report_pub = None
         self.timers = []
 
@@ -68,7 +69,8 @@ class TaskStream(object):
         if self.route is None:
             return True
         candidates = self.flow.candidates()
-        return bool(candidates) and self.route.wired(candidates[0])
+        return bool(candidates) and self.route.wired(
+            candidates[0], self.node_of(candidates[0]) if self.node_of else None)
 
     def on_timer(self, _event):
         if rospy.is_shutdown() or (self.limit and self.flow.sent >= self.limit):
