@@ -42,7 +42,7 @@ def test_hedging_off_and_on(tmp_path):
 def test_capacity_on_cpu_limited_servers(tmp_path):
     out = run('server_select.bench.capacity',
               ['--shares', '0.2,0.2', '--robots', '2', '--loads', '1', '--variants',
-               'fleet,static', '--seconds', '8'], tmp_path)
+               'fleet,static', '--seconds', '12'], tmp_path)
     results = json.loads((tmp_path / 'capacity_overload.json').read_text())
     runs = results['kinds']['image']['runs']
     assert [r['variant'] for r in runs] == ['fleet', 'static']
