@@ -21,13 +21,17 @@ from test_faults import STABLE, TASK_TIMEOUT, answered, current_server, show, wa
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SECONDS = 6.0      # of the impostor: twice the robots' manager timeout
+# The manager and a robot deciding alone keep their server while it is within 10 ms of the
+# best: on one host the servers are equal, and with the paper's policy a robot deciding
+# alone moves between them on noise, half the time to the one the impostor names.
+STEADY = dict(STABLE, policy='hysteresis')
 
 
 def takeover(ros, **args):
     """Counts of one takeover in a fleet launched with ``args``."""
     rec = ros['rec']
     rec.clear()
-    with Fleet(ros['log'], **dict(STABLE, **args)) as fleet:
+    with Fleet(ros['log'], **dict(STEADY, **args)) as fleet:
         warm_up(rec)
         ours = current_server(rec, 1)
         forged = [s for s in (1, 2, 3) if s != ours][0]
