@@ -3,7 +3,6 @@
 import os
 import signal
 import sys
-import time
 
 import rosgraph
 import rosgraph.names
@@ -11,6 +10,7 @@ import rospy
 
 from server_select.core import names
 from server_select.core.params import ParamError
+from server_select.core.procs import wait_until
 from server_select.core.settings import PARAMS, REQUIRED, default as profile_default
 from server_select.ros.master_watch import MasterWatch
 
@@ -117,12 +117,9 @@ def flush(publisher, timeout=1.0):
     subscribers' connections (rospy writes them from a thread per connection, and a node
     that ends right after publishing loses what is still queued; rospy has no flush, so
     this reads its connections' queues). True once flushed."""
-    end = time.monotonic() + timeout
-    while any(getattr(c, '_queue', None) for c in list(publisher.impl.connections)):
-        if time.monotonic() >= end:
-            return False
-        time.sleep(0.01)
-    return True
+    return wait_until(lambda: not any(getattr(c, '_queue', None)
+                                      for c in list(publisher.impl.connections)),
+                      timeout, period=0.01)
 
 
 def run(node_name, node_class, argv=None):
