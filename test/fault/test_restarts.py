@@ -18,7 +18,7 @@ import time
 import pytest
 import rospy
 
-from server_select.core.procs import wait_until
+from server_select.core.procs import alive, wait_until
 from server_select.core import names
 from server_select.core.outcome import STOPPED
 from server_select.msg import SortTask
@@ -36,15 +36,6 @@ def warm_fleet(ros):
     with Fleet(ros['log'], **STABLE) as fleet:
         warm_up(rec)
         yield rec, fleet
-
-
-def gone(pid):
-    """Whether process ``pid`` has exited (a zombie not yet reaped counts as gone)."""
-    try:
-        with open('/proc/%d/stat' % pid) as stream:
-            return stream.read().split(')')[-1].split()[0] == 'Z'
-    except OSError:
-        return True
 
 
 def probe_answers(probe):
@@ -65,7 +56,7 @@ def test_a_second_copy_of_a_node_takes_its_name(ros, node):
             fleet.restart_server(int(node[len('/server'):]))
         taken = wait_until(lambda: fleet.pid(node) not in (None, old), 30.0)
         t_taken = time.monotonic()
-        old_gone = wait_until(lambda: gone(old), 10.0)
+        old_gone = wait_until(lambda: not alive(old), 10.0)
         new = fleet.pid(node)
         # the name stays served: still the new copy a while later, and it works
         if node == '/manager':
@@ -115,7 +106,7 @@ def test_a_second_copy_of_a_robot_takes_its_name_and_no_task_is_lost(ros):
         fleet.restart_robot(1)
         taken = wait_until(lambda: fleet.pid('/robot1') not in (None, old), 30.0)
         t_taken = time.monotonic()
-        old_gone = wait_until(lambda: gone(old), 10.0)
+        old_gone = wait_until(lambda: not alive(old), 10.0)
         t_gone = time.monotonic()
         new = fleet.pid('/robot1')
         works = wait_until(
@@ -152,7 +143,7 @@ def test_a_robot_stopped_with_tasks_out_reports_each_of_them_failed_once(ros):
             out = wait_until(lambda: len(set(sent)) >= 3, 10.0)
             wire.unregister()
             os.kill(robot, signal.SIGINT)    # Ctrl-C
-            exited = wait_until(lambda: gone(robot), 15.0)
+            exited = wait_until(lambda: not alive(robot), 15.0)
         finally:
             for pid in stopped:
                 os.kill(pid, signal.SIGCONT)
