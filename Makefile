@@ -14,7 +14,7 @@ DEMO_DURATION ?= 30
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
-  bench-scale bench-routing bench-hedging bench-capacity bench-master bench-fleet bench-seal bench-probes \
+  bench-scale bench-routing bench-hedging bench-capacity league bench-master bench-fleet bench-seal bench-probes \
   test check unit-test testbed-test fault-test catkin-test rostest lint docs help clean
 all: build
 
@@ -27,6 +27,7 @@ help:
 	@echo 'make search-demo     the cooperative search: 2 robots, 2 servers, hidden people'
 	@echo 'make evaluate        the paper experiment on the testbed (SCENARIO=config/...yaml)'
 	@echo 'make evaluate-suite  every scenario, every variant, side by side (about 45 min)'
+	@echo 'make league          the fleet profile beside the peer balancers, every scenario'
 	@echo 'make bench           the papers tables and throughput (bench-scale, bench-routing,'
 	@echo '                     bench-hedging, bench-capacity, bench-master, bench-memory, bench-emulator,'
 	@echo '                     bench-seal, bench-probes, bench-fleet)'
@@ -126,6 +127,13 @@ bench-hedging: build
 
 # Goodput and round trip against offered load on servers of finite CPU (cgroup quotas):
 # paper, fleet and the static assignment; overload, crowd and herd (root, ~50 min).
+# The league: the fleet profile beside the peers (p2c peak-EWMA, least request, Prequal,
+# weighted round robin, replication) on every network and capacity scenario, 3 runs each
+# (root, TUN; about 2.5 hours). Tables and plot: results/league/league.md (docs/league.md).
+LEAGUE_ARGS ?=
+league: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.league --out results/league $(LEAGUE_ARGS)
+
 bench-capacity: build
 	@$(ROSENV) cd $(TOP) && for s in overload crowd herd; do \
 	  $(PY) -m server_select.bench.capacity --scenario $$s --repeats 2 --out results/bench \

@@ -11,7 +11,10 @@ variants cannot share servers as the scenario suite's do):
 - ``fleet``: the fleet profile (load-aware ranking, busy answers, in-flight limit, retry
   budget, spread);
 - ``static``: every robot fixed to one server, robots given to servers in proportion to
-  their CPU shares (D'Hondt): the best static assignment when links are equal.
+  their CPU shares (D'Hondt): the best static assignment when links are equal;
+- the league's peers (``p2c_peak_ewma``, ``least_request``, ``prequal``, ``round_robin``,
+  ``replicate``): the fleet profile with that rule choosing per task
+  (:func:`server_select.testbed.suite.peer_params`).
 
 Capacity (tasks/s) is the servers' shares over the CPU seconds one task takes on one core
 of this machine, measured here before the runs. Per variant and load the benchmark prints
@@ -39,12 +42,14 @@ from server_select.bench.capacity_report import static_assignment
 from server_select.core.sort_task import sort_values
 from server_select.msg import SortResult, SortTask
 from server_select.bench.harness import scenario_run
+from server_select.core.balancers import PEERS
+from server_select.testbed.suite import peer_params
 from server_select.testbed import bag_analysis
 from server_select.vision import image_codec
 from server_select.vision.detection import Detector, search_frame
 from server_select.vision.search import sample_image
 
-VARIANTS = ('paper', 'fleet', 'static')
+VARIANTS = ('paper', 'fleet', 'static') + PEERS
 # The cases of the capacity work, as defaults of the options (an option given wins):
 SCENARIOS = {
     # offered load stepping from half to twice the capacity of 3 equal servers
@@ -63,6 +68,12 @@ SORT_SIZE = 20000    # 80 kB a task: on this testbed bytes, not CPU, limit large
 def frame():
     """The camera frame: a photograph with one face, 640x480."""
     return cv2.resize(sample_image('astronaut.png'), (640, 480))
+
+
+def write_frame(folder):
+    """The camera frame as the robots' image source in ``folder`` (made if missing)."""
+    os.makedirs(folder, exist_ok=True)
+    cv2.imwrite(os.path.join(folder, 'face.png'), frame())
 
 
 def cpu_per_task(kind, repeats=10):
@@ -121,7 +132,9 @@ def run_once(variant, kind, rate, args, work, name):
     servers = ','.join(str(s) for s in range(1, len(shares) + 1))
     late = WARMUP + args.seconds / 3.0 if args.late else None
     data = scenario(shares, args.robots, args.seconds, args.delays, late)
-    profile = 'fleet' if variant == 'fleet' else 'paper'
+    profile = 'paper' if variant in ('paper', 'static') else 'fleet'
+    peer = ['%s:=%s' % (k, str(v).lower()) for k, v in sorted(peer_params(variant).items())] \
+        if variant in PEERS else []
     fixed = static_assignment(shares, args.robots)
     # the flags and probe samples too: what a robot's moves can be read from
     with scenario_run(data, work, name, 'sscap', record=(
@@ -148,7 +161,7 @@ def run_once(variant, kind, rate, args, work, name):
                        'mode:=%s' % ('fixed' if variant == 'static' else 'select'),
                        'fixed_server:=%d' % fixed[robot], 'task_timeout:=%g' % TIMEOUT,
                        'start_delay:=5', *(robot_args(kind, rate, args.frames) +
-                                           args.robot_args.split()), stage=0)
+                                           peer + args.robot_args.split()), stage=0)
     done = capacity_report.detections(bag, t0) if kind == 'image' else None
     # each server's tasks/s by its share (frames: the CPU a frame takes is the work; a sort
     # task's is mostly message handling, which is not modelled: no overload figure)
@@ -216,8 +229,7 @@ def main(argv=None):
     with tempfile.TemporaryDirectory(prefix='bench_capacity') as scratch:
         work = args.work or scratch
         args.frames = os.path.join(work, 'frames')
-        os.makedirs(args.frames, exist_ok=True)
-        cv2.imwrite(os.path.join(args.frames, 'face.png'), frame())
+        write_frame(args.frames)
         for kind in args.kinds:
             cpu = args.cpu = cpu_per_task(kind)
             capacity = args.capacity.get(kind, sum(args.shares) / cpu)

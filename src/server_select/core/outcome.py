@@ -32,15 +32,69 @@ Resolution.__doc__ = """What an answer did: ``status`` (ENDED, RETRIED, DUPLICAT
 UNKNOWN or FOREIGN) and, when ENDED, the task's ``outcome`` (else None)."""
 
 
+class EndedTasks(object):
+    """The last ``remember`` tasks that ended, and whether an answer ended each: what a
+    later answer for a task id is (:meth:`why`)."""
+
+    def __init__(self, remember):
+        self.remember = remember
+        self._answered = collections.OrderedDict()     # task id -> answered (bool)
+
+    def add(self, task_id, answered):
+        self._answered[task_id] = answered
+        while len(self._answered) > self.remember:
+            self._answered.popitem(last=False)
+
+    def __len__(self):
+        return len(self._answered)
+
+    def why(self, task_id):
+        """DUPLICATE (it was answered), LATE (it failed) or UNKNOWN (not remembered)."""
+        if task_id not in self._answered:
+            return UNKNOWN
+        return DUPLICATE if self._answered[task_id] else LATE
+
+
 class Pending(object):
     """A task in flight: its request, check context, and the attempts made so far."""
     __slots__ = ('task_id', 'stamp', 'request', 'context', 'started', 'attempts', 'deadline',
-                 'hedged')
+                 'hedged', 'open')
 
     def __init__(self, task_id, stamp, request, context, started):
         self.task_id, self.stamp, self.request, self.context = task_id, stamp, request, context
         self.started, self.attempts, self.deadline = started, [], started
         self.hedged = False
+        self.open = set()       # servers of attempts not ended yet (no answer, no deadline)
+
+    def attempt(self, server, now, observer=None):
+        """An attempt at ``server`` starts ``now`` (``observer.started(server)``)."""
+        self.attempts.append((server, now))
+        self.open.add(server)
+        if observer is not None:
+            observer.started(server)
+
+    def end(self, server, rtt=None, observer=None):
+        """The attempt at ``server`` ended, once: ``observer.ended(server, rtt)``; None
+        for every attempt still open."""
+        for each in list(self.open) if server is None else [server]:
+            if each in self.open:
+                self.open.discard(each)
+                if observer is not None:
+                    observer.ended(each, rtt)
+
+    def hedge_due(self, now, delay):
+        """Whether a hedged copy of this task goes now: once, when its only attempt is
+        older than ``delay(server)`` s (None: not known yet); a task re-sent meanwhile
+        is not hedged."""
+        if self.hedged:
+            return False
+        first, sent = self.attempts[0]
+        if len(self.attempts) == 1:
+            wait = delay(first)
+            if wait is None or now < sent + wait:
+                return False
+        self.hedged = True
+        return len(self.attempts) == 1
 
     def sent_at(self, server):
         return next((t for s, t in reversed(self.attempts) if s == server), None)

@@ -19,6 +19,11 @@ window's statistic) and the current choice, and returns the server to select:
 
 A server that leaves the ranking (no good sample in the window) is always left at once.
 
+The league's peers (:data:`~server_select.core.balancers.PEERS`: ``p2c_peak_ewma``,
+``least_request``, ``prequal``, ``round_robin``, ``replicate``) are policies too: a robot
+with one of them chooses per task with that rule (:mod:`server_select.core.balancers`);
+its manager ranks by the mean, as with ``mean``, for the record only.
+
 ``spread`` (load-aware fleets): robots that see the same servers decide alike, and a
 server that looks best draws all of them at once, gets loaded, and is left by all of them
 at once (a herd). With ``spread``, a move the policy warrants away from a server that is
@@ -53,9 +58,10 @@ import math
 import random
 import threading
 
+from server_select.core.balancers import PEERS
 from server_select.core.ranking import NO_SERVER
 
-POLICIES = ('mean', 'hysteresis', 'bound', 'peak_ewma')
+POLICIES = ('mean', 'hysteresis', 'bound', 'peak_ewma') + PEERS
 
 
 class Policy(object):
@@ -75,6 +81,11 @@ class Policy(object):
     def statistic(self, requested='mean'):
         """The window statistic this policy ranks by (``requested`` unless peak_ewma)."""
         return 'peak_ewma' if self.kind == 'peak_ewma' else requested
+
+    @property
+    def per_task(self):
+        """Whether robots choose per task with a peer's rule (a balancer)."""
+        return self.kind in PEERS
 
     @property
     def robust(self):

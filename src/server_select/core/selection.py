@@ -2,14 +2,17 @@
 
 ``select`` follows the manager's ranking while its flags are fresh, and ranks the servers
 itself from its own probe samples, with the manager's policy, when they are stale or name
-no server; ``fixed`` always names one server (the paper's baseline); ``local`` keeps the
-work in the robot. In ``select`` mode the robot's own evidence comes first: servers its
-:class:`~server_select.core.health.ServerHealth` has ejected are skipped.
+no server; with a peer's policy (:mod:`~server_select.core.balancers`) it asks that rule per
+task and the flags are for the record only; ``fixed`` always names one server (the paper's
+baseline); ``local`` keeps the work in the robot. In ``select`` mode the robot's own
+evidence comes first: servers its :class:`~server_select.core.health.ServerHealth` has
+ejected are skipped.
 """
 
 import threading
 import time
 
+from server_select.core import balancers
 from server_select.core.policy import Chooser, Policy
 from server_select.core.ranking import NO_SERVER, rank_servers
 from server_select.core.rankings import FleetRankings
@@ -43,6 +46,8 @@ class Selection(object):
         self.probes = LatencyWindow(window, keep=keep, horizon=horizon) if passive \
             else self.window
         self._chooser = Chooser(policy)
+        # a peer's rule, asked per task (None: the ranking decides)
+        self.balancer = balancers.make(policy.kind, clock=clock) if policy.per_task else None
         self.on_change = None      # on_change(): a sample may have changed view()
         self._clock = clock
         self._lock = threading.Lock()
@@ -168,13 +173,20 @@ class Selection(object):
     def deciding_locally(self):
         return self.mode == 'select' and self.manager_ranking() is None
 
-    def candidates(self):
-        """Where a task may go now, best first: ``[LOCAL]``, ``[fixed server]``, or the
-        (manager's or own) ranking without the servers the robot's evidence ejected."""
+    def candidates(self, kind=None):
+        """Where a ``kind`` task may go now, best first: ``[LOCAL]``, ``[fixed server]``,
+        the balancer's order of the servers the robot's evidence has not ejected, or the
+        (manager's or own) ranking without them."""
         if self.mode == 'local':
             return [LOCAL]
         if self.mode == 'fixed':
             return [self.fixed_server]
+        if self.balancer is not None:
+            with self._lock:
+                servers = list(self.servers)
+            if self.health is not None:
+                servers = [s for s in servers if self.health.usable(s)]
+            return self.balancer.order(servers, kind)
         ranking = self.manager_ranking()
         if ranking is None:
             ranking = self.own_ranking()
@@ -192,6 +204,10 @@ class Selection(object):
         ejected; NO_SERVER: none."""
         if self.mode != 'select':
             return self.target()
+        if self.balancer is not None:
+            last = self.balancer.last
+            usable = last is not None and (self.health is None or self.health.usable(last))
+            return last if usable else NO_SERVER
         ranking = self.manager_ranking()
         if ranking is None:
             with self._lock:

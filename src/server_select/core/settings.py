@@ -128,7 +128,9 @@ PARAMS = {
     'hysteresis': Param(0.0, parse_non_negative, 'keep the current server while within this '
                         'of the best (s); 0: the paper'),
     'policy': Param('mean', one_of(*POLICIES), 'which ranked server a robot gets: mean (the '
-                    'paper), hysteresis, bound or peak_ewma (docs/design.md, "Policies")'),
+                    'paper), hysteresis, bound or peak_ewma (docs/design.md, "Policies"); or a '
+                    'peer choosing per task: p2c_peak_ewma, least_request, prequal, '
+                    'round_robin, replicate (docs/league.md)'),
     'statistic': Param('mean', one_of('mean', 'median', 'trimmed', 'peak_ewma'), 'what the '
                        'window ranks by (policies mean, hysteresis, bound)'),
     'dwell': Param(0.0, parse_non_negative, 'policy hysteresis: no move within this long of '

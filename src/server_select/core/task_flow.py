@@ -29,8 +29,8 @@ import time
 
 from server_select.core.attempts import AttemptClock
 from server_select.core.outcome import (DUPLICATE, ENDED, FOREIGN, LATE,  # noqa: F401
-                                        LOCAL, NO_SERVER, RETRIED, UNKNOWN, Outcome, Pending,
-                                        Resolution)
+                                        LOCAL, NO_SERVER, RETRIED, UNKNOWN, EndedTasks,
+                                        Outcome, Pending, Resolution)
 
 
 class TaskFlow(object):
@@ -59,13 +59,20 @@ class TaskFlow(object):
         finds them all out is held back (no task is made) until one ends (:meth:`due`).
     :param newest_wins: a task whose attempt deadline passes, or that is refused as busy,
         while a newer one is held back ends there instead of going elsewhere.
+    :param attempts: told of every attempt: ``started(server)`` when it is sent,
+        ``ended(server, rtt)`` once, when its answer came (``rtt``: since it was sent), it
+        failed (an error, or its deadline passed: ``rtt`` is how long that took), or it
+        stopped counting (``rtt`` None: a busy answer, another attempt won, the task
+        ended); a :class:`~server_select.core.balancers.Balancer`.
+    :param copies: each task goes to this many candidates at once (replication; the
+        copies are not paid from ``budget``).
     """
 
     def __init__(self, kind, timeout, candidates, make, publish, check, report, run_local=None,
                  on_failure=None, on_success=None, deadlines=None, ids=None,
                  clock=time.monotonic, remember=2000, keep_rtts=2000, hedge=None,
                  on_answer=None, budget=None, max_in_flight=0, newest_wins=False,
-                 on_busy=None):
+                 on_busy=None, attempts=None, copies=1):
         if not timeout > 0:
             raise ValueError('timeout must be positive, got %r' % (timeout,))
         self.kind, self.timeout = kind, float(timeout)
@@ -75,18 +82,19 @@ class TaskFlow(object):
         self._on_success = on_success or (lambda server: None)
         self._on_answer = on_answer or (lambda server, rtt: None)
         self._on_busy = on_busy or (lambda server: None)
+        self._attempts = attempts
+        self.copies = max(1, int(copies))
         self.deadlines = deadlines or AttemptClock(self.timeout)
         self._ids = ids if ids is not None else itertools.count(1)
         self._clock = clock
         self._lock = threading.RLock()
         self._pending = collections.OrderedDict()     # task id -> _Pending, oldest first
-        self._ended = collections.OrderedDict()       # task id -> answered (bool)
-        self._remember = remember
+        self._ended = EndedTasks(remember)
         self.hedge = hedge
         self.budget, self.max_in_flight, self.newest_wins = budget, max_in_flight, newest_wins
         self._held = False            # a send was held back by max_in_flight
         self.sent = self.ok = self.failed = self.resent = self.switches = self.hedged = 0
-        self.busy = self.skipped = self.superseded = self.unfunded = 0
+        self.busy = self.skipped = self.superseded = self.unfunded = self.replicated = 0
         self._last_first = None
         self.ignored = collections.Counter()          # DUPLICATE / LATE / UNKNOWN / FOREIGN
         self.rtts = collections.deque(maxlen=keep_rtts)   # recent answered round trips
@@ -138,17 +146,25 @@ class TaskFlow(object):
                 self.switches += 1
             self._last_first = candidates[0]
             self._attempt(pending, candidates[0])
+            for server in [s for s in candidates[1:] if s != LOCAL][:self.copies - 1]:
+                self.replicated += 1
+                self._attempt(pending, server)
         if self.budget is not None:
             self.budget.sent()
         return task_id
 
     def _attempt(self, pending, server):
         now = self._clock()
-        pending.attempts.append((server, now))
+        pending.attempt(server, now, self._attempts)
         pending.deadline = min(pending.started + self.timeout,
                                now + self.deadlines.seconds(server))
         self._publish(pending.request, server, self.deadlines.budget(
             server, pending.started + self.timeout - now, now - pending.started))
+
+    def _drop(self, pending):
+        """``pending`` is over: out of the table, its open attempts ended."""
+        self._pending.pop(pending.task_id, None)
+        pending.end(None, observer=self._attempts)
 
     def _next(self, pending, hedge=False):
         """Send ``pending`` to the next candidate it has not tried (a re-send, or a
@@ -179,8 +195,7 @@ class TaskFlow(object):
         with self._lock:
             pending = self._pending.get(task_id)
             if pending is None:
-                why = UNKNOWN if task_id not in self._ended else (
-                    DUPLICATE if self._ended[task_id] else LATE)
+                why = self._ended.why(task_id)
                 self.ignored[why] += 1
                 return Resolution(why, None)
             sent_at = pending.sent_at(answered_by)
@@ -191,10 +206,12 @@ class TaskFlow(object):
                 error = self._check(result, pending.context) or ''
                 ok = not error
             if ok:
-                del self._pending[task_id]
-                self.deadlines.add(answered_by, now - sent_at)
                 answer_rtt = now - sent_at
+                pending.end(answered_by, answer_rtt, self._attempts)
+                self._drop(pending)
+                self.deadlines.add(answered_by, answer_rtt)
             else:
+                pending.end(answered_by, None if busy else now - sent_at, self._attempts)
                 self.busy += busy
                 if busy:
                     error = 'server %d busy (%s)' % (answered_by, error)
@@ -205,7 +222,7 @@ class TaskFlow(object):
                     error += '; a newer task waits'
                 elif self._next(pending):
                     return Resolution(RETRIED, None)
-                del self._pending[task_id]
+                self._drop(pending)
         if ok:
             self._on_success(answered_by)
             if len(pending.attempts) == 1:    # the winner of a race is no fair sample
@@ -221,21 +238,22 @@ class TaskFlow(object):
         with self._lock:
             for pending in list(self._pending.values()):
                 if now - pending.started >= self.timeout:
-                    del self._pending[pending.task_id]
+                    self._drop(pending)
                     ended.append((pending, 'no result within task_timeout %.3g s'
                                   % self.timeout))
                 elif now >= pending.deadline:
-                    server = pending.attempts[-1][0]
-                    self._on_failure(server, 'no answer within %.3g s'
-                                     % (now - pending.attempts[-1][1]))
+                    server, sent = pending.attempts[-1]
+                    pending.end(server, now - sent, self._attempts)
+                    self._on_failure(server, 'no answer within %.3g s' % (now - sent))
                     if self._gives_way():     # not worth sending again
-                        del self._pending[pending.task_id]
+                        self._drop(pending)
                         ended.append((pending, 'no result within its attempt deadline and '
                                       'a newer task waits'))
                     elif not self._next(pending):   # nobody left: wait for any late answer
                         pending.deadline = pending.started + self.timeout
-                elif self.hedge is not None and not pending.hedged:
-                    self._hedge(pending, now)
+                elif self.hedge is not None and pending.hedge_due(   # the first not blamed
+                        now, lambda server: self.deadlines.hedge_seconds(server, self.hedge)):
+                    self._next(pending, hedge=True)
         return [self._end(p.unanswered(self.kind, why)) for p, why in ended]
 
     def abandon(self, why):
@@ -243,7 +261,8 @@ class TaskFlow(object):
         stopping: each task is reported once, none is left unsaid). Returns their Outcomes."""
         with self._lock:
             pending = list(self._pending.values())
-            self._pending.clear()
+            for each in pending:
+                self._drop(each)
         return [self._end(p.unanswered(self.kind, why)) for p in pending]
 
     def _gives_way(self):
@@ -251,22 +270,9 @@ class TaskFlow(object):
         self.superseded += self.newest_wins and self._held
         return self.newest_wins and self._held
 
-    def _hedge(self, pending, now):
-        """A copy to the next candidate once the first attempt is past its server's
-        ``hedge`` quantile (once per task; the first server is not blamed)."""
-        first, sent = pending.attempts[0]
-        delay = self.deadlines.hedge_seconds(first, self.hedge)
-        if len(pending.attempts) == 1 and (delay is None or now < sent + delay):
-            return
-        pending.hedged = True          # sent on, or already re-sent: no hedge
-        if len(pending.attempts) == 1:
-            self._next(pending, hedge=True)
-
     def _end(self, outcome):
         with self._lock:
-            self._ended[outcome.task_id] = outcome.answered_by != NO_SERVER
-            while len(self._ended) > self._remember:
-                self._ended.popitem(last=False)
+            self._ended.add(outcome.task_id, outcome.answered_by != NO_SERVER)
             if outcome.ok:
                 self.ok += 1
                 self.rtts.append(outcome.rtt)

@@ -79,7 +79,7 @@ class RobotNode(object):
         self.search = image.search if image else None
         self.camera = image.source if image and isinstance(image.source, TopicSource) else None
         self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds),
-                              self.selection.heading) \
+                              self.selection.heading, self.selection.balancer) \
             if param('load_aware') and mode == 'select' else None
         self.passive = TaskSamples(self.robot_id, self.selection) \
             if self.selection.passive else None
@@ -127,10 +127,12 @@ class RobotNode(object):
     def _stream(self, kind, rate, mode):
         timeout, fresh = param('task_timeout'), param('fresh_factor')
         return TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready, dict(
-            timeout=timeout, candidates=self.selection.candidates, on_failure=self.on_failure,
+            timeout=timeout, candidates=functools.partial(self.selection.candidates, kind.kind),
+            attempts=self.selection.balancer, on_failure=self.on_failure,
             on_success=self.health.task_ok, ids=self._task_ids,
             on_busy=functools.partial(self.on_busy, kind.kind),
             hedge=param('hedge_quantile') if param('hedge') else None, budget=self.budget,
+            copies=self.selection.balancer.copies if self.selection.balancer else 1,
             max_in_flight=param('max_in_flight'),
             newest_wins=kind.newest_wins,
             # load-aware: a server's first answers may take half the timeout (its work is
@@ -194,6 +196,8 @@ class RobotNode(object):
                                    % (self.robot_id, server, err))
         if ok:
             self.health.probe_ok(server)
+            if self.selection.balancer is not None and self.load is None:
+                self.selection.balancer.probed(server, rtt)   # (with a load: from RobotLoad)
         else:
             self.on_failure(server, 'probe failed: %s' % error)
 

@@ -24,8 +24,9 @@ class RobotLoad(object):
     until its first task is sent), a probe of any other announces none, so that servers
     count the robot where its tasks go now. Thread-safe."""
 
-    def __init__(self, mix, target=None, clock=time.monotonic):
+    def __init__(self, mix, target=None, balancer=None, clock=time.monotonic):
         self.board = LoadBoard(mix)
+        self.balancer = balancer     # a peer's rule hears every answer's load too
         self.mix = dict(mix)
         self.kinds = sorted(mix)
         self.target = target
@@ -36,7 +37,10 @@ class RobotLoad(object):
     def on_answer(self, server, response, rtt=None):
         """A probe answer of ``server`` that took ``rtt`` s (the Prober's ``load_of``): its
         wait (s)."""
-        self.board.update(server, load_of(response), rtt)
+        load = load_of(response)
+        self.board.update(server, load, rtt)
+        if self.balancer is not None and rtt is not None:
+            self.balancer.probed(server, rtt, load)
         return self.board.wait(server)
 
     def sent(self, server, kind):

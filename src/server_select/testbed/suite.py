@@ -21,6 +21,7 @@ import threading
 
 import yaml
 
+from server_select.core.balancers import PEERS
 from server_select.testbed.runner import RECORDED, HostRun, RunOptions, host_ids
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.netns import Testbed, netns_pids
@@ -29,6 +30,18 @@ from server_select.testbed.suite_scenario import (expand, launch_args, scenario_
                                                   scenario_robot_args, short_name)
 
 Variant = collections.namedtuple('Variant', 'mode profile params')
+
+
+def peer_params(name):
+    """The parameters of the league's peer ``name`` (core/balancers.py): the fleet profile
+    with that rule choosing per task, every server probed alike (Prequal's pool wants
+    answers from all; adaptive probing follows the fleet's own ranking), replication
+    without hedges (it already sends each task twice)."""
+    params = {'policy': name, 'contender_rate': 0}
+    if name == 'replicate':
+        params['hedge'] = False
+    return params
+
 
 # What the suite compares. Parameters go to the variant's manager and robots (each takes
 # the ones its launch file has).
@@ -58,9 +71,9 @@ VARIANTS = collections.OrderedDict([
                                                'contender_budget': 40.0})),
     # every probe sample to the manager, which ranks (the robots' own rankings: fleet)
     ('fleet_samples', Variant('select', 'fleet', {'sample_stream': 'robot'})),
-])
+] + [(name, Variant('select', 'fleet', peer_params(name))) for name in PEERS])
 ON_REQUEST = ('fleet_2hz', 'fleet_trimmed', 'fleet_median', 'fleet_no_memory', 'fleet_memory10',
-              'fleet_window1', 'fleet_z4', 'fleet_20hz', 'fleet_samples')
+              'fleet_window1', 'fleet_z4', 'fleet_20hz', 'fleet_samples') + PEERS
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ON_REQUEST)
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server', 'search_sweep')

@@ -89,8 +89,10 @@ def figures(reports, flags, robots, changes, start, end, timeout, samples=(), cp
                    / max(1, len(measured)))
 
 
-def run_figures(meta, run):
-    """``{variant: Figures}`` of one run."""
+def run_figures(meta, run, by_tasks=False):
+    """``{variant: Figures}`` of one run; ``by_tasks``: switches and reactions from where
+    tasks went (the server each was first sent to), not from the flags (what the league
+    compares: a peer's robots choose per task, and flags do not say what they did)."""
     owners = dict((int(k), tuple(v)) for k, v in meta['owners'].items())
     scenario = Scenario.load(meta['scenario'])
     start, end = meta['measure_from'], meta['duration']
@@ -101,8 +103,8 @@ def run_figures(meta, run):
         known = [cpu[str(r)] for r in robots if str(r) in cpu]
         return sum(known) / len(known) if known else None
     return collections.OrderedDict(
-        (variant, figures(reports, flags, robots, changes, start, end, timeout, samples,
-                          share(robots)))
+        (variant, figures(reports, reports if by_tasks else flags, robots, changes, start,
+                          end, timeout, samples, share(robots)))
         for variant, (reports, flags, robots, samples) in split(run, owners).items())
 
 

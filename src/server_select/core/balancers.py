@@ -1,0 +1,286 @@
+"""Per-task balancers: the rules a user would put in front of servers instead of ours
+(no rospy). The league (``make league``) runs each beside the fleet profile.
+
+Each chooses per task, in the robot, from the robot's own evidence, and returns every
+server it may use in its order of preference (the first gets the task; a re-send or hedge
+takes the next): :meth:`Balancer.order`. What the robot tells them: its probe answers
+(:meth:`Balancer.probed`: round trip and the server's :class:`~server_select.core.load.Load`),
+its attempts (:meth:`Balancer.started`, :meth:`Balancer.ended`: round trip of an answer, or
+of an attempt that failed), and the kind of task it is about to send.
+
+- ``p2c_peak_ewma`` (Finagle ``Balancers.p2cPeakEwma``, tower ``balance::p2c`` with
+  ``load::PeakEwma``, Linkerd): two distinct servers drawn at random, the lower cost wins;
+  cost = peak-EWMA of the attempts' round trips x (this robot's attempts out there + 1).
+  As in tower and Finagle the estimate decays towards 0 between samples (so a server left
+  alone is tried again), a sample above it replaces it at once, and a server with no sample
+  starts at 1 s (tower's default). Decay time 10 s (tower's and Finagle's default).
+- ``least_request`` (Envoy ``LEAST_REQUEST``, equal weights): two servers drawn at random,
+  fewer of this robot's attempts out there wins (a tie: the first drawn).
+- ``prequal`` (Wydrowski et al., NSDI '24): a pool of at most 16 probe answers, none
+  older than 1 s, each used for at most ``reuse`` tasks, one answer removed per task
+  (alternately the oldest and the worst); an answer is *hot* when its requests in flight
+  (RIF: queued + in service) are above the 2^-0.25 quantile of the pool's; the cold answer
+  with the lowest latency wins, else (all hot) the lowest RIF; fewer than 2 answers: at
+  random. Adaptations, forced by robots: latency is the robot's own probe round trip plus
+  the server's reported work for the task's kind (a web client's network is the same to
+  every server, a robot's is not; the server reports its recent work per kind, not a
+  latency at a given RIF); probes come from the robot's prober at its own rates (all
+  servers, uniformly, in the league), not 3 per query (a robot sends 1-5 tasks a second
+  and probes far more often, so the pool is always fresh; ``reuse`` 2 rarely binds).
+- ``round_robin``: servers in turn, each as often as its workers (from its probe answers;
+  1 until known): smooth weighted round robin (nginx's), the baseline Prequal measures.
+- ``replicate`` (FogROS2-FT / -PLR): each task to the two best servers by this robot's
+  probes' mean round trip; the first answer wins (:attr:`Balancer.copies` is 2).
+
+Every peer meets the robot's own health (a server that failed is skipped while ejected),
+as production balancers have outlier detection; nothing else of the fleet profile's
+selection applies to them.
+"""
+
+import collections
+import math
+import random
+import threading
+import time
+
+PEERS = ('p2c_peak_ewma', 'least_request', 'prequal', 'round_robin', 'replicate')
+
+
+class PeakEwma(object):
+    """A peak-sensitive moving average of round trips (Finagle's ``PeakEwma`` cost, tower's
+    ``RttEstimate``): a sample above the estimate replaces it; one below moves it by
+    ``1 - exp(-dt / tau)`` (``dt`` since the last update); a read decays it towards 0 the
+    same way (both implementations update with a 0 round trip on every read)."""
+
+    def __init__(self, now, tau=10.0, initial=1.0):
+        if not tau > 0:
+            raise ValueError('tau must be positive, got %r' % (tau,))
+        self.tau, self.estimate, self.stamp = float(tau), float(initial), now
+
+    def observe(self, rtt, now):
+        if rtt > self.estimate:
+            self.estimate = rtt
+        else:
+            w = math.exp(-max(0.0, now - self.stamp) / self.tau)
+            self.estimate = self.estimate * w + rtt * (1.0 - w)
+        self.stamp = now
+
+    def get(self, now):
+        self.observe(0.0, now)
+        return self.estimate
+
+
+ProbeAnswer = collections.namedtuple('ProbeAnswer', 'server rtt rif service workers at')
+ProbeAnswer.__doc__ = """One probe answer as a balancer keeps it: round trip (s), requests
+in flight (queued + in service), ``{kind: work s}``, workers, when it arrived."""
+
+
+class Balancer(object):
+    """The state every peer keeps: this robot's attempts out per server, the newest probe
+    answer of each, and a random source (``rng``). Thread-safe."""
+
+    name = None
+    copies = 1
+
+    def __init__(self, rng=None, clock=time.monotonic):
+        self.rng = rng or random.Random()
+        self._clock = clock
+        self._lock = threading.Lock()
+        self.out = collections.Counter()     # server -> this robot's attempts out there
+        self.probes = {}                     # server -> its newest ProbeAnswer
+        self.last = None                     # where the last task went
+
+    def probed(self, server, rtt, load=None):
+        """A good probe answer: round trip ``rtt`` and ``load`` (a Load, or None)."""
+        answer = ProbeAnswer(server, rtt, (load.queued + load.in_service) if load else 0,
+                             dict(load.service) if load else {},
+                             max(1, load.workers) if load else 1, self._clock())
+        with self._lock:
+            self.probes[server] = answer
+            self._probed(answer)
+
+    def _probed(self, answer):
+        """Subclasses: a probe answer arrived (lock held)."""
+
+    def started(self, server):
+        with self._lock:
+            self.out[server] += 1
+
+    def ended(self, server, rtt=None):
+        """An attempt at ``server`` ended: ``rtt`` its round trip (answered, or failed
+        after that long), None when it just stopped counting (another attempt won)."""
+        with self._lock:
+            if self.out[server] > 0:
+                self.out[server] -= 1
+            if rtt is not None:
+                self._ended(server, rtt, self._clock())
+
+    def _ended(self, server, rtt, now):
+        """Subclasses: an attempt's round trip (lock held)."""
+
+    def order(self, servers, kind=None):
+        """``servers`` (the usable ones) in this rule's order for the next ``kind`` task."""
+        servers = list(servers)
+        if not servers:
+            return []
+        with self._lock:
+            ordered = self._order(servers, kind, self._clock())
+        self.last = ordered[0]
+        return ordered
+
+    def _order(self, servers, kind, now):
+        raise NotImplementedError
+
+    def _two(self, servers):
+        """Two distinct servers drawn at random (one when there is one)."""
+        return self.rng.sample(servers, min(2, len(servers)))
+
+
+def _pair_first(drawn, servers, key):
+    """The pair ``drawn`` by ``key`` (strictly lower wins; a tie keeps the first drawn),
+    then the other servers by ``key`` (where re-sends go)."""
+    pair = sorted(drawn, key=key) if len(drawn) == 2 and key(drawn[1]) < key(drawn[0]) \
+        else list(drawn)
+    return pair + sorted((s for s in servers if s not in pair), key=key)
+
+
+class P2CPeakEwma(Balancer):
+    name = 'p2c_peak_ewma'
+
+    def __init__(self, tau=10.0, initial=1.0, **kwargs):
+        Balancer.__init__(self, **kwargs)
+        self.tau, self.initial = tau, initial
+        self.ewma = {}
+
+    def _estimate(self, server, now):
+        if server not in self.ewma:     # from when the robot first meets it, as in tower
+            self.ewma[server] = PeakEwma(now, self.tau, self.initial)
+        return self.ewma[server]
+
+    def _ended(self, server, rtt, now):
+        self._estimate(server, now).observe(rtt, now)
+
+    def cost(self, server, now):
+        return self._estimate(server, now).get(now) * (self.out[server] + 1)
+
+    def _order(self, servers, kind, now):
+        costs = dict((s, self.cost(s, now)) for s in servers)
+        return _pair_first(self._two(servers), servers, costs.__getitem__)
+
+
+class LeastRequest(Balancer):
+    name = 'least_request'
+
+    def _order(self, servers, kind, now):
+        return _pair_first(self._two(servers), servers, lambda s: self.out[s])
+
+
+class RoundRobin(Balancer):
+    """Smooth weighted round robin: each turn every server gains its weight, the one with
+    the most goes and loses the total."""
+    name = 'round_robin'
+
+    def __init__(self, **kwargs):
+        Balancer.__init__(self, **kwargs)
+        self.current = collections.defaultdict(float)
+
+    def _order(self, servers, kind, now):
+        weights = dict((s, self.probes[s].workers if s in self.probes else 1)
+                       for s in servers)
+        for s in servers:
+            self.current[s] += weights[s]
+        turn = max(servers, key=lambda s: (self.current[s], -servers.index(s)))
+        self.current[turn] -= sum(weights.values())
+        return [turn] + [s for s in servers if s != turn]
+
+
+class Replicate(Balancer):
+    """The two best by the mean of the robot's probes' round trips (its last ``keep``)."""
+    name = 'replicate'
+    copies = 2
+
+    def __init__(self, keep=8, **kwargs):
+        Balancer.__init__(self, **kwargs)
+        self.rtts = collections.defaultdict(lambda: collections.deque(maxlen=keep))
+
+    def _probed(self, answer):
+        self.rtts[answer.server].append(answer.rtt)
+
+    def _order(self, servers, kind, now):
+        def mean(s):
+            rtts = self.rtts.get(s)
+            return sum(rtts) / len(rtts) if rtts else float('inf')
+        return sorted(servers, key=lambda s: (mean(s), servers.index(s)))
+
+
+def quantile(values, q):
+    """The ``q`` quantile of ``values`` by linear interpolation (numpy's default)."""
+    ordered = sorted(values)
+    position = q * (len(ordered) - 1)
+    low = int(math.floor(position))
+    high = min(low + 1, len(ordered) - 1)
+    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
+
+
+class Prequal(Balancer):
+    """Prequal's probe pool and hot-cold rule (the module docstring says what is adapted)."""
+    name = 'prequal'
+    HOT_QUANTILE = 2 ** -0.25
+
+    def __init__(self, pool=16, max_age=1.0, reuse=2, q=HOT_QUANTILE, **kwargs):
+        Balancer.__init__(self, **kwargs)
+        self.size, self.max_age, self.reuse, self.q = pool, max_age, reuse, q
+        self.pool = []            # [ProbeAnswer, uses], oldest first
+        self._remove_oldest = True
+
+    def _probed(self, answer):
+        self.pool.append([answer, 0])
+        if len(self.pool) > self.size:
+            self.pool.pop(0)
+
+    def latency(self, answer, kind):
+        return answer.rtt + answer.service.get(kind, 0.0)
+
+    def hot(self, entries):
+        """The answers of ``entries`` that are hot (RIF above the pool's quantile)."""
+        limit = quantile([e[0].rif for e in entries], self.q)
+        return [e for e in entries if e[0].rif > limit]
+
+    def _order(self, servers, kind, now):
+        usable = set(servers)
+        self.pool = [e for e in self.pool if now - e[0].at <= self.max_age]
+        entries = [e for e in self.pool if e[0].server in usable]
+        if len(entries) < 2:
+            first = self.rng.choice(servers)
+            return [first] + [s for s in servers if s != first]
+        hot = self.hot(entries)
+        cold = [e for e in entries if not any(e is h for h in hot)]
+
+        def rank(e):   # the rule's order: cold by latency, then hot by RIF
+            return (0, self.latency(e[0], kind), e[0].rif) if any(e is c for c in cold) \
+                else (1, e[0].rif, self.latency(e[0], kind))
+        ranked = sorted(entries, key=rank)
+        chosen = ranked[0]
+        chosen[1] += 1
+        if chosen[1] >= self.reuse:
+            self.pool.remove(chosen)
+        elif len(self.pool) > 1:      # one answer goes per query: oldest, worst, in turn
+            self.pool.remove(self.pool[0] if self._remove_oldest else
+                             max(self.pool, key=rank))
+            self._remove_oldest = not self._remove_oldest
+        order = []
+        for e in ranked:
+            if e[0].server not in order:
+                order.append(e[0].server)
+        return order + [s for s in servers if s not in order]
+
+
+_CLASSES = dict((c.name, c) for c in (P2CPeakEwma, LeastRequest, Prequal, RoundRobin,
+                                      Replicate))
+
+
+def make(name, **kwargs):
+    """The balancer called ``name`` (one of :data:`PEERS`)."""
+    if name not in _CLASSES:
+        raise ValueError('unknown balancer %r (expected one of %s)' % (name, ', '.join(PEERS)))
+    return _CLASSES[name](**kwargs)
