@@ -18,7 +18,7 @@ import json
 import os
 import sys
 
-from server_select.bench import capacity, capacity_report, cli
+from server_select.bench import capacity_report, cli
 from server_select.core.balancers import PEERS
 from server_select.core.tables import markdown_table, median_range
 
@@ -44,10 +44,10 @@ def network(args, log):
     out, results = os.path.join(args.out, 'network'), collections.OrderedDict()
     status = guarded('league', lambda: [
         run_scenario(name, out, repeat, args.variants, default_options(), log)
-        for repeat in range(1, args.repeats + 1) for name in args.scenarios])
+        for repeat in args.runs for name in args.scenarios])
     if status:
         raise SystemExit(status)
-    for name in (short_name(s) for s in args.scenarios):
+    for name in (short_name(s) for s in args.scenarios):   # every run in --out
         results[name] = [dict((v, f._asdict()) for v, f in
                               run_figures(meta, run, by_tasks=True).items())
                          for meta, run in load_runs(os.path.join(out, name))]
@@ -57,6 +57,7 @@ def network(args, log):
 def capacity_runs(args, log):
     """``{case: [row]}``: the capacity benchmark's figures of each run (variant, load and
     repeat in each row)."""
+    from server_select.bench import capacity      # OpenCV and the messages: only here
     results = collections.OrderedDict()
     for case in args.cases:
         options = capacity.parse(CAPACITY[case] + ['--seconds', str(args.seconds)] +
@@ -69,7 +70,7 @@ def capacity_runs(args, log):
         capacity.write_frame(options.frames)
         options.cpu = capacity.cpu_per_task('image')
         rate = options.capacity.get('image', sum(options.shares) / options.cpu)
-        for repeat in range(args.repeats):
+        for repeat in args.runs:
             for load in options.loads:
                 for variant in args.capacity_variants:
                     name = '%s-%g-%d' % (variant, load, repeat)
@@ -198,6 +199,8 @@ def parse(argv):
     parser.add_argument('--loads', help="capacity cases' offered loads, multiples of the "
                         "capacity (default: each case's own)")
     parser.add_argument('--repeats', type=int, default=3)
+    parser.add_argument('--first-run', type=int, default=1, help='number the runs from this '
+                        "one: more runs into an --out that has some (the report takes all)")
     parser.add_argument('--seconds', type=float, default=30.0,
                         help='measured s per capacity run')
     parser.add_argument('--image-capacity', type=float, default=None,
@@ -208,18 +211,36 @@ def parse(argv):
     for name in ('scenarios', 'variants', 'cases', 'capacity_variants'):
         setattr(args, name, [x for x in getattr(args, name).split(',') if x])
     bad = [c for c in args.cases if c not in CAPACITY]
-    if bad or args.repeats < 1:
-        parser.error('unknown capacity cases %s (of %s), or --repeats < 1'
+    if bad or args.repeats < 1 or args.first_run < 1:
+        parser.error('unknown capacity cases %s (of %s), or --repeats or --first-run < 1'
                      % (bad, ', '.join(CAPACITY)))
+    args.runs = range(args.first_run, args.first_run + args.repeats)
     return args
+
+
+def merge(old, new):
+    """``new`` results over ``old`` (a league.json already in --out): network results are
+    recomputed from every bag, so ``new``'s win; capacity rows of runs that ``new`` did not
+    make are kept."""
+    merged = dict(old, **new)
+    for case, rows in old.get('capacity', {}).items():
+        made = set((r['variant'], r['load'], r['repeat']) for r in
+                   new.get('capacity', {}).get(case, []))
+        merged.setdefault('capacity', {})[case] = [
+            r for r in rows if (r['variant'], r['load'], r['repeat']) not in made] + \
+            new.get('capacity', {}).get(case, [])
+    return merged
 
 
 def main(argv=None):
     args = parse(sys.argv[1:] if argv is None else argv)
     path = os.path.join(args.out, 'league.json')
-    if args.analyze_only:
+    old = {}
+    if os.path.exists(path):
         with open(path) as stream:
-            results = json.load(stream)
+            old = json.load(stream)
+    if args.analyze_only:
+        results = old
     else:
         def log(text):
             print(text, file=sys.stderr, flush=True)
@@ -228,6 +249,7 @@ def main(argv=None):
             results['network'] = network(args, log)
         if args.part in ('all', 'capacity'):
             results['capacity'] = capacity_runs(args, log)
+        results = merge(old, results)
         cli.write(args.out, 'league.json', results)
     text = report(results, os.path.join(args.out, 'league.png'))
     cli.write(args.out, 'league.md', text)
