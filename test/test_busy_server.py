@@ -10,6 +10,9 @@ server 1 is not ejected for being busy, and it still does the work that has time
 
 And a load-aware robot's probes announce its task rate to the server its tasks go to, and
 to that server only: the utilization servers report to another prober shows it.
+
+And a server without ``~test_knobs`` reads ``~work_delay`` once: another node's
+``rosparam set`` does not change how long its tasks take.
 """
 
 import itertools
@@ -118,6 +121,25 @@ class BusyServerTest(unittest.TestCase):
         self.assertGreater(times[-1] - times[0], 6.0, times)
         self.assertGreaterEqual(len(self.of('results', lambda m: m.robot_id == OWN and m.ok)),
                                 5, 'server 1 must keep doing the work that has time')
+
+    def test_z_another_nodes_rosparam_set_does_not_slow_or_speed_a_server(self):
+        """Last (it changes server 1's parameter): without ~test_knobs the 0.6 s stays."""
+        self.assertTrue(wait_until(lambda: self.flags.get_num_connections() >= 1, 30.0))
+        rospy.set_param('/server1/work_delay', 0.0)
+        # a server that followed it would within 1 s; whatever it had started (0.6 s each)
+        # is done 2 s after
+        rospy.sleep(2.0)
+        rtts = []
+        for task_id in range(900001, 900004):
+            count = len(self.of('results', lambda m: m.robot_id == OWN))
+            start = time.monotonic()
+            self.occupy(task_id)
+            self.assertTrue(wait_until(lambda: len(self.of(
+                'results', lambda m: m.robot_id == OWN)) > count, 10.0))
+            rtts.append(time.monotonic() - start)
+        print('\nserver 1 after rosparam set work_delay 0 from another node: own tasks '
+              'took %s ms' % ', '.join('%.0f' % (1e3 * r) for r in rtts))
+        self.assertGreaterEqual(min(rtts), 0.55, rtts)
 
     def test_a_robots_probes_announce_its_rate_where_its_tasks_go(self):
         self.assertTrue(wait_until(lambda: self.flags.get_num_connections() >= 1, 30.0))

@@ -5,7 +5,8 @@ Parameters (private): ``robots``, ``servers`` (id lists), ``tasks`` (per robot),
 (``select`` or ``fixed``), ``fixed_server``, ``timeout`` (s to wait for all tasks),
 ``routing`` (``broadcast`` or ``direct``: the fleet profile), ``best_first`` (default true:
 the flag selects its ranking's first; false for a policy with a margin, which may keep a
-server the ranking no longer puts first).
+server the ranking no longer puts first), ``chooses`` (default false: robots follow the
+flags; true: robots choose per task, as the fleet profile's do, and the flags follow them).
 """
 
 import collections
@@ -44,6 +45,7 @@ class FleetTest(unittest.TestCase):
         cls.timeout = float(rospy.get_param('~timeout', 60.0))
         cls.direct = rospy.get_param('~routing', 'broadcast') == 'direct'
         cls.best_first = bool(rospy.get_param('~best_first', True))
+        cls.chooses = bool(rospy.get_param('~chooses', False))
         cls.rec = FleetRecorder(cls.robots, cls.servers) if cls.direct else FleetRecorder()
         cls.logs, cls.log_lock = [], threading.Lock()
         rospy.Subscriber('/rosout', Log, cls.on_log, queue_size=1000)
@@ -130,6 +132,17 @@ class FleetTest(unittest.TestCase):
         racing = [f for f in mine if stamp - delivery < f.header.stamp <= stamp]
         return set(f.server_id for f in settled[-1:] + racing)
 
+    @staticmethod
+    def flagged_around(flags, robot, stamp, delivery=rospy.Duration(2.0)):
+        """A robot that chooses per task: the servers flags named for ``robot`` from the
+        last flag before ``stamp`` to ``delivery`` after it (its choice reaches the manager
+        with its next probe sample, or its ranking's period, 1 s; then the manager's flag)."""
+        mine = sorted((f.msg for f in flags if f.msg.robot_id == robot),
+                      key=lambda f: f.header.stamp)
+        before = [f for f in mine if f.header.stamp <= stamp]
+        after = [f for f in mine if stamp < f.header.stamp <= stamp + delivery]
+        return set(f.server_id for f in before[-1:] + after)
+
     def doubted(self, robot, stamp, within=rospy.Duration(6.0)):
         """The servers ``robot`` logged, in the ``within`` before ``stamp``, that it ejected
         or that had not answered yet: its own evidence, which goes before the flags (an
@@ -195,6 +208,9 @@ class FleetTest(unittest.TestCase):
                     self.assertEqual(report.answered_by, report.server_id, what)
                 if self.mode == 'fixed':
                     self.assertEqual(targets, [self.fixed_server], what)
+                elif self.chooses:       # the flags say where the robot's tasks went
+                    self.assertIn(report.server_id, self.flagged_around(
+                        flags, robot, copies[0].header.stamp), what)
                 else:
                     flagged = self.flagged_at(flags, robot, copies[0].header.stamp)
                     if report.server_id not in flagged:   # only if its own evidence said

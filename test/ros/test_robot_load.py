@@ -15,7 +15,7 @@ from fake_clock import Clock   # noqa: E402
 def test_a_probe_announces_the_robots_send_rate_only_to_where_its_tasks_go():
     clock = Clock(0.0)
     heading = {'server': 2}
-    load = RobotLoad({'image': 0.5, 'sort': 4.0}, lambda: heading['server'], clock)
+    load = RobotLoad({'image': 0.5, 'sort': 4.0}, lambda: heading['server'], clock=clock)
     # nothing sent yet: the streams' rates, to the server its first task goes to
     assert load.announcement(2) == (['image', 'sort'], [0.5, 4.0])
     assert load.announcement(1) == (['image', 'sort'], [0.0, 0.0])

@@ -232,3 +232,102 @@ def test_every_attempt_ends_once_whatever_ends_the_task():
     f.send_next('d')
     f.abandon('stopping')
     assert sum(b.out.values()) == 0 and len(reports) == 4
+
+
+# -- the fleet's rule, hot_cold --------------------------------------------------------------
+
+def hot_cold(clock, seed=1):
+    return balancers.make('hot_cold', rng=random.Random(seed), clock=clock)
+
+
+def feed(rule, clock, answers, rounds=5):
+    """``answers``: {server: (rtt, rif, utilization)}, given ``rounds`` times each."""
+    for _ in range(rounds):
+        for server, (rtt, rif, utilization) in sorted(answers.items()):
+            rule.probed(server, rtt, Load(rif, 0, 1, 0.0, {'image': 0.1}, utilization))
+        clock.now += 0.1
+
+
+def test_hot_cold_never_picks_a_hot_server_while_a_cold_one_exists():
+    clock = Clock()
+    rule = hot_cold(clock)
+    feed(rule, clock, {1: (0.001, 4, 0.0), 2: (0.05, 0, 0.0), 3: (0.08, 0, 0.0)})
+    # server 1 is nearest but hot (4 in flight against the others' 0): the fastest cold wins
+    assert rule.order([1, 2, 3], 'image')[0] == 2
+
+
+def test_hot_cold_every_answer_hot_or_equal_takes_the_fastest():
+    clock = Clock()
+    rule = hot_cold(clock)
+    feed(rule, clock, {1: (0.030, 1, 0.0), 2: (0.010, 1, 0.0)})
+    assert rule.order([1, 2], 'image')[0] == 2
+
+
+def test_hot_cold_keeps_its_server_within_the_noise_and_leaves_beyond_it():
+    clock = Clock()
+    rule = hot_cold(clock)
+    jitter = [0.0, 0.004, -0.004, 0.002, -0.002]
+    for j in jitter:      # 1 ms apart under +-4 ms of noise: not a reason to move
+        rule.probed(1, 0.011 + j, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.0))
+        rule.probed(2, 0.010 - j, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.0))
+    rule.current = 1
+    assert [rule.order([1, 2], 'image')[0] for _ in range(20)] == [1] * 20
+    for _ in range(5):    # server 2 is now 20 ms nearer: far beyond the noise
+        rule.probed(1, 0.030, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.0))
+        rule.probed(2, 0.010, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.0))
+    assert rule.order([1, 2], 'image')[0] == 2
+    assert 'faster' in rule.why
+
+
+def test_hot_cold_ranks_by_expected_completion_with_the_wait():
+    clock = Clock()
+    rule = hot_cold(clock)
+    # equal round trips and requests in flight; server 1's others keep it 90 % busy
+    feed(rule, clock, {1: (0.010, 0, 0.9), 2: (0.010, 0, 0.1)})
+    assert rule.order([1, 2], 'image')[0] == 2
+
+
+def test_hot_cold_leaves_out_the_robots_own_task_and_one_odd_answer():
+    clock = Clock()
+    rule = hot_cold(clock)
+    feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.020, 0, 0.0)})
+    assert rule.order([1, 2], 'image')[0] == 1
+    rule.started(1)                      # its own frame is at server 1 now
+    feed(rule, clock, {1: (0.010, 1, 0.0), 2: (0.020, 0, 0.0)}, rounds=3)
+    rule.probed(1, 0.010, Load(2, 0, 1, 0.0, {'image': 0.1}, 0.0))   # one other caught
+    assert rule.order([1, 2], 'image')[0] == 1
+
+
+def test_hot_cold_without_answers_picks_at_random_and_stays():
+    clock = Clock()
+    picks = set()
+    for seed in range(20):
+        rule = hot_cold(clock, seed)
+        first = rule.order([1, 2, 3], 'image')[0]
+        assert rule.order([1, 2, 3], 'image')[0] == first
+        picks.add(first)
+    assert picks == {1, 2, 3}
+
+
+def test_hot_cold_leaves_an_ejected_server_at_once():
+    clock = Clock()
+    rule = hot_cold(clock)
+    feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.020, 0, 0.0)})
+    assert rule.order([1, 2], 'image')[0] == 1
+    assert rule.order([2], 'image') == [2]       # the caller left out server 1
+
+
+def test_hot_cold_counts_its_own_tasks_where_it_would_send_them():
+    clock = Clock()
+    rule = hot_cold(clock)
+    # server 2 does a frame in 0.1 s and the others keep it 60 % busy; server 1 is idle
+    # but takes 0.15 s a frame. At 5 frames/s of its own, server 2 would be 110 % busy.
+    for _ in range(5):
+        rule.probed(1, 0.010, Load(0, 0, 1, 0.0, {'image': 0.15}, 0.0))
+        rule.probed(2, 0.010, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.6))
+    picks = []
+    for _ in range(25):
+        picks.append(rule.order([1, 2], 'image')[0])
+        clock.now += 0.2
+    assert rule.rate('image', clock.now) == pytest.approx(5.0, rel=0.1)
+    assert picks[-1] == 1

@@ -42,14 +42,13 @@ from server_select.bench.capacity_report import static_assignment
 from server_select.core.sort_task import sort_values
 from server_select.msg import SortResult, SortTask
 from server_select.bench.harness import scenario_run
-from server_select.core.balancers import PEERS
-from server_select.testbed.suite import peer_params
+from server_select.testbed.suite import PREVIOUS_FLEET, RULES, peer_params
 from server_select.testbed import bag_analysis
 from server_select.vision import image_codec
 from server_select.vision.detection import Detector, search_frame
 from server_select.vision.search import sample_image
 
-VARIANTS = ('paper', 'fleet', 'static') + PEERS
+VARIANTS = ('paper', 'fleet', 'static', 'fleet_hysteresis') + RULES
 # The cases of the capacity work, as defaults of the options (an option given wins):
 SCENARIOS = {
     # offered load stepping from half to twice the capacity of 3 equal servers
@@ -133,8 +132,9 @@ def run_once(variant, kind, rate, args, work, name):
     late = WARMUP + args.seconds / 3.0 if args.late else None
     data = scenario(shares, args.robots, args.seconds, args.delays, late)
     profile = 'paper' if variant in ('paper', 'static') else 'fleet'
-    peer = ['%s:=%s' % (k, str(v).lower()) for k, v in sorted(peer_params(variant).items())] \
-        if variant in PEERS else []
+    given = PREVIOUS_FLEET if variant == 'fleet_hysteresis' else \
+        peer_params(variant) if variant in RULES else {}
+    peer = ['%s:=%s' % (k, str(v).lower()) for k, v in sorted(given.items())]
     fixed = static_assignment(shares, args.robots)
     # the flags and probe samples too: what a robot's moves can be read from
     with scenario_run(data, work, name, 'sscap', record=(

@@ -24,7 +24,7 @@ from server_select.core.tables import markdown_table, median_range
 
 NETWORK = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
            'hung_server')
-NETWORK_VARIANTS = ('oracle_fleet', 'fleet') + PEERS
+NETWORK_VARIANTS = ('oracle_fleet', 'fleet', 'fleet_hysteresis') + PEERS
 # capacity cases: the capacity benchmark's scenario and what the league changes in it
 CAPACITY = collections.OrderedDict([
     ('crowd', ['--scenario', 'crowd']),
@@ -32,7 +32,7 @@ CAPACITY = collections.OrderedDict([
     ('overload_unequal', ['--scenario', 'overload', '--shares', '0.10,0.15,0.20']),
     ('herd', ['--scenario', 'herd']),
 ])
-CAPACITY_VARIANTS = ('static', 'fleet') + PEERS
+CAPACITY_VARIANTS = ('static', 'fleet', 'fleet_hysteresis') + PEERS
 
 
 def network(args, log):

@@ -70,9 +70,11 @@ class PeakEwma(object):
         return self.estimate
 
 
-ProbeAnswer = collections.namedtuple('ProbeAnswer', 'server rtt rif service workers at')
+ProbeAnswer = collections.namedtuple('ProbeAnswer',
+                                     'server rtt rif service workers at utilization')
 ProbeAnswer.__doc__ = """One probe answer as a balancer keeps it: round trip (s), requests
-in flight (queued + in service), ``{kind: work s}``, workers, when it arrived."""
+in flight (queued + in service), ``{kind: work s}``, workers, when it arrived, and the
+share of the workers' time the other robots' tasks take."""
 
 
 class Balancer(object):
@@ -94,7 +96,8 @@ class Balancer(object):
         """A good probe answer: round trip ``rtt`` and ``load`` (a Load, or None)."""
         answer = ProbeAnswer(server, rtt, (load.queued + load.in_service) if load else 0,
                              dict(load.service) if load else {},
-                             max(1, load.workers) if load else 1, self._clock())
+                             max(1, load.workers) if load else 1, self._clock(),
+                             load.utilization if load else 0.0)
         with self._lock:
             self.probes[server] = answer
             self._probed(answer)
@@ -280,7 +283,10 @@ _CLASSES = dict((c.name, c) for c in (P2CPeakEwma, LeastRequest, Prequal, RoundR
 
 
 def make(name, **kwargs):
-    """The balancer called ``name`` (one of :data:`PEERS`)."""
+    """The balancer called ``name`` (one of :data:`PEERS`, or the fleet's ``hot_cold``)."""
+    if name == 'hot_cold':
+        from server_select.core.hot_cold import HotCold    # it builds on this module
+        return HotCold(**kwargs)
     if name not in _CLASSES:
         raise ValueError('unknown balancer %r (expected one of %s)' % (name, ', '.join(PEERS)))
     return _CLASSES[name](**kwargs)

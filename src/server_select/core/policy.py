@@ -61,7 +61,9 @@ import threading
 from server_select.core.balancers import PEERS
 from server_select.core.ranking import NO_SERVER
 
-POLICIES = ('mean', 'hysteresis', 'bound', 'peak_ewma') + PEERS
+POLICIES = ('mean', 'hysteresis', 'bound', 'peak_ewma', 'hot_cold') + PEERS
+# policies a robot applies per task itself (a balancer): the fleet's rule and the peers
+PER_TASK = ('hot_cold',) + PEERS
 
 
 class Policy(object):
@@ -85,7 +87,7 @@ class Policy(object):
     @property
     def per_task(self):
         """Whether robots choose per task with a peer's rule (a balancer)."""
-        return self.kind in PEERS
+        return self.kind in PER_TASK
 
     @property
     def robust(self):
@@ -96,6 +98,8 @@ class Policy(object):
         """The server to select; ``current`` was selected at ``since`` (same clock as
         ``now``; None: unknown, no dwell applies)."""
         best = ranking.selected
+        if self.per_task:      # the robot chose; its ranking says what (its flag follows)
+            return best
         if current is None or current == NO_SERVER or current not in ranking.ranking:
             return best
         here = ranking.means[ranking.ranking.index(current)]

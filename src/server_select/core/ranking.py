@@ -56,10 +56,13 @@ def view_key(ranking, policy, current):
             policy.choose(ranking, current))
 
 
-def from_view(ranking, means, errors, counts, waits, excluded):
+def from_view(ranking, means, errors, counts, waits, excluded, selected=0):
     """A :class:`Ranking` from a robot's message (parallel arrays; ``waits`` may be empty,
-    NaN: not known). ValueError says what is wrong with it."""
+    NaN: not known; ``selected``: where a robot that chooses per task sends its tasks, 0:
+    the first ranked). ValueError says what is wrong with it."""
     ranking = [int(s) for s in ranking]
+    if selected and selected not in ranking:
+        raise ValueError('it selects server %d, which its ranking %s lacks' % (selected, ranking))
     n = len(ranking)
     if not len(means) == len(errors) == len(counts) == n or len(waits) not in (0, n):
         raise ValueError('arrays of %d servers, %d latencies, %d errors, %d counts, %d waits'
@@ -77,15 +80,17 @@ def from_view(ranking, means, errors, counts, waits, excluded):
     waits = [None if w != w else float(w) for w in waits] if len(waits) else [None] * n
     if not all(w is None or 0.0 <= w < float('inf') for w in waits):
         raise ValueError('waits %s are not finite and >= 0 (or NaN: not known)' % waits)
-    return Ranking(selected=ranking[0] if ranking else NO_SERVER, ranking=ranking,
-                   means=means, counts=[int(c) for c in counts],
+    return Ranking(selected=selected or (ranking[0] if ranking else NO_SERVER),
+                   ranking=ranking, means=means, counts=[int(c) for c in counts],
                    excluded=[int(s) for s in excluded], errors=errors, waits=waits)
 
 
 def only(ranking, wanted):
     """``ranking`` with only the servers for which ``wanted(server)`` is true."""
     keep = [i for i, s in enumerate(ranking.ranking) if wanted(s)]
-    return Ranking(selected=ranking.ranking[keep[0]] if keep else NO_SERVER,
+    first = ranking.ranking[keep[0]] if keep else NO_SERVER
+    return Ranking(selected=ranking.selected if ranking.selected in ranking.ranking and
+                   wanted(ranking.selected) else first,
                    ranking=[ranking.ranking[i] for i in keep],
                    means=[ranking.means[i] for i in keep],
                    counts=[ranking.counts[i] for i in keep],

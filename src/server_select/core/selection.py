@@ -53,6 +53,7 @@ class Selection(object):
         self._lock = threading.Lock()
         self._flag = None          # (receive time, selected, ranking) of the last good flag
         self._handed_over = None   # the flag whose selection the own decisions started from
+        self._task_servers = None  # where tasks may go (grouped: the group's), None: any
 
     def on_flag(self, robot_id, server_id, ranking):
         """A flag arrived: None if it is for another robot or taken, else why it is refused."""
@@ -75,6 +76,12 @@ class Selection(object):
                 self.servers.append(server)
         if self.health is not None:
             self.health.add(server)
+
+    def restrict(self, servers):
+        """Tasks go only to ``servers`` (grouped: the robot's group's; the others are
+        probed for the top manager); None: to any."""
+        with self._lock:
+            self._task_servers = None if servers is None else set(servers)
 
     def remove_server(self, server):
         """A server left the fleet: never a candidate again, whatever a flag says."""
@@ -100,8 +107,13 @@ class Selection(object):
 
     def view(self):
         """The robot's own ranking of the servers it has samples of, as the manager ranks a
-        robot from its samples (what ``~sample_stream view`` sends it)."""
-        return self.rankings.rank(self.robot_id, self._clock())
+        robot from its samples (what ``~sample_stream view`` sends it); choosing per task,
+        ``selected`` is where its tasks go now (when ranked)."""
+        ranking = self.rankings.rank(self.robot_id, self._clock())
+        last = self.balancer.last if self.balancer is not None else None
+        if last is not None and last in ranking.ranking:
+            ranking = ranking._replace(selected=last)
+        return ranking
 
     def contenders(self, rule):
         """The servers that ``rule`` (a :class:`~server_select.core.probing.ContenderRule`)
@@ -171,7 +183,10 @@ class Selection(object):
             return self._flag is not None
 
     def deciding_locally(self):
-        return self.mode == 'select' and self.manager_ranking() is None
+        """Whether a robot that follows the manager has no fresh flag (one that chooses
+        per task always decides itself)."""
+        return self.mode == 'select' and self.balancer is None and \
+            self.manager_ranking() is None
 
     def candidates(self, kind=None):
         """Where a ``kind`` task may go now, best first: ``[LOCAL]``, ``[fixed server]``,
@@ -183,7 +198,8 @@ class Selection(object):
             return [self.fixed_server]
         if self.balancer is not None:
             with self._lock:
-                servers = list(self.servers)
+                servers = [s for s in self.servers
+                           if self._task_servers is None or s in self._task_servers]
             if self.health is not None:
                 servers = [s for s in servers if self.health.usable(s)]
             return self.balancer.order(servers, kind)

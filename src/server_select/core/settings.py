@@ -92,7 +92,11 @@ PARAMS = {
     'min_size': Param(24, parse_positive_int, 'smallest target (px)'),
     'max_task_len': Param(1000000, parse_positive_int, 'larger sort tasks get an error result'),
     'work_delay': Param(0.0, parse_non_negative, 'each task takes this much longer (s): a '
-                        'slower or busier machine; rosparam set changes it at run time'),
+                        'slower or busier machine; with ~test_knobs, rosparam set changes '
+                        'it at run time'),
+    'test_knobs': Param(False, parse_bool, 'server: follow ~work_delay at run time (tests and '
+                        'the testbed); off, it is read once at start and no other node can '
+                        'slow the server down'),
     'queue_size': Param(100, parse_positive_int, 'task subscriber queue length'),
     'workers': Param(0, parse_count, 'tasks a server works on at once (0: the cores it may '
                      "use, its cgroup's CPU quota rounded up)"),
@@ -129,8 +133,9 @@ PARAMS = {
                         'of the best (s); 0: the paper'),
     'policy': Param('mean', one_of(*POLICIES), 'which ranked server a robot gets: mean (the '
                     'paper), hysteresis, bound or peak_ewma (docs/design.md, "Policies"); or a '
-                    'peer choosing per task: p2c_peak_ewma, least_request, prequal, '
-                    'round_robin, replicate (docs/league.md)'),
+                    'rule the robot applies per task: hot_cold (docs/selection.md), or a peer: '
+                    'p2c_peak_ewma, least_request, prequal, round_robin, replicate '
+                    '(docs/league.md)'),
     'statistic': Param('mean', one_of('mean', 'median', 'trimmed', 'peak_ewma'), 'what the '
                        'window ranks by (policies mean, hysteresis, bound)'),
     'dwell': Param(0.0, parse_non_negative, 'policy hysteresis: no move within this long of '
@@ -196,14 +201,15 @@ PROFILES = {
     'fleet': {'routing': 'direct', 'sample_stream': 'view', 'flag_stream': 'robot',
               'discover': True,
               'robots': [], 'servers': [],
-              # the scenario suite's winner (docs/evaluation.md, "The scenario suite")
-              'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
-              'window': 1.5, 'probe_rate': 4.0, 'passive': True, 'task_memory': 5.0,
+              # one rule, chosen by the robot per task (docs/selection.md; the league:
+              # docs/league.md)
+              'policy': 'hot_cold',
+              'window': 1.5, 'probe_rate': 4.0,
               # adaptive probing: docs/design.md, "Adaptive probing"
               'contender_rate': 10.0, 'window_samples': 3,
               'fail_fast': 2, 'hedge': True,
               # capacity: docs/design.md, "Capacity and overload"
-              'load_aware': True, 'max_in_flight': 1, 'spread': True, 'fresh_factor': 2.0},
+              'load_aware': True, 'max_in_flight': 1, 'fresh_factor': 2.0},
 }
 
 

@@ -190,7 +190,7 @@ class ManagerNode(object):
         why = self.refuse(msg, robot)
         try:
             ranking = from_view(msg.ranking, msg.mean_latency, msg.error, msg.sample_count,
-                                msg.wait, msg.excluded) if why is None else None
+                                msg.wait, msg.excluded, msg.selected) if why is None else None
         except ValueError as error:
             why = str(error)
         if why:

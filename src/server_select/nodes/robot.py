@@ -22,7 +22,7 @@ from server_select.ros.load import RobotLoad
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
 from server_select.ros.node import fleet, param, run
 from server_select.ros.passive import TaskSamples
-from server_select.ros.prober import Prober
+from server_select.ros.prober import STILL_OUT, Prober
 from server_select.ros.routing import ROUTES
 from server_select.ros.senders import SenderGate
 from server_select.ros.task_kinds import stream_kinds
@@ -188,6 +188,8 @@ class RobotNode(object):
     # -- evidence ----------------------------------------------------------------------------
 
     def on_sample(self, server, ok, rtt, error, wait=None):
+        if error == STILL_OUT and self.load is not None and self.load.saturated(server):
+            return   # slow while every worker is busy: the probe still out decides by its timeout
         try:   # load-aware: the expected completion, round trip + wait
             self.selection.on_sample(server, ok, rtt + wait if ok and wait else rtt,
                                      wait=wait if ok else None)
@@ -217,10 +219,12 @@ class RobotNode(object):
             for server in removed:
                 stream.remove_server(server)
 
-    def on_group(self, group):
-        """Grouped: the top manager put this robot in ``group``; its manager's flags count."""
+    def on_group(self, group, servers):
+        """Grouped: the top manager put this robot in ``group`` of ``servers``; its
+        manager's flags count, and a robot that chooses per task chooses among those."""
         self.manager_node = rospy.resolve_name(param('group_manager_node').format(group=group))
         self.flag_senders.expect(self.manager_node)
+        self.selection.restrict(servers)
 
     def on_failure(self, server, why):
         ejection = self.health.failure(server, why)
@@ -263,11 +267,13 @@ class RobotNode(object):
 
     def summary(self):
         target = self.selection.target()
-        return 'robot %d: %s; server %s%s, %d switches' % (
+        moves = getattr(self.selection.balancer, 'moves', None)
+        return 'robot %d: %s; server %s%s, %d switches%s' % (
             self.robot_id, '; '.join(s.summary() for s in self.streams),
             {NO_SERVER: 'none', LOCAL: 'local'}.get(target, target),
             ' (own decision)' if self._local_decision else '',
-            sum(s.flow.switches for s in self.streams))
+            sum(s.flow.switches for s in self.streams),
+            ' (%s)' % ', '.join('%s %d' % m for m in sorted(moves.items())) if moves else '')
 
     def on_shutdown(self):
         for timer in self.timers:

@@ -51,6 +51,9 @@ class ServerNode(object):
           rounded up): tasks worked on at once.
         - ``~max_queue`` (int, 100): tasks waiting for a worker; more are answered busy.
         - ``~summary_period`` (s, 10): period of the log line of what it has done.
+        - ``~work_delay`` (s, 0): each task takes this much longer (a slower machine).
+        - ``~test_knobs`` (bool, false): follow ``~work_delay`` at run time (``rosparam
+          set``, for tests and the testbed); off, it is read once at start.
         - ``~detector`` (str, ``haar``): ``haar`` or ``hog``.
         - ``~cascade`` (str, ``haarcascade_frontalface_default.xml``)
         - ``~scale_factor`` (1.2), ``~min_neighbors`` (5), ``~min_size`` (24 px): cascade settings.
@@ -93,7 +96,11 @@ class ServerNode(object):
         return next(h for h in self.handlers if h.plugin.kind == kind)
 
     def start(self):
-        self.work_delay = live_param('work_delay')      # from now on, as the master says
+        self.test_knobs = param('test_knobs')
+        if self.test_knobs:      # from now on as the master says: any node may change it
+            self.work_delay = live_param('work_delay')
+            rospy.logwarn('server %d: ~test_knobs is on: ~work_delay (now %g s) follows '
+                          'rosparam set from any node', self.server_id, self.work_delay)
         for handler in self.handlers:
             handler.start()
         self.work.start()
@@ -104,7 +111,8 @@ class ServerNode(object):
         rospy.loginfo('server %d: probe service %s, tasks on %s',
                       self.server_id, self.probe_srv.resolved_name,
                       ', '.join(t for h in self.handlers for t in h.endpoint.topics))
-        self.work_timer = rospy.Timer(rospy.Duration(1.0), self.on_work_check)
+        self.work_timer = rospy.Timer(rospy.Duration(1.0), self.on_work_check) \
+            if self.test_knobs else None
         self.summary_timer = rospy.Timer(rospy.Duration(param('summary_period')),
                                          lambda _e: rospy.loginfo(self.summary()))
         rospy.on_shutdown(self.on_shutdown)
@@ -145,7 +153,8 @@ class ServerNode(object):
 
     def on_shutdown(self):
         self.announcer.leave()
-        self.work_timer.shutdown()
+        if self.work_timer is not None:
+            self.work_timer.shutdown()
         self.summary_timer.shutdown()
         self._pool.shutdown(wait=False)
         self.work.shutdown()

@@ -174,7 +174,8 @@ class GroupAssignmentsListener(object):
 class GroupFollower(object):
     """Robot side of a grouped deployment: probe what the top manager's table says (this
     robot's group's servers and every group's representative, plus ``static``), and take
-    flags from the group's manager: ``on_change(added, removed)``, ``on_group(group)``."""
+    flags from the group's manager: ``on_change(added, removed)``, ``on_group(group,
+    servers)`` when the robot's group or its servers (where its tasks may go) change."""
 
     def __init__(self, robot_id, static, top_node, on_change, on_group):
         self.robot_id = robot_id
@@ -182,7 +183,7 @@ class GroupFollower(object):
         self.listener = GroupAssignmentsListener(top_node, self.on_assignments,
                                                  'robot %d' % robot_id)
         self.on_group = on_group
-        self.group = None
+        self.group, self.servers = None, None
 
     def start(self):
         self.listener.start()
@@ -190,8 +191,12 @@ class GroupFollower(object):
     def on_assignments(self, groups, assigned):
         group = assigned.get(self.robot_id)
         self.announced.on_servers(FleetServers(servers=sorted(probe_set(groups, group))))
-        if group is not None and group != self.group:
+        if group is None:
+            return
+        servers = sorted(groups.get(group, []))
+        if group != self.group:
             rospy.loginfo('robot %d: in server group %d (servers %s)', self.robot_id, group,
-                          groups.get(group))
-            self.group = group
-            self.on_group(group)
+                          servers)
+        if (group, servers) != (self.group, self.servers):
+            self.group, self.servers = group, servers
+            self.on_group(group, servers)

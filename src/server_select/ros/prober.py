@@ -15,6 +15,10 @@ from server_select.ros.seal import SealedPublisher
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
 
+# the error of a probe not sent because the previous one to that server is still out
+STILL_OUT = 'previous probe still in progress'
+
+
 class _Round(object):
     """The samples of one probe round, published as one batch when the last one is in."""
 
@@ -126,8 +130,7 @@ class Prober(object):
         for server in servers:
             previous = self._inflight.get(server)
             if previous is not None and not previous.done():
-                self._publish(server, next(self._seq), stamp, None,
-                              'previous probe still in progress', batch)
+                self._publish(server, next(self._seq), stamp, None, STILL_OUT, batch)
                 continue
             try:
                 self._inflight[server] = self._pool.submit(self._probe, server,

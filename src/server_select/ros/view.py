@@ -50,7 +50,9 @@ class RankingSender(object):
                                mean_latency=ranking.means, error=ranking.errors,
                                sample_count=ranking.counts, excluded=ranking.excluded,
                                wait=[float('nan') if w is None else w for w in ranking.waits]
-                               if any(w is not None for w in ranking.waits) else [])
+                               if any(w is not None for w in ranking.waits) else [],
+                               selected=ranking.selected if self.policy.per_task and
+                               ranking.selected in ranking.ranking else 0)
             msg.header.stamp = rospy.Time.now()
             self.pub.publish(msg)
             self.sent += 1

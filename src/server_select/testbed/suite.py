@@ -30,6 +30,11 @@ from server_select.testbed.suite_scenario import (expand, launch_args, scenario_
                                                   scenario_robot_args, short_name)
 
 Variant = collections.namedtuple('Variant', 'mode profile params')
+# the per-task rules: the fleet's own (hot_cold) and the league's peers
+RULES = ('hot_cold',) + PEERS
+# the fleet profile's selection before it chose per task with hot_cold (for the league)
+PREVIOUS_FLEET = {'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
+                  'passive': True, 'task_memory': 5.0, 'spread': True}
 
 
 def peer_params(name):
@@ -37,6 +42,8 @@ def peer_params(name):
     with that rule choosing per task, every server probed alike (Prequal's pool wants
     answers from all; adaptive probing follows the fleet's own ranking), replication
     without hedges (it already sends each task twice)."""
+    if name == 'hot_cold':     # the fleet's own rule: the fleet's adaptive probing
+        return {'policy': name}
     params = {'policy': name, 'contender_rate': 0}
     if name == 'replicate':
         params['hedge'] = False
@@ -56,24 +63,21 @@ VARIANTS = collections.OrderedDict([
     ('bound', Variant('select', 'paper', {'policy': 'bound', 'latency_bound': 0.02})),
     ('peak_ewma', Variant('select', 'paper', {'policy': 'peak_ewma'})),
     ('fleet_no_hedge', Variant('select', 'fleet', {'hedge': False})),
-    ('fleet_probes', Variant('select', 'fleet', {'passive': False})),
     ('fleet_uniform', Variant('select', 'fleet', {'contender_rate': 0})),
     # not in the default run: ask for them with --variants
     ('fleet_2hz', Variant('select', 'fleet', {'contender_rate': 0, 'probe_rate': 2.0,
                                               'window': 2.0})),
-    ('fleet_trimmed', Variant('select', 'fleet', {'statistic': 'trimmed'})),
-    ('fleet_median', Variant('select', 'fleet', {'statistic': 'median'})),
-    ('fleet_no_memory', Variant('select', 'fleet', {'task_memory': 0.0})),
-    ('fleet_memory10', Variant('select', 'fleet', {'task_memory': 10.0})),
     ('fleet_window1', Variant('select', 'fleet', {'window': 1.0})),
-    ('fleet_z4', Variant('select', 'fleet', {'margin_z': 4.0})),
     ('fleet_20hz', Variant('select', 'fleet', {'contender_rate': 20.0,
                                                'contender_budget': 40.0})),
+    # the fleet profile's rule before hot_cold: the manager's hysteresis over the robots'
+    # windows, robots spread by draws, answered tasks as samples
+    ('fleet_hysteresis', Variant('select', 'fleet', PREVIOUS_FLEET)),
     # every probe sample to the manager, which ranks (the robots' own rankings: fleet)
     ('fleet_samples', Variant('select', 'fleet', {'sample_stream': 'robot'})),
-] + [(name, Variant('select', 'fleet', peer_params(name))) for name in PEERS])
-ON_REQUEST = ('fleet_2hz', 'fleet_trimmed', 'fleet_median', 'fleet_no_memory', 'fleet_memory10',
-              'fleet_window1', 'fleet_z4', 'fleet_20hz', 'fleet_samples') + PEERS
+] + [(name, Variant('select', 'fleet', peer_params(name))) for name in RULES])
+ON_REQUEST = ('fleet_2hz', 'fleet_window1', 'fleet_20hz', 'fleet_samples',
+              'fleet_hysteresis') + RULES
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ON_REQUEST)
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server', 'search_sweep')
@@ -110,7 +114,8 @@ class SuiteRun(HostRun):
                             *_args(variant.params, manager_args))
         for server in self.scenario.of_role('server'):
             self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
-                        'routing:=direct')      # takes broadcast and direct tasks
+                        'routing:=direct',      # takes broadcast and direct tasks
+                        'test_knobs:=true')     # its events may set ~work_delay
             threading.Thread(target=self.server_events, args=(server,), daemon=True).start()
         extra = scenario_robot_args(robot_args, self.tb.t0)
         for robot in self.scenario.of_role('robot'):
