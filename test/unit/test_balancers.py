@@ -279,11 +279,11 @@ def test_hot_cold_keeps_its_server_within_the_noise_and_leaves_beyond_it():
     assert 'faster' in rule.why
 
 
-def test_hot_cold_ranks_by_expected_completion_with_the_wait():
+def test_hot_cold_ranks_by_expected_completion_with_the_work_in_flight():
     clock = Clock()
     rule = hot_cold(clock)
-    # equal round trips and requests in flight; server 1's others keep it 90 % busy
-    feed(rule, clock, {1: (0.010, 0, 0.9), 2: (0.010, 0, 0.1)})
+    # server 1 is 20 ms nearer, but another robot's 0.1 s frame is always ahead there
+    feed(rule, clock, {1: (0.010, 1, 0.0), 2: (0.030, 0, 0.0)})
     assert rule.order([1, 2], 'image')[0] == 2
 
 
@@ -317,17 +317,58 @@ def test_hot_cold_leaves_an_ejected_server_at_once():
     assert rule.order([2], 'image') == [2]       # the caller left out server 1
 
 
-def test_hot_cold_counts_its_own_tasks_where_it_would_send_them():
-    clock = Clock()
-    rule = hot_cold(clock)
-    # server 2 does a frame in 0.1 s and the others keep it 60 % busy; server 1 is idle
-    # but takes 0.15 s a frame. At 5 frames/s of its own, server 2 would be 110 % busy.
-    for _ in range(5):
-        rule.probed(1, 0.010, Load(0, 0, 1, 0.0, {'image': 0.15}, 0.0))
-        rule.probed(2, 0.010, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.6))
-    picks = []
-    for _ in range(25):
-        picks.append(rule.order([1, 2], 'image')[0])
+def test_hot_cold_moves_only_if_it_pays_with_one_more_robot_like_it_arriving():
+    def settle(rate_period):
+        clock = Clock()
+        rule = hot_cold(clock)
+        rule.current = 1
+        picks = []
+        for i in range(40):
+            # server 1: a 0.1 s frame of another robot ahead; server 2: 60 ms farther, up
+            # once the robot's rate is known
+            feed(rule, clock, {1: (0.010, 1, 0.0), 2: (0.070, 0, 0.0)}, rounds=1)
+            clock.now += rate_period - 0.1
+            picks.append(rule.order([1, 2] if i >= 10 else [1], 'image')[0])
+        return picks
+    # one frame a second: another robot like it would keep 0.01 s in flight at server 2,
+    # which is then 0.03 s faster: move; five a second, 0.05 s: 0.01 s slower: stay
+    assert settle(1.0)[-1] == 2
+    assert settle(0.2)[-1] == 1
+
+
+def herd(seed, robots=20, steps=150, work=0.04):
+    """20 robots on server 1 (each a task a second of ``work`` s), server 2 comes up idle
+    at step 20; every 0.2 s each robot hears both servers' load as the robots' previous
+    choices made it, and about one in five sends a task. The count on server 1 each step,
+    and the moves by reason."""
+    clock, rng = Clock(), random.Random(seed)
+    rules = [hot_cold(clock, seed * 100 + i) for i in range(robots)]
+    on = [1] * robots
+    for rule in rules:
+        rule.current = 1
+    servers, counts = [1], []
+    for step in range(steps):
+        servers = [1, 2] if step >= 20 else [1]
+        total = collections.Counter(on)
+        for i, rule in enumerate(rules):
+            for s in servers:
+                utilization = (total[s] - (on[i] == s)) * work
+                rule.probed(s, 0.010 + rng.gauss(0, 0.0005),
+                            Load(int(rng.random() < utilization), 0, 1, 0.0,
+                                 {'image': work}, utilization))
+        for i, rule in enumerate(rules):
+            if rng.random() < 0.2:
+                on[i] = rule.order(servers, 'image')[0]
         clock.now += 0.2
-    assert rule.rate('image', clock.now) == pytest.approx(5.0, rel=0.1)
-    assert picks[-1] == 1
+        counts.append(on.count(1))
+    return counts, sum((r.moves for r in rules), collections.Counter())
+
+
+def test_hot_cold_robots_spread_to_a_new_server_without_a_herd():
+    for seed in range(3):
+        counts, moves = herd(seed)
+        # no herd: never all (or nearly all) at once on the new server, and settled near
+        # half and half, with few moves (one per robot that should move, and some)
+        assert min(counts[20:]) >= 5, counts
+        assert all(7 <= n <= 13 for n in counts[-10:]), counts
+        assert sum(moves.values()) <= 25, moves

@@ -1,15 +1,11 @@
 """The robot's task path under overload: busy answers, the retry budget, the in-flight limit
-with the newest frame winning, attempt deadlines that follow the load, and the spread that
-keeps robots from moving as a herd."""
+with the newest frame winning, attempt deadlines that follow the load."""
 
-import random
 
 import pytest
 
 from server_select.core.attempts import AttemptClock
 from server_select.core.budget import RetryBudget
-from server_select.core.policy import Chooser, Policy, Settling
-from server_select.core.ranking import Ranking
 from server_select.core.task_flow import RETRIED
 
 from fake_clock import Clock
@@ -169,123 +165,3 @@ def test_no_hedge_for_a_delay_the_servers_load_explains():
     assert clock.hedge_seconds(3, 0.95) == pytest.approx(1.0)   # 2 x what the load says
     expected[3] = None
     assert clock.hedge_seconds(3, 0.95) == pytest.approx(0.2)   # else the quantile
-
-
-def ranking(means, waits=None):
-    """A Ranking of ``{server: statistic}`` (and ``{server: its wait part}``)."""
-    order = sorted(means, key=means.get)
-    return Ranking(order[0], order, [means[s] for s in order], [10] * len(order), [],
-                   waits=[waits.get(s) for s in order] if waits else None)
-
-
-def test_spread_takes_a_warranted_move_with_probability_half_the_relative_gap():
-    policy = Policy('mean', dwell=0.0, spread=True)
-    moved = 0
-    for seed in range(2000):
-        chooser = Chooser(policy, random.Random(seed))
-        chooser.choose(ranking({1: 0.10, 2: 0.20}), 0.0)        # starts on 1
-        moved += chooser.choose(ranking({1: 0.25, 2: 0.20}), 5.0) == 2
-    assert moved / 2000.0 == pytest.approx((1 - 0.20 / 0.25) / 2, abs=0.03)
-
-
-def test_spread_draws_once_per_dwell_and_leaves_an_unranked_server_at_once():
-    chooser = Chooser(Policy('mean', dwell=3.0, spread=True), random.Random(1))
-    chooser.choose(ranking({1: 0.1, 2: 0.2}), 0.0)
-    draws = [chooser.choose(ranking({1: 0.4, 2: 0.2}), t) for t in (1.0, 1.5, 2.0, 3.9)]
-    assert len(set(draws)) == 1                  # one draw at 1.0, then none until 4.0
-    chooser = Chooser(Policy('mean', spread=True), random.Random(1))
-    chooser.choose(ranking({1: 0.1, 2: 0.2}), 0.0)
-    assert chooser.choose(ranking({2: 0.2}), 0.1) == 2
-
-
-def test_spread_does_not_hold_back_a_move_its_wait_cannot_erase():
-    """A server 7 ms nearer with 1 ms of work: taken at once, not drawn for."""
-    chooser = Chooser(Policy('mean', dwell=3.0, spread=True), random.Random(1))
-    chooser.choose(ranking({1: 0.0097}), 0.0)
-    assert chooser.choose(ranking({1: 0.0097, 3: 0.0026}, {1: 0.001, 3: 0.001}), 5.0) == 3
-    # a server better by 1.4 s of queue (idle, but 0.7 s a task): drawn for, though its
-    # gain is twice its wait: robots that follow add to that wait
-    moves = 0
-    for seed in range(200):
-        chooser = Chooser(Policy('mean', dwell=3.0, spread=True), random.Random(seed))
-        chooser.choose(ranking({1: 2.1}), 0.0)
-        moves += chooser.choose(ranking({1: 2.1, 2: 0.7}, {1: 2.1, 2: 0.7}), 5.0) == 2
-    assert 55 < moves < 80          # (1 - 0.7 / 2.1) / 2 = a third of 200
-    # a server whose load just fell: its statistic (the window's) still high, the newest
-    # sample's wait low; by the window's own wait it is no nearer, and it is drawn for
-    moves = 0
-    for seed in range(200):
-        chooser = Chooser(Policy('mean', dwell=3.0, spread=True), random.Random(seed))
-        chooser.choose(ranking({1: 5.5}), 0.0)
-        moves += chooser.choose(ranking({1: 5.5, 2: 0.76}, {1: 5.499, 2: 0.759}), 5.0) == 2
-    assert moves < 110              # (1 - 0.76 / 5.5) / 2 = 43 % of 200, not all
-
-
-def test_a_herd_is_spread_over_equal_servers():
-    """20 robots on server 1, whose completion time grows with its robots; server 2 comes
-    up idle. Without spread all 20 move at once and back; with it the load evens out."""
-    def run(spread):
-        choosers = [Chooser(Policy('mean', dwell=3.0, spread=spread), random.Random(r))
-                    for r in range(20)]
-        for chooser in choosers:                 # all on server 1 before server 2 came
-            chooser.choose(ranking({1: 0.05}), -10.0)
-        on = dict((r, 1) for r in range(20))
-        history = []
-        for step in range(40):                   # decisions every 0.5 s for 20 s
-            load = dict((s, 0.05 * (1 + sum(1 for v in on.values() if v == s)))
-                        for s in (1, 2))
-            for r, chooser in enumerate(choosers):
-                on[r] = chooser.choose(ranking(load), step * 0.5)
-            history.append(sum(1 for v in on.values() if v == 2))
-        return history
-    herd, spread = run(False), run(True)
-    assert max(herd) == 20                           # everyone moved together
-    assert all(9 <= n <= 11 for n in spread[-10:]), spread   # settled near 10 / 10
-    assert max(spread) <= 13, spread                          # never a herd
-
-
-def test_robots_that_see_moves_late_move_less_with_a_shared_settling():
-    """12 robots, 6 on server 1 and 6 on server 2, whose completion time grows with their
-    robots; server 3 comes up idle. A move shows in the loads the others see only 1.5 s
-    later (its probes announce it, the window fills), so robots that draw meanwhile draw
-    on old loads. With the manager's Settling a server takes one newcomer a window:
-    about half the moves for the same 4 / 4 / 4 (30 seeded runs of 60 s each)."""
-    def run(settling, seed):
-        shared = Settling(1.5) if settling else None
-        choosers = [Chooser(Policy('mean', dwell=3.0, spread=True),
-                            random.Random(seed * 100 + r), settling=shared) for r in range(12)]
-        on = dict((r, 1 + r % 2) for r in range(12))
-        for r, chooser in enumerate(choosers):
-            chooser.choose(ranking({on[r]: 0.05}), -10.0)
-        seen, moves = [], 0
-        for step in range(120):                  # decisions every 0.5 s
-            seen.append(dict((s, 0.05 * (1 + sum(1 for v in on.values() if v == s)))
-                             for s in (1, 2, 3)))
-            load = seen[max(0, len(seen) - 4)]  # what the window says: 1.5 s old
-            for r, chooser in enumerate(choosers):
-                before, on[r] = on[r], chooser.choose(ranking(load), step * 0.5)
-                moves += on[r] != before
-        return moves, max(sum(1 for v in on.values() if v == s) for s in (1, 2, 3))
-    late = [run(False, seed) for seed in range(30)]
-    settled = [run(True, seed) for seed in range(30)]
-    assert all(most <= 5 for _, most in settled), settled       # spread out at the end
-    late_moves, moves = sum(m for m, _ in late), sum(m for m, _ in settled)
-    assert moves < 0.75 * late_moves, (moves, late_moves)       # 4 is the fewest a run
-    assert moves < 10 * 30, moves                               # can do
-
-
-def test_robots_with_no_server_go_round_the_servers_the_policy_would_keep():
-    shared = Settling(1.5)
-    policy = Policy('hysteresis', margin=0.0003, z=3.0, dwell=3.0, spread=True)
-
-    def first_choice(servers, now, seed):
-        return Chooser(policy, random.Random(seed), settling=shared).choose(servers, now)
-    # three servers alike but for noise, one far: robots starting together go round the
-    # three, never to the far one
-    servers = Ranking(1, [1, 2, 3, 4], [0.0101, 0.0102, 0.0103, 0.050], [10] * 4, [],
-                      [0.002] * 4, [0.001] * 4)
-    chosen = [first_choice(servers, 0.1 * i, i) for i in range(6)]
-    assert chosen == [1, 2, 3, 1, 2, 3], chosen
-    assert first_choice(servers, 5.0, 7) == 1          # all settled again: the best
-    # without spread no settling is kept
-    assert Chooser(Policy('mean'), settling=shared).settling is None

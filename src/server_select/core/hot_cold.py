@@ -6,22 +6,27 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
 
 1. The candidates are the servers the robot's health has not ejected (the caller's list).
 2. A server's *latency* for a task of a kind is its *expected completion*, from each of
-   its last :data:`RTTS` probe answers: the robot's round trip + the wait for a worker +
-   the work per task of that kind (the median of what the servers report, where it has
-   done none yet). The wait is the larger of two: the M/D/c mean wait
-   (:func:`~server_select.core.load_board.queueing`) at the utilization the server would
-   have with the robot's tasks on it (what it reports for the other robots' tasks plus
-   the robot's own rate of this kind, over its last :data:`RATE_HORIZON` s, x the work),
-   and the other robots' work in flight there (their requests queued and in service x
-   the work, per worker), which is what a saturated server makes a task wait. The
-   latency is the median of those, its noise their robust standard error. Every server
-   is judged as if the robot were on it, its own too: a move is worth it only when the
-   other server is faster *after* the robot's tasks have joined it (a best response in
-   selfish load balancing).
+   its last :data:`RTTS` probe answers: the robot's round trip + the other robots' work
+   in flight there (their requests queued and in service x the work per task of the
+   kind, per worker: what a task sent then would wait for) + the work (the median of
+   what the servers report, where it has done none yet); the mean of those, its noise
+   their standard error. Robots keep a task or two out each, so servers and robots make
+   a closed system: a task waits for the work in flight ahead of it, whatever the
+   utilization (an open queue's mean wait, M/D/c at the reported utilization, grows
+   without bound at saturation and made servers of unequal speed look alike). A server
+   the robot is not on is judged with one more robot like it arriving (its rate x the
+   work, what such a robot keeps in flight there): robots that read the same reports
+   decide alike, and a move that pays only if the robot moves alone makes them swap
+   back and forth. A server asked for more work than it can do (the utilization of the
+   others' announced rates plus the robot's own, and the other's like it, above 1) does
+   1/u of it and answers the rest busy: a task there takes u times as long to get
+   through, in expectation (a server that refuses keeps its queue short, so its work in
+   flight alone would make it look fast).
 3. A server is *hot* when the others' work in flight per worker (the median over its last
-   answers, so that one answer that caught another robot's task does not make it hot) is
-   above the 2^-0.25 quantile of the candidates' (Prequal's rule, on work rather than on
-   requests: servers of unequal speed carry unequal numbers of requests).
+   answers) is above the 2^-0.25 quantile of the candidates' (Prequal's rule, on work
+   rather than on requests: servers of unequal speed carry unequal numbers of requests);
+   the robot's own server only when it is above by more than one task's work (whether an
+   answer caught another robot's task in service or not is no reason to move).
 4. The robot **keeps** the server its last task went to while that server is cold and no
    cold server's latency is lower by more than the noise of the comparison: 3 standard
    errors of the difference of the two latencies. Else it takes a cold server of the
@@ -46,24 +51,12 @@ import math
 import statistics
 
 from server_select.core.balancers import Balancer, quantile
-from server_select.core.load_board import queueing
 
 RTTS = 5                 # probe answers per server the estimates are the medians of
 HOT_QUANTILE = 2 ** -0.25
 Z = 3.0                  # standard errors a challenger must win by
 MAX_AGE = 3.0            # s: an older probe answer does not count (the probes stopped)
 RATE_HORIZON = 5.0       # s of the robot's own tasks its rate is counted over
-
-
-def robust_error(values):
-    """The standard error of the median of ``values`` from their median absolute
-    deviation (1.4826 x MAD is the standard deviation of normal data; the median's error is
-    1.253 x that over the root of the count); 0.0 for fewer than 2 values."""
-    if len(values) < 2:
-        return 0.0
-    centre = statistics.median(values)
-    mad = statistics.median(abs(v - centre) for v in values)
-    return 1.253 * 1.4826 * mad / math.sqrt(len(values))
 
 
 Answer = collections.namedtuple('Answer', 'rtt others utilization')
@@ -75,7 +68,8 @@ class HotCold(Balancer):
 
     def __init__(self, **kwargs):
         Balancer.__init__(self, **kwargs)
-        # server -> its last answers: round trip, others' requests in flight, utilization
+        # server -> its last answers: round trip, the others' requests in flight and
+        # their share of the workers' time
         self.answers = collections.defaultdict(lambda: collections.deque(maxlen=RTTS))
         self.current = None
         self.why = 'no task yet'
@@ -101,23 +95,30 @@ class HotCold(Balancer):
         span = now - times[0] if len(times) > 1 else 0.0
         return (len(times) - 1) / span if span > 0 else 0.0
 
-    def estimate(self, newest, kind, fresh, rate=0.0):
-        """``(latency, its standard error, work in flight per worker)`` of a ``kind`` task
-        at ``newest``'s server (its newest answer) with the robot's own ``rate`` of them
-        there: each of the server's last answers gives a latency, round trip + wait +
-        work, the wait being the larger of the M/D/c mean at its utilization with the
-        robot's tasks and the others' work in flight per worker; the median of them, its
-        robust error, and the median of the work in flight."""
+    def estimate(self, newest, kind, fresh, rate=0.0, joining=False):
+        """``(latency, its standard error, work in flight per worker, a task's work per
+        worker)`` of a ``kind`` task at ``newest``'s server (its newest answer), from
+        each of the server's last answers: round trip + the others' work in flight there
+        per worker (what a task sent then would wait for) + the work; the mean of those
+        and its standard error, and the median of the work in flight. ``joining``: a
+        server the robot is not on is judged with one more robot like it arriving too
+        (the robot's ``rate`` x the work, what such a robot keeps in flight): robots that
+        read the same reports move together, and a move must pay even then."""
         work = self._work(newest, kind, fresh)
         workers = float(newest.workers)
         mine = rate * work / workers
+        extra = mine * work if joining else 0.0
         latencies, heat = [], []
         for a in self.answers[newest.server] or [Answer(newest.rtt, 0, newest.utilization)]:
             queued = a.others * work / workers
-            latencies.append(a.rtt + max(queueing(a.utilization + mine, work, workers),
-                                         queued) + work)
+            # asked for more than it can do, a server does 1/u of it: a task gets through
+            # in u tries (busy answers, re-sends), in expectation
+            tries = max(1.0, a.utilization + mine * (2 if joining else 1))
+            latencies.append((a.rtt + queued + extra + work) * tries)
             heat.append(queued)
-        return statistics.median(latencies), robust_error(latencies), statistics.median(heat)
+        error = statistics.stdev(latencies) / math.sqrt(len(latencies)) \
+            if len(latencies) > 1 else 0.0
+        return (statistics.mean(latencies), error, statistics.median(heat), work / workers)
 
     def _order(self, servers, kind, now):
         self.sends[kind].append(now)
@@ -128,12 +129,16 @@ class HotCold(Balancer):
                 self._move(self.rng.choice(servers), 'unknown', 'no answer yet: at random')
             return [self.current] + [s for s in servers if s != self.current]
         rate = self.rate(kind, now)
-        estimates = dict((s, self.estimate(a, kind, fresh, rate)) for s, a in fresh.items())
+        estimates = dict((s, self.estimate(a, kind, fresh, rate, s != self.current))
+                         for s, a in fresh.items())
         latency = dict((s, e[0]) for s, e in estimates.items())
         self.errors = dict((s, e[1]) for s, e in estimates.items())
         rifs = dict((s, e[2]) for s, e in estimates.items())       # work in flight
         limit = quantile(list(rifs.values()), HOT_QUANTILE)
-        cold = [s for s in fresh if rifs[s] <= limit]
+        # the robot's own server is hot only by one more task than that: a single answer
+        # that caught another robot's task is not a reason to move
+        cold = [s for s in fresh if rifs[s] <= limit +
+                (estimates[s][3] if s == self.current else 0.0)]
         choice = self._choose(cold, latency, rifs)
         ranked = sorted(fresh, key=lambda s: (s not in cold, latency[s] if s in cold
                                               else rifs[s]))

@@ -115,8 +115,6 @@ PARAMS = {
                           'cannot start in time is refused busy (0: the task timeout)'),
     'retry_budget': Param(0.1, parse_non_negative, 're-sends and hedges: at most this share '
                           'of the tasks sent in the last 10 s, plus 2 (0: no limit)'),
-    'spread': Param(False, parse_bool, 'a warranted move away from a ranked server is taken '
-                    'with probability 1 - best/current, drawn once per dwell (no herds)'),
     'max_image_pixels': Param(1 << 24, parse_positive_int, 'larger frames get an error result'),
     'image_topic': Param('', parse_text, 'camera frames from this sensor_msgs/Image or '
                          'CompressedImage topic (newest frame wins)'),

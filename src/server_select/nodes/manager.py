@@ -6,7 +6,7 @@ import rospy
 
 from server_select.core import names
 from server_select.core.params import ParamError
-from server_select.core.policy import Chooser, Settling, from_params
+from server_select.core.policy import Chooser, from_params
 from server_select.core.rankings import FleetRankings
 from server_select.core.window import RTT_RANGE, valid_rtt
 from server_select.core.ranking import from_view
@@ -39,9 +39,6 @@ class ManagerNode(object):
     sample (a restarted manager does not publish an empty ranking over a robot's working
     choice). Samples claiming another pair, with an impossible round trip, or not
     published by ``~robot_node`` are ignored with a throttled warning naming the publisher.
-    With ``~spread`` the robots' choices share a settling record: a server a robot was
-    just moved to takes no other robot by a draw for ``~window`` s (the others see the
-    move in their samples only then).
 
     :ROS Parameters:
         - ``~profile`` (``paper``): ``fleet`` sets the defaults marked (fleet) below.
@@ -50,7 +47,7 @@ class ManagerNode(object):
         - ``~sample_stream`` (``pair``; (fleet) ``view``): samples on ``latency_R<r>S<s>``
           per pair, batches on ``latency_samples`` (``robot``), or each robot's own ranking
           on ``robot_rankings`` (``view``: the robot keeps its samples as this node would;
-          this node keeps the policy's state, spreads moves and flags; a ranking older
+          this node keeps the policy's state and flags; a ranking older
           than 3 / ``~view_rate`` s counts as none).
         - ``~flag_stream`` (``shared``; (fleet) ``robot``): every flag on
           ``server_select_flag``, or each on its robot's own latched
@@ -113,7 +110,6 @@ class ManagerNode(object):
                                   lookup=node_pattern(pattern) if pattern else None)
         self._locks = {}          # robot -> lock of its ranking and flag
         self._choosers = {}       # robot -> its Chooser (the policy's state)
-        self._settling = Settling(param('window'))   # servers a robot was just moved to
         self._slice = 0
         self.group = param('group')       # grouped: robots get their servers elsewhere
         self.discovery = ServerRegistry(param('announce_period'), self.on_leave) \
@@ -300,7 +296,7 @@ class ManagerNode(object):
         chooser = self._choosers.get(robot)
         if chooser is None:
             chooser = self._choosers.setdefault(
-                robot, Chooser(self.policy, settling=self._settling))
+                robot, Chooser(self.policy))
         return chooser
 
 

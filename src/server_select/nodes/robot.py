@@ -50,7 +50,7 @@ class RobotNode(object):
           ``~image_topic``, ``~frame_rate``, ``~task_plugins``, ...), failover and health
           (``~retry_factor``, ...), policy (``~policy``, ...), ``~passive``,
           ``~manager_node`` or, grouped, ``~group_manager_node``; ``~start_delay``;
-          capacity (``~load_aware``, ``~max_in_flight``, ``~retry_budget``, ``~spread``)
+          capacity (``~load_aware``, ``~max_in_flight``, ``~retry_budget``)
     :ROS Publishers:
         - ``latency_R<robot_id>S<s>`` or ``latency_samples`` (fleet); ``task_samples``;
           ``robot_rankings`` (its own ranking, ``~sample_stream view``: fleet)

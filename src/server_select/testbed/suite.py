@@ -33,8 +33,9 @@ Variant = collections.namedtuple('Variant', 'mode profile params')
 # the per-task rules: the fleet's own (hot_cold) and the league's peers
 RULES = ('hot_cold',) + PEERS
 # the fleet profile's selection before it chose per task with hot_cold (for the league)
+# (less its draws for moves, ~spread, which went with it)
 PREVIOUS_FLEET = {'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
-                  'passive': True, 'task_memory': 5.0, 'spread': True}
+                  'passive': True, 'task_memory': 5.0}
 
 
 def peer_params(name):
@@ -71,7 +72,7 @@ VARIANTS = collections.OrderedDict([
     ('fleet_20hz', Variant('select', 'fleet', {'contender_rate': 20.0,
                                                'contender_budget': 40.0})),
     # the fleet profile's rule before hot_cold: the manager's hysteresis over the robots'
-    # windows, robots spread by draws, answered tasks as samples
+    # windows, answered tasks as samples
     ('fleet_hysteresis', Variant('select', 'fleet', PREVIOUS_FLEET)),
     # every probe sample to the manager, which ranks (the robots' own rankings: fleet)
     ('fleet_samples', Variant('select', 'fleet', {'sample_stream': 'robot'})),
