@@ -154,3 +154,15 @@ def test_a_hung_server_is_not_ranked_its_work_is_not_seen_by_the_oracle():
 def test_bad_hang_and_work(spec, message):
     with pytest.raises(ScenarioError, match=message):
         scenario(hosts=dict(HOSTS, s2=spec))
+
+
+def test_a_bad_file_is_one_error_naming_the_file(tmp_path):
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('name: x\nduration: abc\nhosts: {}\n')
+    with pytest.raises(ScenarioError) as error:
+        Scenario.load(str(bad))
+    assert str(error.value) == "%s: duration: expected a number, got 'abc'" % bad
+    with pytest.raises(ScenarioError) as error:
+        Scenario.load(str(tmp_path / 'missing.yaml'))
+    assert str(error.value).startswith('%s: ' % (tmp_path / 'missing.yaml'))
+    assert '\n' not in str(error.value)

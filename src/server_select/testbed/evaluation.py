@@ -108,7 +108,10 @@ def main(argv=None):
     bad = [m for m in modes if m not in MODES]
     if bad or not modes:
         parser.error('unknown modes %s (expected %s)' % (bad, ', '.join(MODES)))
-    out = os.path.join(args.out, Scenario.load(args.scenario).name)
+    try:
+        out = os.path.join(args.out, Scenario.load(args.scenario).name)
+    except ScenarioError as error:      # one line naming the file and what is wrong
+        parser.error(str(error))
     options = RunOptions(fixed_server=args.fixed_server, window=args.window,
                          task_rate=args.task_rate, task_size=args.task_size,
                          hysteresis=args.hysteresis, profile=args.profile)

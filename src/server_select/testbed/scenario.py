@@ -150,7 +150,12 @@ class Scenario(object):
                 data = yaml.safe_load(stream)
         except (OSError, yaml.YAMLError) as error:
             raise ScenarioError('%s: %s' % (path, error))
-        return cls(data, path)
+        try:
+            return cls(data, path)
+        except ScenarioError as error:     # the file's name first, once
+            text = str(error)
+            raise ScenarioError(text if text.startswith(str(path)) else
+                                '%s: %s' % (path, text))
 
     def _hosts(self, hosts):
         if not isinstance(hosts, dict) or not hosts:
