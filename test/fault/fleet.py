@@ -161,7 +161,9 @@ class Fleet(object):
     def restart_robot(self, robot):
         rate = ['_task_rate:=%s' % self.args['task_rate']] if 'task_rate' in self.args else []
         return self.start('rosrun', 'server_select', 'robot', '_robot_id:=%d' % robot,
-                          '_servers:=1,2,3', '__name:=robot%d' % robot, *rate)
+                          '_servers:=1,2,3', '__name:=robot%d' % robot, *rate,
+                          *['_%s:=%s' % (k, self.args[k]) for k in ('fleet_key', 'hysteresis')
+                            if k in self.args])
 
     def restart_manager(self):
         return self.start('rosrun', 'server_select', 'manager', '_robots:=1,2',

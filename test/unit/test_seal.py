@@ -38,11 +38,38 @@ def test_unsigned_wrong_key_other_content_or_other_name_are_refused():
     verifier = seal.Verifier([KEY], clock=clock)
     seq, mac = signed(KEY, '/manager', b'flag', clock)
     assert verifier.refusal('/manager', seq, b'', b'flag') == 'not signed'
-    assert verifier.refusal('/manager', seq, mac, b'flag!') == 'wrong signature'
-    assert verifier.refusal('/impostor', seq, mac, b'flag') == 'wrong signature'
-    assert verifier.refusal('/manager', seq + 1, mac, b'flag') == 'wrong signature'
+    assert verifier.refusal('/manager', seq, mac, b'flag!').startswith('wrong signature')
+    assert verifier.refusal('/impostor', seq, mac, b'flag').startswith('wrong signature')
+    assert verifier.refusal('/manager', seq + 1, mac, b'flag').startswith('wrong signature')
     seq, mac = signed(OTHER, '/manager', b'flag', clock)
-    assert verifier.refusal('/manager', seq, mac, b'flag') == 'wrong signature'
+    assert verifier.refusal('/manager', seq, mac, b'flag').startswith('wrong signature')
+
+
+def test_a_copy_on_another_topic_or_as_another_type_is_refused():
+    clock = Clock()
+    verifier = seal.Verifier([KEY], clock=clock)
+    sealer = seal.Sealer(KEY, '/robot1', clock)
+    flag = seal.context('/robot_1/server_select_flag', 'server_select/SelectionFlag')
+    seq = sealer.next_seq()
+    mac = sealer.mac(seq, b'x', flag)
+    for where in (seal.context('/robot_2/server_select_flag', 'server_select/SelectionFlag'),
+                  seal.context('/robot_1/server_select_flag', 'server_select/Other'), b''):
+        assert verifier.refusal('/robot1', seq, mac, b'x', where).startswith('wrong')
+    assert verifier.refusal('/robot1', seq, mac, b'x', flag) is None
+
+
+def test_a_receiver_that_restarted_refuses_what_was_sent_before_it_started():
+    clock = Clock()
+    seq, mac = signed(KEY, '/manager', b'flag', clock)
+    clock.now += int(seal.START_SKEW * 1e9) + 1           # well within max_age (30 s)
+    restarted = seal.Verifier([KEY], max_age=30.0, clock=clock)
+    assert 'before this node started' in restarted.refusal('/manager', seq, mac, b'flag')
+    seq, mac = signed(KEY, '/manager', b'flag', clock)     # what is sent now counts
+    assert restarted.refusal('/manager', seq, mac, b'flag') is None
+    # within the skew the fleet's clocks may have: counts
+    clock.now += int(1e9)
+    seq, mac = signed(KEY, '/manager', b'flag', lambda: clock.now - int(1.5e9))
+    assert seal.Verifier([KEY], clock=clock).refusal('/manager', seq, mac, b'flag') is None
 
 
 def test_a_recording_replayed_later_is_refused_even_by_a_receiver_that_never_saw_it():
@@ -96,7 +123,7 @@ def test_rotation_accepts_the_next_key_and_the_current_one():
         assert verifier.refusal('/manager', seq, mac, b'flag') is None
         clock.now += 1
     seq, mac = signed(OTHER, '/manager', b'flag', clock)
-    assert verifier.refusal('/manager', seq, mac, b'flag') == 'wrong signature'
+    assert verifier.refusal('/manager', seq, mac, b'flag').startswith('wrong signature')
 
 
 def test_make_key_writes_a_private_key_that_loads_and_keeps_an_existing_file(tmp_path):

@@ -161,13 +161,14 @@ class SimulatedRobots(object):
                                      ok=[True] * len(rtts), rtt=rtts)
             msg.header.stamp = rospy.Time.now()
             sending()
-            self.pub.publish(sealed(msg, self.sealer))
+            self.pub.publish(sealed(msg, self.sealer, self.pub.resolved_name))
             return
         for server, rtt in zip(servers, rtts):
             if server == slow:
                 sending()
-            self.pubs[(robot, server)].publish(sealed(LatencySample(
-                robot_id=robot, server_id=server, ok=True, rtt=rtt), self.sealer))
+            pub = self.pubs[(robot, server)]
+            pub.publish(sealed(LatencySample(robot_id=robot, server_id=server, ok=True,
+                                             rtt=rtt), self.sealer, pub.resolved_name))
 
     def all_ranked(self):
         with self.lock:

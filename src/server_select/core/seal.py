@@ -3,17 +3,24 @@ rospy; the ROS side is :mod:`server_select.ros.seal`).
 
 In ROS 1 any process may register under any node name: a name check stops a careless node,
 not one that takes the manager's name. With a fleet key (one secret file per fleet) the
-fleet's advice and results carry a seal: ``mac = HMAC(key, publisher name, seq, message)``
-where ``message`` is the serialized message with the MAC left empty, and ``seq`` is the
-publisher's clock in nanoseconds since the epoch, strictly increasing per publisher. A
-receiver with the key admits a message only when
+fleet's advice and results carry a seal:
+``mac = HMAC(key, context, publisher name, seq, message)`` where ``context`` is the topic
+(or service) name and the message type, ``message`` is the serialized message with the MAC
+left empty, and ``seq`` is the publisher's clock in nanoseconds since the epoch, strictly
+increasing per publisher. A receiver with the key admits a message only when
 
 - its MAC is right for one of the receiver's keys (the current one, or the next one while
-  keys are rotated) and the name of the node that published it: a node without the key
-  signs nothing, and a sealed message re-published under another name fails;
+  keys are rotated), the name of the node that published it and the topic it came on: a
+  node without the key signs nothing, and a sealed message re-published under another
+  name, or on another topic, fails;
 - its ``seq`` is no older than ``max_age`` s by the receiver's clock (and no newer: clocks
-  of the fleet's hosts agree within that) and has not been seen from that publisher
-  before: a recorded message replayed later, or a copy replayed at once, is refused.
+  of the fleet's hosts agree within that), no older than the receiver's own start less
+  :data:`START_SKEW` s, and has not been seen from that publisher before: a recorded
+  message replayed later, a copy replayed at once, or one replayed to a receiver that
+  restarted since it was sent, is refused. The last needs the fleet's clocks to agree
+  within :data:`START_SKEW` s (NTP or chrony keep a LAN within milliseconds); latched
+  messages older than the receiver are refused with it, and their publishers send them
+  again every few seconds while a key is set.
 
 What it does not do: hide anything (ROS 1 topics are plain TCP).
 """
@@ -30,6 +37,7 @@ import time
 KEY_BYTES = 32            # what make_key writes
 MIN_KEY_BYTES = 16
 MAC_BYTES = hashlib.sha256().digest_size
+START_SKEW = 2.0          # s: a message signed this much before its receiver started counts
 
 
 class KeyFileError(ValueError):
@@ -67,9 +75,16 @@ def load_key(path):
     return key
 
 
-def mac(key, sender, seq, payload):
-    """The seal's MAC of ``payload`` (bytes) published by node ``sender`` with ``seq``."""
-    head = sender.encode('utf-8') + b'\0' + struct.pack('<Q', seq)
+def context(channel, msg_type):
+    """What a seal binds a message to: the topic or service name it travels on, and its
+    type (a copy replayed on another topic, or as another type, fails)."""
+    return ('%s\0%s' % (channel, msg_type)).encode('utf-8')
+
+
+def mac(key, sender, seq, payload, where=b''):
+    """The seal's MAC of ``payload`` (bytes) published by node ``sender`` with ``seq`` on
+    ``where`` (:func:`context`)."""
+    head = where + b'\0' + sender.encode('utf-8') + b'\0' + struct.pack('<Q', seq)
     return hmac.new(key, head + payload, hashlib.sha256).digest()
 
 
@@ -87,8 +102,8 @@ class Sealer(object):
             self._last = max(self._last + 1, self._clock())
             return self._last
 
-    def mac(self, seq, payload):
-        return mac(self.key, self.sender, seq, payload)
+    def mac(self, seq, payload, where=b''):
+        return mac(self.key, self.sender, seq, payload, where)
 
 
 class Verifier(object):
@@ -96,28 +111,34 @@ class Verifier(object):
 
     ``keys``: the keys a MAC may be made with (the current one, and the next one while
     keys are rotated). ``max_age``: s a message may be older (or newer) than this host's
-    clock. Sequence numbers seen in the last ``max_age`` s are remembered per publisher.
+    clock. Sequence numbers seen in the last ``max_age`` s are remembered per publisher;
+    what was signed more than :data:`START_SKEW` s before this verifier was made (its
+    node started) is refused.
     """
 
     def __init__(self, keys, max_age=30.0, clock=time.time_ns):
         if not keys:
             raise ValueError('a verifier needs a key')
         self.keys, self.max_age_ns, self._clock = list(keys), int(max_age * 1e9), clock
+        self.started_ns = clock()
         self._lock = threading.Lock()
         self._seen = {}           # publisher -> {seq: True}, oldest first
 
-    def refusal(self, sender, seq, mac_, payload):
+    def refusal(self, sender, seq, mac_, payload, where=b''):
         """None when the message counts (and its ``seq`` is now seen), else why not."""
         if not mac_:
             return 'not signed'
-        if not any(hmac.compare_digest(mac(k, sender, seq, payload), bytes(mac_))
+        if not any(hmac.compare_digest(mac(k, sender, seq, payload, where), bytes(mac_))
                    for k in self.keys):
-            return 'wrong signature'
+            return 'wrong signature (another key, node, topic or type)'
         now = self._clock()
         if abs(now - seq) > self.max_age_ns:
             return 'signed %.1f s %s this host\'s clock (at most %g s: replayed, or clocks ' \
                 'apart)' % (abs(now - seq) / 1e9, 'before' if seq < now else 'after',
                             self.max_age_ns / 1e9)
+        if seq < self.started_ns - int(START_SKEW * 1e9):
+            return 'signed %.1f s before this node started (replayed; the fleet\'s clocks ' \
+                'must agree within %g s)' % ((self.started_ns - seq) / 1e9, START_SKEW)
         with self._lock:
             seen = self._seen.setdefault(sender, {})
             while seen:                          # forget what max_age refuses anyway

@@ -173,6 +173,8 @@ PARAMS = {
     'fleet_key': Param('', parse_text, 'key file (make_key): fleet messages leave signed and '
                        'only signed ones count (empty: off)'),
     'fleet_key_next': Param('', parse_text, 'a second key file also accepted (rotation)'),
+    'require_key': Param(False, parse_bool, 'refuse to start without ~fleet_key (a fleet '
+                         'that must not run unsigned)'),
     'fleet_key_max_age': Param(30.0, parse_positive, 'a signed message older or newer than '
                                'this by our clock is refused (s)'),
     'master_check': Param(60.0, parse_positive, 'period of a node\'s own check for a restarted '

@@ -10,6 +10,7 @@ from server_select.core.params import parse_id_list
 from server_select.core.report import RunReport
 from server_select.msg import LatencySample, LatencySamples, SelectionFlag, TaskReport
 from server_select.ros.node import end_parent_launch, fleet, param, run
+from server_select.ros.senders import SenderGate
 
 
 class ReportNode(object):
@@ -36,6 +37,7 @@ class ReportNode(object):
         self.output = param('output')
         self.end_launch = param('end_launch')
         self.report = RunReport(param('task_timeout'))
+        self.gate = SenderGate('report', 'a node of the fleet')   # with a key: sealed only
         self.flag_sub = rospy.Subscriber(fleet(names.SELECTION_TOPIC), SelectionFlag, self.on_flag,
                                          queue_size=100)
         self.task_sub = rospy.Subscriber(fleet(names.TASK_REPORT_TOPIC), TaskReport, self.on_task,
@@ -61,6 +63,8 @@ class ReportNode(object):
             self.report.add_probe(batch.robot_id, server, ok, rtt)
 
     def on_task(self, report):
+        if not self.gate.admits(report, 'a task report'):
+            return
         if cut_off(report.error):       # a robot stopped with it out: not the fleet's doing
             return
         self.report.add_task(report.robot_id, report.ok, report.rtt, report.answered_by,

@@ -19,7 +19,8 @@ from server_select.ros.camera import TopicSource
 from server_select.ros.flags import flag_topic
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.load import RobotLoad
-from server_select.ros.membership import GroupFollower, ServerAnnouncements
+from server_select.ros import seal
+from server_select.ros.membership import GroupFollower, ProbeAddresses, ServerAnnouncements
 from server_select.ros.node import fleet, param, run
 from server_select.ros.passive import TaskSamples
 from server_select.ros.prober import STILL_OUT, Prober
@@ -84,11 +85,15 @@ class RobotNode(object):
         self.passive = TaskSamples(self.robot_id, self.selection) \
             if self.selection.passive else None
         plan, rule = probing.from_params(param, self.policy)
+        # with a fleet key: servers probed where their sealed announcements say
+        self.addresses = ProbeAddresses('robot %d' % self.robot_id) if seal.enabled() \
+            else None
         self.prober = Prober(self.robot_id, servers, plan, param('probe_timeout'),
                              on_sample=self.on_sample, stream=param('sample_stream'),
                              load_of=self.load.on_answer if self.load else None,
                              announce=self.load.announcement if self.load else None,
-                             contenders=(rule, self.selection) if rule else None)
+                             contenders=(rule, self.selection) if rule else None,
+                             node_of=self.server_node, addresses=self.addresses)
         self.view = RankingSender(self.robot_id, self.selection, self.policy, param('view_rate')) \
             if param('sample_stream') == 'view' and mode == 'select' else None
         self.start_delay = param('start_delay')
@@ -161,6 +166,8 @@ class RobotNode(object):
             stream.start()
             for server in self.prober.servers:    # task topics connected before the first task
                 stream.add_server(server)
+        if self.addresses is not None:
+            self.addresses.start()
         self.prober.start()
         for part in (self.announcements, self.view):
             if part is not None:

@@ -10,6 +10,7 @@ from server_select.core.params import ParamError
 from server_select.core.tables import markdown_table
 from server_select.msg import FoundTarget
 from server_select.ros.node import fleet, param, run
+from server_select.ros.senders import SenderGate
 from server_select.vision.search import SearchError, SearchWorld
 
 
@@ -41,12 +42,15 @@ class SearchMonitorNode(object):
         self.reports = []
         self.false_alarms = []
         self.start = rospy.get_time()
+        self.gate = SenderGate('search monitor', 'a node of the fleet')   # key: sealed only
         self.sub = rospy.Subscriber(fleet(names.FOUND_TARGETS_TOPIC), FoundTarget, self.on_found,
                                     queue_size=100)
         self.timer = rospy.Timer(rospy.Duration(timeout), self.finish, oneshot=True)
         rospy.loginfo('search monitor: %d targets to find', len(self.world.targets))
 
     def on_found(self, msg):
+        if not self.gate.admits(msg, 'a found target'):
+            return
         name = self.world.target_at(msg.x, msg.y, self.radius)
         t = rospy.get_time() - self.start
         with self._lock:

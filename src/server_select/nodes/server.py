@@ -8,6 +8,7 @@ import rospy
 from server_select.core import names
 from server_select.core.params import ParamError
 from server_select.core.procs import usable_cpus
+from server_select.ros import seal
 from server_select.ros.membership import ServerAnnouncer
 from server_select.ros.node import fleet, live_param, param, run
 from server_select.ros.plugins import PluginHandler
@@ -107,6 +108,7 @@ class ServerNode(object):
         # Advertised last: a robot that can probe us finds our task topics wired already.
         self.probe_srv = rospy.Service(
             fleet(names.probe_service(self.server_id)), LatencyProbe, self.on_probe)
+        self.announcer.probe_uri = self.probe_srv.uri
         self.announcer.start()
         rospy.loginfo('server %d: probe service %s, tasks on %s',
                       self.server_id, self.probe_srv.resolved_name,
@@ -141,11 +143,12 @@ class ServerNode(object):
         if req.task_kinds:
             self.work.announce(req.robot_id, zip(req.task_kinds, req.task_rates))
         load = self.work.load(req.robot_id)
-        return LatencyProbeResponse(
+        return seal.seal_answer(LatencyProbeResponse(
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),
             queued=load.queued, in_service=load.in_service, workers=load.workers,
             backlog=load.backlog, utilization=load.utilization, kinds=list(load.service),
-            service_time=list(load.service.values()))
+            service_time=list(load.service.values())), self.probe_srv.resolved_name,
+            self.probe_srv.uri, req)
 
     def _prepare(self, robot):
         for handler in self.handlers:

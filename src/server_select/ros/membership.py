@@ -32,6 +32,7 @@ class ServerAnnouncer(object):
     def __init__(self, server_id, period):
         self.server_id, self.period = server_id, period
         self.pub = self.timer = None
+        self.probe_uri = ''      # its probe service's address, once it serves it
 
     def start(self):
         with warnings.catch_warnings():     # synchronous on purpose: the leaving
@@ -43,7 +44,7 @@ class ServerAnnouncer(object):
 
     def announce(self, _event=None, lease=None):
         msg = ServerAnnouncement(server_id=self.server_id, lease=LEASE_PERIODS * self.period
-                                 if lease is None else lease)
+                                 if lease is None else lease, probe_uri=self.probe_uri)
         msg.header.stamp = rospy.Time.now()
         self.pub.publish(msg)
 
@@ -200,3 +201,30 @@ class GroupFollower(object):
         if (group, servers) != (self.group, self.servers):
             self.group, self.servers = group, servers
             self.on_group(group, servers)
+
+
+class ProbeAddresses(object):
+    """Robot side, with a fleet key: where each server serves its probe service, and under
+    which node name, as its sealed announcements say (ROS 1 lets any node register any
+    service at the master, at its own address and under another node's name; a server's
+    announcement, sealed with the fleet key, is the witness instead). Thread-safe."""
+
+    def __init__(self, who):
+        self.gate = SenderGate(who, 'a server')
+        self._lock = threading.Lock()
+        self._known = {}         # server -> (probe uri, node)
+        self.sub = None
+
+    def start(self):
+        self.sub = rospy.Subscriber(fleet(names.ANNOUNCE_TOPIC), ServerAnnouncement,
+                                    self.on_announcement, queue_size=100)
+
+    def on_announcement(self, msg):
+        if msg.probe_uri and msg.lease > 0 and self.gate.admits(msg, 'a server announcement'):
+            with self._lock:
+                self._known[msg.server_id] = (msg.probe_uri, publisher_of(msg))
+
+    def of(self, server):
+        """``(probe uri, node)`` server ``server`` announced last, or None."""
+        with self._lock:
+            return self._known.get(server)

@@ -135,7 +135,8 @@ def run(node_name, node_class, argv=None):
     rospy.init_node(node_name, argv=argv)
     quiet_logging()
     try:
-        seal.enabled()          # a fleet key file that cannot be used ends the node here
+        seal.announce(rospy.get_name())   # a key that cannot be used, or none with
+        #                                   ~require_key, ends the node here
         node = node_class()
         watcher = getattr(node_class, 'MASTER_WATCHER', False)
         watch = MasterWatch(param('master_watch' if watcher else 'master_check'),

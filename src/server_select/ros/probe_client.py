@@ -25,8 +25,11 @@ class ProbeTimeout(rospy.ServiceException):
 class TimedServiceProxy(rospy.ServiceProxy):
     """Persistent ``rospy.ServiceProxy`` with a per-call deadline (``call_within``)."""
 
-    def __init__(self, name, service_class):
+    def __init__(self, name, service_class, pinned=None, on_moved=None):
+        """``pinned()``: the address to connect to (None: the master's); ``on_moved(master,
+        pinned)``: the master lists another address than the pinned one."""
         super(TimedServiceProxy, self).__init__(name, service_class, persistent=True)
+        self.pinned, self.on_moved = pinned, on_moved
         self._abort_lock = threading.Lock()
         self._connecting = None
         self._aborted = False
@@ -63,7 +66,17 @@ class TimedServiceProxy(rospy.ServiceProxy):
             watchdog.cancel()
 
     def _connect(self, request, timeout):
-        uri = self._get_service_uri(request)  # master lookup; ServiceException if not advertised
+        pinned = self.pinned() if self.pinned is not None else None
+        try:
+            uri = self._get_service_uri(request)  # master lookup; ServiceException if none
+        except rospy.ServiceException:
+            if pinned is None:
+                raise
+            uri = pinned
+        if pinned is not None and uri != pinned:
+            if self.on_moved is not None:
+                self.on_moved(uri, pinned)
+            uri = self.uri = pinned
         address, port = rospy.core.parse_rosrpc_uri(uri)
         transport = TCPROSTransport(self.protocol, self.resolved_name)
         transport.buff_size = self.buff_size
@@ -86,6 +99,10 @@ class TimedServiceProxy(rospy.ServiceProxy):
             transport = self._connecting or self.transport
         if transport is not None:
             transport.close()
+
+    def reconnect(self):
+        """Drop the connection: the next call connects again (to the pinned address)."""
+        self._drop()
 
     def _drop(self):
         transport, self.transport = self.transport, None

@@ -2,13 +2,16 @@
 
 import concurrent.futures
 import itertools
+import random
 import threading
 import time
 
 import rospy
 
 from server_select.core import names
+from server_select.core.senders import Throttle
 from server_select.msg import LatencySample, LatencySamples
+from server_select.ros import seal
 from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
 from server_select.ros.seal import SealedPublisher
@@ -58,10 +61,18 @@ class Prober(object):
     server (s, what a task of this robot would wait for there; None: unknown), carried in
     the sample and in the batch's ``wait`` (a load-aware robot ranks by rtt + wait);
     ``announce(server)`` gives the ``(task kinds, rates)`` a probe of it carries.
+    ``node_of(server, refresh)`` names the node the master says serves its probe service: with a
+    fleet key an answer counts only when sealed by that node, for this request, at the
+    address probed (:func:`server_select.ros.seal.answer_refusal`); any other answer is
+    a failed probe and a throttled warning naming the node and address that answered.
+    ``addresses`` (a :class:`~server_select.ros.membership.ProbeAddresses`, with a key):
+    each server is probed at the address, and its answers checked against the node, that
+    its sealed announcement names, whatever the master lists (a warning says when the
+    master lists another).
     """
 
     def __init__(self, robot_id, servers, plan, timeout, on_sample=None, stream='pair',
-                 load_of=None, announce=None, contenders=None):
+                 load_of=None, announce=None, contenders=None, node_of=None, addresses=None):
         self.robot_id = robot_id
         self.plan, self.contenders = plan, contenders
         self.timeout = timeout
@@ -70,6 +81,10 @@ class Prober(object):
         self.on_sample = on_sample or (lambda server, ok, rtt, error, wait: None)
         self.load_of = load_of
         self.announce = announce
+        self.addresses = addresses
+        self.node_of = node_of or (lambda server, refresh=False: None)
+        self._forged = Throttle(5.0)
+        self._nonce = random.SystemRandom()
         self._seq = itertools.count(1)
         self._rounds = itertools.count(1)
         self._lock = threading.Lock()
@@ -96,9 +111,29 @@ class Prober(object):
                 self._pubs[server] = SealedPublisher(
                     fleet(names.sample_topic(self.robot_id, server)), LatencySample,
                     queue_size=10)
-            self._proxies[server] = TimedServiceProxy(fleet(names.probe_service(server)),
-                                                      LatencyProbe)
+            self._proxies[server] = TimedServiceProxy(
+                fleet(names.probe_service(server)), LatencyProbe,
+                *((self._pinned(server), self._moved(server)) if self.addresses else ()))
             self.plan.add(server, time.monotonic())
+
+    def _pinned(self, server):
+        return lambda: (self.addresses.of(server) or (None, None))[0]
+
+    def _moved(self, server):
+        def warn(master, pinned):
+            due, held = self._forged.due()
+            if due:
+                rospy.logwarn('robot %d: the master lists %s for the probe service of server '
+                              '%d, but the server\'s sealed announcement says %s: probing '
+                              'that (another node registered the service)%s' % (
+                                  self.robot_id, master, server, pinned,
+                                  '; %d more before' % held if held else ''))
+        return warn
+
+    def _node(self, server, refresh=False):
+        """The node whose seal a probe answer of ``server`` must carry."""
+        announced = self.addresses.of(server) if self.addresses is not None else None
+        return announced[1] if announced else self.node_of(server, refresh)
 
     def remove(self, server):
         with self._lock:
@@ -140,7 +175,8 @@ class Prober(object):
 
     def _probe(self, server, seq, batch):
         stamp = rospy.Time.now()
-        request = LatencyProbeRequest(robot_id=self.robot_id, seq=seq, stamp=stamp)
+        request = LatencyProbeRequest(robot_id=self.robot_id, seq=seq, stamp=stamp,
+                                      nonce=self._nonce.getrandbits(64))
         if self.announce is not None:
             request.task_kinds, request.task_rates = self.announce(server)
         proxy = self._proxies.get(server)
@@ -155,6 +191,24 @@ class Prober(object):
         if response.server_id != server or response.seq != seq:
             self._publish(server, seq, stamp, None, 'answer from server %d seq %d'
                           % (response.server_id, response.seq), batch)
+            return
+        node = self._node(server)
+        forged = seal.answer_refusal(response, proxy.resolved_name, proxy.uri, request,
+                                     node or '?')
+        if forged is not None and not forged.endswith('(replayed)'):
+            node = self._node(server, True)         # the server may have been restarted
+            forged = seal.answer_refusal(response, proxy.resolved_name, proxy.uri, request,
+                                         node or '?')
+        if forged is not None:
+            due, held = self._forged.due()
+            if due:
+                rospy.logwarn('robot %d: ignored a probe answer of %s from node %s at %s '
+                              '(%s, by the fleet key): not server %d%s' % (
+                                  self.robot_id, proxy.resolved_name, node, proxy.uri, forged,
+                                  server, '; %d more before' % held if held else ''))
+            proxy.reconnect()       # to where the server's announcement says, once known
+            self._publish(server, seq, stamp, None, 'answer not sealed by the fleet key: %s'
+                          % forged, batch)
             return
         self.answered.add(server)
         wait = self.load_of(server, response, rtt) if self.load_of is not None else None

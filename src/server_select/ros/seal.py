@@ -2,9 +2,13 @@
 
 A node with ``~fleet_key`` (a key file) seals what it publishes on the fleet's topics
 (:class:`SealedPublisher`: flags, sample batches, task samples, server lists, group
-assignments, task results) and admits those messages only when sealed with that key or
-``~fleet_key_next`` (:func:`refusal`, called by every
-:class:`~server_select.ros.senders.SenderGate`). Without ``~fleet_key`` nothing changes.
+assignments, task results, task reports, detections, found targets) and its probe answers
+(:func:`seal_answer`), and admits those only when sealed with that key or
+``~fleet_key_next`` on the topic (or service) they came on (:func:`refusal`, called by
+every :class:`~server_select.ros.senders.SenderGate`; :func:`answer_refusal`). Without
+``~fleet_key`` nothing is signed or checked: every node says which at start
+(:func:`announce`), ``~require_key`` makes a missing key fatal, and a keyless node that
+receives signed messages warns that it should have the key.
 """
 
 import io
@@ -14,6 +18,7 @@ import rospy
 
 from server_select.core import seal as core
 from server_select.core.params import ParamError
+from server_select.core.senders import Throttle
 from server_select.ros.node import param
 
 _LOCK = threading.Lock()
@@ -46,6 +51,35 @@ def _configured():
         return _STATE['done']
 
 
+def announce(who):
+    """One line at start: whether ``who`` (this node) signs and checks (``~require_key``
+    without a key: ParamError)."""
+    if enabled():
+        rospy.loginfo('%s: fleet key on: signs what it publishes and counts only signed '
+                      'messages and probe answers', who)
+    elif param('require_key'):
+        raise ParamError('~require_key: no ~fleet_key given (make one with make_key and '
+                         'give every node of the fleet a copy)')
+    else:       # a warning where the fleet is deployed, a note in the paper's set-up
+        log = rospy.logwarn if param('profile') == 'fleet' else rospy.loginfo
+        log('%s: fleet key off: signs nothing and checks nothing, so any node on this '
+            'master can steer it (give every node ~fleet_key)', who)
+
+
+_KEYLESS = Throttle(60.0)
+
+
+def _keyless_heard(msg, sender):
+    """A keyless node received a signed message: say once a minute what it lacks."""
+    if getattr(getattr(msg, 'seal', None), 'mac', None):
+        due, _ = _KEYLESS.due()
+        if due:
+            rospy.logwarn('%s: received a signed %s from %s but has no ~fleet_key: it counts '
+                          'unsigned messages too; give it the fleet\'s key (~fleet_key, or '
+                          'fleet_key:= of its launch file)' % (rospy.get_name(), msg._type,
+                                                               sender))
+
+
 def enabled():
     """Whether this node signs and checks fleet messages (reads the parameters on first
     use: call it at start-up, where a bad key file ends the node with one clear line)."""
@@ -68,44 +102,77 @@ def _payload(msg):
     return buf.getvalue()
 
 
-def seal(msg):
-    """``msg`` with its seal made by this node (unchanged without a key, or when its type
-    has no seal)."""
-    return sealed(msg, _configured()[0])
+def seal(msg, channel):
+    """``msg``, to go out on topic ``channel``, with its seal made by this node (unchanged
+    without a key, or when its type has no seal)."""
+    return sealed(msg, _configured()[0], channel)
 
 
 def refusal(msg, sender):
     """None when ``msg`` (published by node ``sender``) counts for this node, else why not:
     without a key everything counts."""
-    return check(msg, sender, _configured()[1])
+    verifier = _configured()[1]
+    if verifier is None:
+        _keyless_heard(msg, sender)
+        return None
+    return check(msg, sender, verifier)
 
 
-def sealed(msg, sealer):
+def sealed(msg, sealer, channel):
     """``msg`` sealed by ``sealer`` (a :class:`~server_select.core.seal.Sealer`; None:
-    unchanged)."""
+    unchanged) for topic or service ``channel``."""
     if sealer is None or not hasattr(msg, 'seal'):
         return msg
     msg.seal.seq = sealer.next_seq()
     msg.seal.mac = b''
-    msg.seal.mac = sealer.mac(msg.seal.seq, _payload(msg))
+    msg.seal.mac = sealer.mac(msg.seal.seq, _payload(msg), core.context(channel, msg._type))
     return msg
 
 
-def check(msg, sender, verifier):
+def check(msg, sender, verifier, channel=None):
     """``verifier``'s refusal of ``msg`` from ``sender`` (None: counts; so does everything
-    when ``verifier`` is None)."""
+    when ``verifier`` is None), received on ``channel`` (None: the topic its connection
+    says, as rospy keeps it)."""
     if verifier is None:
         return None
     stamp = getattr(msg, 'seal', None)
     if stamp is None:
         return 'its type has no seal'
+    if not stamp.mac:
+        return 'not signed'
+    if channel is None:
+        channel = (getattr(msg, '_connection_header', None) or {}).get('topic')
+        if channel is None:
+            return 'no topic known to check its seal against'
     mac = stamp.mac
     stamp.mac = b''
     try:
         payload = _payload(msg)
     finally:
         stamp.mac = mac
-    return verifier.refusal(sender, stamp.seq, mac, payload)
+    return verifier.refusal(sender, stamp.seq, mac, payload, core.context(channel, msg._type))
+
+
+def seal_answer(response, service, uri, request):
+    """A probe answer of this node's ``service``, served at ``uri`` (its rosrpc address),
+    sealed for ``request``: the robot, seq and nonce are in the seal (an answer fits one
+    request only), and so is the address (an answer relayed by a node that registered the
+    service at its own address fails). Unchanged without a key."""
+    return sealed(response, _configured()[0], _answer_channel(service, uri, request))
+
+
+def answer_refusal(response, service, uri, request, server_node):
+    """None when a probe answer counts (no key here, or sealed with it by node
+    ``server_node`` serving ``service`` at ``uri``, for this ``request``), else why not."""
+    verifier = _configured()[1]
+    if verifier is None:
+        _keyless_heard(response, server_node)
+        return None
+    return check(response, server_node, verifier, _answer_channel(service, uri, request))
+
+
+def _answer_channel(service, uri, request):
+    return '%s@%s#%d/%d/%d' % (service, uri, request.robot_id, request.seq, request.nonce)
 
 
 def require_sealable(msg_type, what):
@@ -123,4 +190,4 @@ class SealedPublisher(rospy.Publisher):
     def publish(self, msg):
         if not self.impl.is_latch and not self.impl.has_connections():
             return      # nobody listens: no seal to make (rospy would drop it too)
-        super(SealedPublisher, self).publish(seal(msg))
+        super(SealedPublisher, self).publish(seal(msg, self.resolved_name))

@@ -9,6 +9,8 @@ from std_msgs.msg import Header
 from server_select.core import names
 from server_select.msg import Detections, FoundTarget
 from server_select.ros.node import fleet
+from server_select.ros.seal import SealedPublisher
+from server_select.ros.senders import SenderGate
 from server_select.srv import KnownTargets, KnownTargetsResponse
 from server_select.vision.search import Found, TargetRegistry
 
@@ -30,10 +32,12 @@ class SearchParticipant(object):
         self._views = collections.OrderedDict()   # task id -> where its frame was taken
         self._remember = remember
         self.found_pub = None
+        # with a fleet key, detections and found targets count only when sealed with it
+        self.gate = SenderGate('robot %d' % robot_id, 'a node of the fleet')
 
     def start(self):
         found = fleet(names.FOUND_TARGETS_TOPIC)
-        self.found_pub = rospy.Publisher(found, FoundTarget, queue_size=100)
+        self.found_pub = SealedPublisher(found, FoundTarget, queue_size=100)
         self.found_sub = rospy.Subscriber(found, FoundTarget, self.on_found, queue_size=100,
                                           tcp_nodelay=True)
         self.detections_sub = rospy.Subscriber(fleet(names.DETECTIONS_TOPIC), Detections,
@@ -49,7 +53,8 @@ class SearchParticipant(object):
                 self._views.popitem(last=False)
 
     def on_detections(self, msg):
-        if msg.robot_id == self.robot_id and msg.detections:
+        if msg.robot_id == self.robot_id and msg.detections and \
+                self.gate.admits(msg, 'detections'):
             self.found_in(msg.task_id, [(d.roi.x_offset, d.roi.y_offset, d.roi.width,
                                          d.roi.height, d.label) for d in msg.detections])
 
@@ -68,7 +73,7 @@ class SearchParticipant(object):
                 self.found_pub.publish(_message(found))
 
     def on_found(self, msg):
-        if msg.robot_id != self.robot_id:
+        if msg.robot_id != self.robot_id and self.gate.admits(msg, 'a found target'):
             self.registry.add(Found(msg.robot_id, msg.task_id, msg.label, msg.x, msg.y,
                                     msg.header.stamp.to_sec()))
 

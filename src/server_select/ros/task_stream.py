@@ -18,6 +18,7 @@ from server_select.ros.graph import publisher_of
 from server_select.ros.senders import SenderGate
 from server_select.ros.node import fleet, flush
 from server_select.ros.routing import BroadcastRoute
+from server_select.ros.seal import SealedPublisher
 
 
 class TaskStream(object):
@@ -52,7 +53,7 @@ class TaskStream(object):
         self.timers = []
 
     def start(self):
-        self.report_pub = rospy.Publisher(fleet(names.TASK_REPORT_TOPIC), TaskReport,
+        self.report_pub = SealedPublisher(fleet(names.TASK_REPORT_TOPIC), TaskReport,
                                           queue_size=100)
         if self.route is not None:
             self.route.start()

@@ -11,7 +11,6 @@ goes back in the result and what was found on ``detections``, under the frame's 
 import queue
 import time
 
-import rospy
 from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 from std_msgs.msg import Header
 
@@ -19,6 +18,7 @@ from server_select.core import names
 from server_select.msg import Detection, Detections, ImageResult, ImageTask
 from server_select.ros.node import fleet
 from server_select.ros.plugins import TaskPlugin
+from server_select.ros.seal import SealedPublisher
 from server_select.vision import image_codec
 from server_select.vision.detection import search_frame
 
@@ -101,7 +101,7 @@ class Frames(TaskPlugin):
     # -- server side --------------------------------------------------------------------------
 
     def start(self):
-        self.detections_pub = rospy.Publisher(fleet(names.DETECTIONS_TOPIC), Detections,
+        self.detections_pub = SealedPublisher(fleet(names.DETECTIONS_TOPIC), Detections,
                                               queue_size=100)
 
     def handle(self, task, result):
