@@ -76,6 +76,7 @@ class HotCold(Balancer):
         self.sends = collections.defaultdict(collections.deque)   # kind -> its task times
         self.moves = collections.Counter()     # why the robot changed server, how often
         self.errors = {}                       # server -> its latency's standard error
+        self.on_move = None                    # on_move(server, why): a move was made
 
     def _probed(self, answer):
         others = max(0, answer.rif - self.out[answer.server])
@@ -151,10 +152,13 @@ class HotCold(Balancer):
         return Z * math.sqrt(ea * ea + eb * eb)
 
     def _move(self, server, reason, why):
-        """Go to ``server``; ``reason`` counts in :attr:`moves`, ``why`` says it."""
+        """Go to ``server``; ``reason`` counts in :attr:`moves`, ``why`` says it (and
+        :attr:`on_move`, when set, hears both)."""
         if server != self.current:
             self.moves[reason] += 1
             self.current, self.why = server, why
+            if self.on_move is not None:
+                self.on_move(server, why)
         return server
 
     def _choose(self, cold, latency, rifs):

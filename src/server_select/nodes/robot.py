@@ -84,16 +84,10 @@ class RobotNode(object):
             if param('load_aware') and mode == 'select' else None
         self.passive = TaskSamples(self.robot_id, self.selection) \
             if self.selection.passive else None
-        plan, rule = probing.from_params(param, self.policy)
-        # with a fleet key: servers probed where their sealed announcements say
-        self.addresses = ProbeAddresses('robot %d' % self.robot_id) if seal.enabled() \
-            else None
-        self.prober = Prober(self.robot_id, servers, plan, param('probe_timeout'),
-                             on_sample=self.on_sample, stream=param('sample_stream'),
-                             load_of=self.load.on_answer if self.load else None,
-                             announce=self.load.announcement if self.load else None,
-                             contenders=(rule, self.selection) if rule else None,
-                             node_of=self.server_node, addresses=self.addresses)
+        if hasattr(self.selection.balancer, 'on_move'):     # the fleet's rule: say why
+            self.selection.balancer.on_move = lambda server, why: rospy.loginfo(
+                'robot %d: tasks go to server %d now (%s)', self.robot_id, server, why)
+        self.prober = self._prober(servers)
         self.view = RankingSender(self.robot_id, self.selection, self.policy, param('view_rate')) \
             if param('sample_stream') == 'view' and mode == 'select' else None
         self.start_delay = param('start_delay')
@@ -128,6 +122,18 @@ class RobotNode(object):
                          tau=param('ewma_tau'), passive=param('passive') and mode == 'select',
                          task_memory=param('task_memory'), keep=param('window_samples'),
                          horizon=param('window_max'), fail_fast=param('fail_fast'))
+
+    def _prober(self, servers):
+        plan, rule = probing.from_params(param, self.policy)
+        # with a fleet key: servers probed where their sealed announcements say
+        self.addresses = ProbeAddresses('robot %d' % self.robot_id) if seal.enabled() \
+            else None
+        return Prober(self.robot_id, servers, plan, param('probe_timeout'),
+                      on_sample=self.on_sample, stream=param('sample_stream'),
+                      load_of=self.load.on_answer if self.load else None,
+                      announce=self.load.announcement if self.load else None,
+                      contenders=(rule, self.selection) if rule else None,
+                      node_of=self.server_node, addresses=self.addresses)
 
     def _stream(self, kind, rate, mode):
         timeout, fresh = param('task_timeout'), param('fresh_factor')

@@ -137,7 +137,7 @@ class ServerNode(object):
             time.sleep(self.work_delay)
 
     def on_probe(self, req):
-        if self.direct and req.robot_id not in self._known_robots:
+        if self.direct and req.robot_id and req.robot_id not in self._known_robots:
             self._known_robots.add(req.robot_id)   # its result publishers, off this path
             self._pool.submit(self._prepare, req.robot_id)
         if req.task_kinds:
