@@ -125,7 +125,8 @@ def main(argv=None):
     parser.add_argument('--ros-home', help='ROS_HOME of the role (logs)')
     parser.add_argument('--loader', help='the environment loader (default: this package\'s '
                         'scripts/env_loader.sh)')
-    parser.add_argument('--unit-dir', default='/etc/systemd/system')
+    parser.add_argument('--unit-dir', default='/etc/systemd/system',
+                        help='where to write the unit file (default: %(default)s)')
     parser.add_argument('--print', action='store_true', help='print the unit, write nothing')
     parser.add_argument('--enable', action='store_true',
                         help='systemctl daemon-reload, then enable --now the unit')

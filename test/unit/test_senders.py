@@ -65,3 +65,11 @@ def test_a_throttle_writes_one_line_a_period_and_counts_the_rest():
     assert throttle.due() == (True, 2)
     clock.now += 5.0
     assert throttle.due() == (True, 0)
+
+
+def test_the_robot_node_pattern_that_would_admit_a_robot_named_otherwise():
+    from server_select.core.senders import node_pattern_of
+    assert node_pattern_of('/tb3_2/robot2', 2) == '/tb3_{id}/robot{id}'
+    assert node_pattern_of('/fleetA/tb3_12/robot', 12) == '/fleetA/tb3_{id}/robot'
+    assert node_pattern_of('/tb3_12/robot', 2) is None        # 12 is not 2
+    assert node_pattern_of('/spoofer', 1) is None

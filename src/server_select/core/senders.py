@@ -7,6 +7,7 @@ serves the server's probe service, samples of robot ``r`` from robot ``r``'s nod
 in its namespace: a robot's nodes may live in ``/robot1/``).
 """
 
+import re
 import threading
 import time
 
@@ -44,6 +45,17 @@ class ExpectedSender(object):
             return None
         expected = self.lookup(key, True)
         return None if self._matches(sender, expected) else expected
+
+
+def node_pattern_of(sender, key):
+    """The ``~robot_node`` pattern that would admit ``sender`` as robot ``key``: its name
+    with each number equal to the key written ``{id}`` (``/tb3_2/robot2``, 2:
+    ``/tb3_{id}/robot{id}``); None when no number in it is the key."""
+    parts = re.split(r'(\d+)', sender)
+    if str(key) not in parts[1::2]:
+        return None
+    return ''.join('{id}' if i % 2 and part == str(key) else part
+                   for i, part in enumerate(parts))
 
 
 class Throttle(object):

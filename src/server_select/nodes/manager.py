@@ -10,6 +10,7 @@ from server_select.core.policy import Chooser, from_params
 from server_select.core.rankings import FleetRankings
 from server_select.core.window import RTT_RANGE, valid_rtt
 from server_select.core.ranking import from_view
+from server_select.core.senders import node_pattern_of
 from server_select.core.views import ViewRankings
 from server_select.msg import LatencySample, LatencySamples, RobotRanking
 from server_select.ros.flags import FlagPublisher
@@ -107,7 +108,8 @@ class ManagerNode(object):
         self.update_rate = param('update_rate')
         pattern = param('robot_node')      # None: any publisher
         self.senders = SenderGate('manager', 'robot {key}', within=True,
-                                  lookup=node_pattern(pattern) if pattern else None)
+                                  lookup=node_pattern(pattern) if pattern else None,
+                                  hint=robot_node_hint)
         self._locks = {}          # robot -> lock of its ranking and flag
         self._choosers = {}       # robot -> its Chooser (the policy's state)
         self._slice = 0
@@ -298,6 +300,13 @@ class ManagerNode(object):
             chooser = self._choosers.setdefault(
                 robot, Chooser(self.policy))
         return chooser
+
+
+def robot_node_hint(sender, robot):
+    """The fix for a robot's node that ``~robot_node`` does not admit."""
+    pattern = node_pattern_of(sender, robot)
+    return 'if %s is robot %s, start the manager with robot_node:=%s' % (
+        sender, robot, pattern) if pattern else None
 
 
 def main():

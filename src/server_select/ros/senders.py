@@ -16,8 +16,10 @@ class SenderGate(object):
     (``the manager``, ``server {key}``, ``robot {key}``).
     """
 
-    def __init__(self, who, role, expected=None, lookup=None, within=False, period=5.0):
-        self.who, self.role = who, role
+    def __init__(self, who, role, expected=None, lookup=None, within=False, period=5.0,
+                 hint=None):
+        """``hint(sender, key)``: the fix to name when ``sender`` is refused (or None)."""
+        self.who, self.role, self.hint = who, role, hint
         self.rule = ExpectedSender(expected, lookup, within)
         self.throttle = Throttle(period)
 
@@ -33,9 +35,11 @@ class SenderGate(object):
         sender = publisher_of(msg)
         expected = self.rule.refusal(sender, key)
         if expected is not None:
-            self._warn(what, sender, '%s is %s%s' % (
+            fix = self.hint(sender, key) if self.hint is not None else None
+            self._warn(what, sender, '%s is %s%s%s' % (
                 self.role.format(key=key), expected,
-                ' or a node in its namespace' if self.rule.within else ''))
+                ' or a node in its namespace' if self.rule.within else '',
+                '; %s' % fix if fix else ''))
             return False
         unsealed = seal.refusal(msg, sender)
         if unsealed is not None:
