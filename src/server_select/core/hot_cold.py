@@ -6,14 +6,18 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
 
 1. The candidates are the servers the robot's health has not ejected (the caller's list).
 2. A server's *latency* for a task of a kind is its *expected completion*, from each of
-   its last :data:`RTTS` probe answers: the robot's round trip + the other robots' work
-   in flight there (their requests queued and in service x the work per task of the
-   kind, per worker: what a task sent then would wait for) + the work (the median of
-   what the servers report, where it has done none yet); the mean of those, its noise
-   their standard error. Robots keep a task or two out each, so servers and robots make
-   a closed system: a task waits for the work in flight ahead of it, whatever the
-   utilization (an open queue's mean wait, M/D/c at the reported utilization, grows
-   without bound at saturation and made servers of unequal speed look alike). A server
+   its probe answers of the robot's window (``~window``, at least its newest
+   :data:`MIN_ANSWERS`): the robot's round trip + the other robots' work in flight there
+   (their requests queued and in service x the work per task of the kind, per worker:
+   what a task sent then would wait for) + the work (the median of what the servers
+   report, where it has done none yet); the mean of those, its noise their standard
+   error. Where the round trips of the robot's own tasks there in the window say more
+   (a larger mean), they stand instead: they are what tasks really take (a task
+   connection that backs off after an outage, a queue the probes miss). Robots keep a
+   task or two out each, so servers and robots make a closed system: a task waits for
+   the work in flight ahead of it, whatever the utilization (an open queue's mean wait,
+   M/D/c at the reported utilization, grows without bound at saturation and made servers
+   of unequal speed look alike). A server
    the robot is not on is judged with one more robot like it arriving (its rate x the
    work, what such a robot keeps in flight there): robots that read the same reports
    decide alike, and a move that pays only if the robot moves alone makes them swap
@@ -22,8 +26,8 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
    1/u of it and answers the rest busy: a task there takes u times as long to get
    through, in expectation (a server that refuses keeps its queue short, so its work in
    flight alone would make it look fast).
-3. A server is *hot* when the others' work in flight per worker (the median over its last
-   answers) is above the 2^-0.25 quantile of the candidates' (Prequal's rule, on work
+3. A server is *hot* when the others' work in flight per worker (the median over its
+   answers of the window) is above the 2^-0.25 quantile of the candidates' (Prequal's rule, on work
    rather than on requests: servers of unequal speed carry unequal numbers of requests);
    the robot's own server only when it is above by more than one task's work (whether an
    answer caught another robot's task in service or not is no reason to move).
@@ -39,11 +43,12 @@ Adapted from Prequal (NSDI '24) for robots: latency is the robot's own round tri
 server's expected wait and work (a robot's network differs per server; a web client's does
 not), requests in flight leave out the robot's own (a robot with one task out would see its
 own server one task hotter than the rest and leave it for nothing), requests count by
-their work (servers differ in speed), each server's last few answers stand for the pool
+their work (servers differ in speed), each server's answers of the window stand for the pool
 (a robot probes every server several times a second), and the choice is kept while
 nothing beats it (a move is a new connection and a cold start at the server: per-request
 choice suits a web client with many requests in flight, not a robot with one). No
-parameter: the quantile, the 3 errors and the 5 answers are the rule's.
+parameter of its own: the quantile and the 3 errors are the rule's; the window is the
+robot's ``~window``.
 """
 
 import collections
@@ -52,7 +57,8 @@ import statistics
 
 from server_select.core.balancers import Balancer, quantile
 
-RTTS = 5                 # probe answers per server the estimates are the medians of
+MIN_ANSWERS = 3          # answers per server kept however old (a rarely probed server)
+KEEP = 64                # answers and task round trips kept per server at most
 HOT_QUANTILE = 2 ** -0.25
 Z = 3.0                  # standard errors a challenger must win by
 MAX_AGE = 3.0            # s: an older probe answer does not count (the probes stopped)
@@ -62,15 +68,24 @@ RATE_HORIZON = 5.0       # s of the robot's own tasks its rate is counted over
 Answer = collections.namedtuple('Answer', 'rtt others utilization')
 
 
+def _mean_error(values):
+    """``(mean, its standard error)`` of ``values`` (error 0.0 for one value)."""
+    error = statistics.stdev(values) / math.sqrt(len(values)) if len(values) > 1 else 0.0
+    return statistics.mean(values), error
+
+
 class HotCold(Balancer):
     """The ``hot_cold`` rule (the module docstring says what it does)."""
     name = 'hot_cold'
 
-    def __init__(self, **kwargs):
+    def __init__(self, window=1.5, **kwargs):
         Balancer.__init__(self, **kwargs)
-        # server -> its last answers: round trip, the others' requests in flight and
-        # their share of the workers' time
-        self.answers = collections.defaultdict(lambda: collections.deque(maxlen=RTTS))
+        self.window = float(window)
+        # server -> (time, Answer) of its answers: round trip, the others' requests in
+        # flight, their share of the workers' time; and (time, round trip) of the tasks
+        # it answered (or failed) for this robot
+        self.answers = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
+        self.tasks = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
         self.current = None
         self.why = 'no task yet'
         self.sends = collections.defaultdict(collections.deque)   # kind -> its task times
@@ -80,7 +95,17 @@ class HotCold(Balancer):
 
     def _probed(self, answer):
         others = max(0, answer.rif - self.out[answer.server])
-        self.answers[answer.server].append(Answer(answer.rtt, others, answer.utilization))
+        self.answers[answer.server].append(
+            (answer.at, Answer(answer.rtt, others, answer.utilization)))
+
+    def _ended(self, server, rtt, now):
+        self.tasks[server].append((now, rtt))
+
+    def _recent(self, entries, now, keep=0):
+        """The values of ``entries`` ((time, value), oldest first) of the last window,
+        and at least the newest ``keep``."""
+        values = [v for t, v in entries if now - t <= self.window]
+        return values if len(values) >= keep else [v for _, v in list(entries)[-keep:]]
 
     def _work(self, answer, kind, fresh):
         if kind in answer.service:
@@ -96,12 +121,15 @@ class HotCold(Balancer):
         span = now - times[0] if len(times) > 1 else 0.0
         return (len(times) - 1) / span if span > 0 else 0.0
 
-    def estimate(self, newest, kind, fresh, rate=0.0, joining=False):
+    def estimate(self, newest, kind, fresh, rate=0.0, joining=False, now=None):
         """``(latency, its standard error, work in flight per worker, a task's work per
         worker)`` of a ``kind`` task at ``newest``'s server (its newest answer), from
-        each of the server's last answers: round trip + the others' work in flight there
-        per worker (what a task sent then would wait for) + the work; the mean of those
-        and its standard error, and the median of the work in flight. ``joining``: a
+        each of the server's answers of the last window (at least :data:`MIN_ANSWERS`):
+        round trip + the others' work in flight there per worker (what a task sent then
+        would wait for) + the work, and from the round trips of the robot's tasks it
+        answered in the window (what tasks really take there: a task connection that
+        backs off after an outage, a queue the probes miss); the mean of those and its
+        standard error, and the median of the work in flight. ``joining``: a
         server the robot is not on is judged with one more robot like it arriving too
         (the robot's ``rate`` x the work, what such a robot keeps in flight): robots that
         read the same reports move together, and a move must pay even then."""
@@ -109,17 +137,21 @@ class HotCold(Balancer):
         workers = float(newest.workers)
         mine = rate * work / workers
         extra = mine * work if joining else 0.0
+        now = newest.at if now is None else now
         latencies, heat = [], []
-        for a in self.answers[newest.server] or [Answer(newest.rtt, 0, newest.utilization)]:
+        answers = self._recent(self.answers[newest.server], now, MIN_ANSWERS)
+        for a in answers or [Answer(newest.rtt, 0, newest.utilization)]:
             queued = a.others * work / workers
             # asked for more than it can do, a server does 1/u of it: a task gets through
             # in u tries (busy answers, re-sends), in expectation
             tries = max(1.0, a.utilization + mine * (2 if joining else 1))
             latencies.append((a.rtt + queued + extra + work) * tries)
             heat.append(queued)
-        error = statistics.stdev(latencies) / math.sqrt(len(latencies)) \
-            if len(latencies) > 1 else 0.0
-        return (statistics.mean(latencies), error, statistics.median(heat), work / workers)
+        latency = _mean_error(latencies)
+        tasks = self._recent(self.tasks[newest.server], now)
+        if len(tasks) >= 2:      # what tasks took, where it says more than the probes
+            latency = max(latency, _mean_error(tasks))
+        return latency + (statistics.median(heat), work / workers)
 
     def _order(self, servers, kind, now):
         self.sends[kind].append(now)
@@ -130,7 +162,7 @@ class HotCold(Balancer):
                 self._move(self.rng.choice(servers), 'unknown', 'no answer yet: at random')
             return [self.current] + [s for s in servers if s != self.current]
         rate = self.rate(kind, now)
-        estimates = dict((s, self.estimate(a, kind, fresh, rate, s != self.current))
+        estimates = dict((s, self.estimate(a, kind, fresh, rate, s != self.current, now))
                          for s, a in fresh.items())
         latency = dict((s, e[0]) for s, e in estimates.items())
         self.errors = dict((s, e[1]) for s, e in estimates.items())

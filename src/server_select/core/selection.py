@@ -47,7 +47,9 @@ class Selection(object):
             else self.window
         self._chooser = Chooser(policy)
         # a peer's rule, asked per task (None: the ranking decides)
-        self.balancer = balancers.make(policy.kind, clock=clock) if policy.per_task else None
+        self.balancer = balancers.make(
+            policy.kind, clock=clock, **({'window': window} if policy.kind == 'hot_cold'
+                                         else {})) if policy.per_task else None
         self.on_change = None      # on_change(): a sample may have changed view()
         self._clock = clock
         self._lock = threading.Lock()
