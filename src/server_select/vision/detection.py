@@ -4,7 +4,6 @@ import collections
 import os
 import threading
 
-import cv2
 import numpy as np
 
 from server_select.core.settings import default
@@ -23,6 +22,7 @@ class DetectorError(ValueError):
 def cascade_dir():
     """The folder of OpenCV's Haar cascades: ``cv2.data.haarcascades`` (pip wheels) or
     Debian's opencv-data folder; DetectorError when neither exists."""
+    import cv2    # lazy: no OpenCV in a node that needs none
     data = getattr(cv2, 'data', None)
     for folder in (getattr(data, 'haarcascades', None), DEBIAN_CASCADES):
         if folder and os.path.isdir(folder):
@@ -54,6 +54,7 @@ class Detector(object):
     def __init__(self, kind=default('detector'), cascade=default('cascade'),
                  scale_factor=default('scale_factor'), min_neighbors=default('min_neighbors'),
                  min_size=default('min_size'), label=None):
+        import cv2    # lazy: no OpenCV in a node that needs none
         self.kind = kind
         self.scale_factor = float(scale_factor)
         self.min_neighbors = int(min_neighbors)
@@ -85,6 +86,7 @@ class Detector(object):
             return self._detect(frame)
 
     def _detect(self, frame):
+        import cv2    # lazy: no OpenCV in a node that needs none
         if self.kind == 'haar':
             boxes, _, weights = self.classifier.detectMultiScale3(
                 to_gray(frame), scaleFactor=self.scale_factor, minNeighbors=self.min_neighbors,
@@ -100,6 +102,7 @@ class Detector(object):
 
 def annotate(frame, boxes):
     """A BGR copy of ``frame`` with the boxes drawn and labelled."""
+    import cv2    # lazy: no OpenCV in a node that needs none
     image = frame.copy() if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
     for b in boxes:
         cv2.rectangle(image, (b.x, b.y), (b.x + b.width, b.y + b.height), (0, 255, 0), 2)

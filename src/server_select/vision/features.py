@@ -1,6 +1,5 @@
 """ORB keypoints and descriptors of a frame (no rospy): a SLAM front end's first step."""
 
-import cv2
 import numpy as np
 
 from server_select.vision.image_codec import to_gray
@@ -9,6 +8,7 @@ from server_select.vision.image_codec import to_gray
 def orb_features(frame, max_features=500):
     """``(points, descriptors)``: an (N, 2) float32 array of keypoint positions and an
     (N, 32) uint8 array of their binary descriptors, N <= ``max_features``."""
+    import cv2    # lazy: no OpenCV in a node that needs none
     orb = cv2.ORB_create(nfeatures=max(1, int(max_features)))
     keypoints, descriptors = orb.detectAndCompute(to_gray(frame), None)
     if descriptors is None or not keypoints:

@@ -3,7 +3,6 @@ or a robot moving over a synthetic search area."""
 
 import os
 
-import cv2
 
 from server_select.vision.search import PathFollower, SearchWorld, lawnmower
 
@@ -25,6 +24,7 @@ class FolderSource(object):
         self.index = 0
 
     def frame(self, _t):
+        import cv2    # lazy: no OpenCV in a node that needs none
         for _ in range(len(self.paths)):
             path = self.paths[self.index % len(self.paths)]
             self.index += 1
@@ -38,12 +38,14 @@ class VideoSource(object):
     """The frames of a video file, looping."""
 
     def __init__(self, path):
+        import cv2    # lazy: no OpenCV in a node that needs none
         self.path = path
         self.capture = cv2.VideoCapture(path)
         if not self.capture.isOpened():
             raise SourceError('cannot open video %s' % path)
 
     def frame(self, _t):
+        import cv2    # lazy: no OpenCV in a node that needs none
         ok, image = self.capture.read()
         if not ok:
             self.capture.release()

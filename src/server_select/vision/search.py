@@ -7,7 +7,6 @@ import math
 import os
 import threading
 
-import cv2
 import numpy as np
 import yaml
 
@@ -24,6 +23,7 @@ def sample_image(name):
 
     Located without importing scikit-image; nothing is downloaded.
     """
+    import cv2    # lazy: no OpenCV in a node that needs none
     spec = importlib.util.find_spec('skimage')
     if spec is None or not spec.submodule_search_locations:
         raise SearchError('scikit-image is not installed: its wheel ships the sample photos')
@@ -42,6 +42,7 @@ class SearchWorld(object):
     """
 
     def __init__(self, width, height, targets, seed=0, frame_width=640, frame_height=480):
+        import cv2    # lazy: no OpenCV in a node that needs none
         self.width, self.height = int(width), int(height)
         self.frame_width, self.frame_height = int(frame_width), int(frame_height)
         rng = np.random.default_rng(seed)
