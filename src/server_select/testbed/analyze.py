@@ -47,7 +47,8 @@ def main(argv=None):
     if args.out:
         bag_analysis.write_report(runs, summaries, args.out, 'Analysis of %d bag(s)' % len(runs),
                                   'Bags: %s.' % ', '.join('`%s`' % b for b in args.bags))
-    print('%s\n\n%s' % (bag_analysis.table(summaries), bag_analysis.legend(summaries)))
+    first = 'mode' if all(run.meta.get('mode') for run in runs.values()) else 'run'
+    print('%s\n\n%s' % (bag_analysis.table(summaries, first), bag_analysis.legend(summaries)))
     if args.out:
         print('report: %s (plots beside it)' % os.path.join(args.out, 'report.md'))
     return 0

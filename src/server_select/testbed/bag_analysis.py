@@ -157,9 +157,10 @@ def _applies(summaries):
             'reaction': any(s.get('reactions') for s in rows)}
 
 
-def table(summaries):
-    """Markdown table of :func:`mode_summary` results, one row per mode; the columns that
-    apply to no row are left out (:func:`legend` says which and why)."""
+def table(summaries, first='mode'):
+    """Markdown table of :func:`mode_summary` results, one row per mode (or bag: the
+    first column's heading is ``first``); the columns that apply to no row are left out
+    (:func:`legend` says which and why)."""
     applies = _applies(summaries)
     rows = []
     for mode, s in summaries.items():
@@ -173,7 +174,7 @@ def table(summaries):
                     + [fmt(s.get('vs_fixed_pct'), '%+.1f %%')] * applies['vs fixed']
                     + [fmt(s.get('gap_to_oracle_pct'), '%+.1f %%')] * applies['gap to oracle']
                     + [s['switches']] + [reaction] * applies['reaction'])
-    header = ['mode', 'tasks', 'failed', 'mean ms', 'median ms', 'p95 ms', 'p99 ms', 'max ms'] \
+    header = [first, 'tasks', 'failed', 'mean ms', 'median ms', 'p95 ms', 'p99 ms', 'max ms'] \
         + ['vs fixed'] * applies['vs fixed'] + ['gap to oracle'] * applies['gap to oracle'] \
         + ['switches'] + ['reaction mean / max s (missed)'] * applies['reaction']
     return markdown_table(header, rows)
