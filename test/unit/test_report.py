@@ -1,6 +1,6 @@
 import pytest
 
-from server_select.core.report import RunReport
+from server_select.core.report import RunReport, switch_count
 from server_select.core.stats import format_ms, summarize
 
 
@@ -17,8 +17,8 @@ def test_run_report_counts_switches_and_tasks():
     r.add_flag(1, 2, [2, 1], [0.001, 0.002])
     r.add_flag(1, 2, [2, 1], [0.001, 0.002])
     r.add_flag(1, 1, [1, 2], [0.001, 0.002])
-    r.add_task(1, True, 0.004, 2, '')
-    r.add_task(1, False, float('nan'), -1, 'timeout')
+    r.add_task(1, True, 0.004, 2, '', 1, 2)
+    r.add_task(1, False, float('nan'), -1, 'timeout', 2, 1)     # sent to 1: a switch
     r.add_probe(1, 1, True, 0.0005)
     r.add_probe(1, 2, False, 0.0)
     (s,) = r.summaries()
@@ -54,3 +54,8 @@ def test_the_legend_says_what_every_column_of_the_table_means():
                                         line.split(':')[0] for line in legend.splitlines()), \
             column
     assert 'counts at the task timeout' in legend
+
+
+def test_one_count_of_switches_from_where_tasks_went():
+    assert switch_count([1, 1, 2, -1, 2, -2, 3, 1]) == 3     # no server, local: left out
+    assert switch_count([]) == 0

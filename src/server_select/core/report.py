@@ -8,24 +8,33 @@ from server_select.core.stats import summarize
 from server_select.core.tables import markdown_table
 
 
+def switch_count(servers):
+    """Changes in ``servers``, the servers a robot sent its tasks to in task order (no
+    server, or its own CPU, left out): the one count of switches of the demo's table, the
+    bag analysis and the league."""
+    servers = [s for s in servers if s is not None and s >= 0]
+    return sum(1 for a, b in zip(servers, servers[1:]) if a != b)
+
+
 class RunReport(object):
     """Accumulates what a run's topics say about each robot."""
 
     def __init__(self, timeout=default('task_timeout')):
         self.timeout = timeout   # a failed task's round trip in the statistics
         self.flags = {}
-        self.switches = collections.Counter()
+        self.sent_to = collections.defaultdict(dict)   # robot -> {task id: server sent to}
         self.tasks = collections.defaultdict(list)
         self.probes = collections.defaultdict(list)
 
     def add_flag(self, robot_id, server_id, ranking, means):
-        previous = self.flags.get(robot_id)
-        if previous is not None and previous[0] != server_id:
-            self.switches[robot_id] += 1
         self.flags[robot_id] = (server_id, list(ranking), list(means))
 
-    def add_task(self, robot_id, ok, rtt, server_id, error):
+    def add_task(self, robot_id, ok, rtt, server_id, error, task_id=None, sent_to=None):
+        """A task report: answered by ``server_id``; ``sent_to`` the server it was first
+        sent to (its ``task_id`` orders them), which switches are counted from."""
         self.tasks[robot_id].append((ok, rtt, server_id, error))
+        if task_id is not None and sent_to is not None:
+            self.sent_to[robot_id][task_id] = sent_to
 
     def add_probe(self, robot_id, server_id, ok, rtt):
         self.probes[robot_id].append((server_id, ok, rtt))
@@ -39,7 +48,7 @@ class RunReport(object):
             'selected': selected,
             'ranking': ranking,
             'mean_latency_ms': [m * 1e3 for m in means],
-            'switches': self.switches[robot_id],
+            'switches': switch_count([s for _, s in sorted(self.sent_to[robot_id].items())]),
             'tasks': len(tasks),
             'ok': sum(1 for t in tasks if t[0]),
             'failed': sum(1 for t in tasks if not t[0]),
@@ -96,10 +105,12 @@ class RunReport(object):
 
 
 LEGEND = (
-    ('selected', "the server the manager's last flag for the robot selects"),
+    ('selected', "the server the manager's last flag for the robot selects (a fleet robot's "
+     'own choice: it also weighs load and noise, so it may not be the ranking\'s first)'),
     ('ranking', "that flag's servers, best first, with the statistic it ranks them by "
      '(mean probe round trip over the window, ms)'),
-    ('switches', 'changes of the selected server during the run'),
+    ('switches', 'changes of the server a robot sent its tasks to (counted as analyze and '
+     'the league count them)'),
     ('tasks, ok, failed', "the robot's task reports; failed: no right answer within the task "
      'timeout'),
     ('task RTT', 'send to checked result, ms; a failed task counts at the task timeout'),

@@ -11,6 +11,7 @@ import os
 
 from server_select.testbed.scenario import Scenario
 from server_select.core.outcome import cut_off
+from server_select.core.report import switch_count
 from server_select.core.settings import default
 from server_select.core.stats import summarize
 from server_select.core.tables import fmt, markdown_table
@@ -68,11 +69,9 @@ def switches(reports):
     counts = collections.Counter()
     by_robot = collections.defaultdict(list)
     for r in reports:
-        if r.server >= 0:
-            by_robot[r.robot].append((r.task, r.server))
+        by_robot[r.robot].append((r.task, r.server))
     for robot, tasks in by_robot.items():
-        servers = [server for _, server in sorted(tasks)]
-        counts[robot] = sum(1 for a, b in zip(servers, servers[1:]) if a != b)
+        counts[robot] = switch_count([server for _, server in sorted(tasks)])
     return counts
 
 
