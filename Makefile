@@ -9,6 +9,8 @@ VENV := $(TOP)/.venv
 PY := $(VENV)/bin/python
 APT_PACKAGES := $(shell grep -v '^\#' $(TOP)/debian-packages.txt)
 DEMO_DURATION ?= 30
+# the loopback demo's summary, printed again once roslaunch's shutdown lines are done
+DEMO_MD := $(BUILD)/demo_summary.md
 # Runs a command with the workspace sourced and the venv's python first on PATH (the
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
@@ -78,16 +80,18 @@ demo: build
 	else \
 	  echo "demo: the testbed is not available here (see above): running the loopback demo"; \
 	  echo "demo: manager + 3 servers + 2 robots on this host for $(DEMO_DURATION) s"; \
-	  export ROS_MASTER_URI=http://localhost:$${DEMO_PORT:-11411} && \
+	  export ROS_MASTER_URI=http://localhost:$${DEMO_PORT:-11411} && rm -f $(DEMO_MD) && \
 	  roslaunch --port $${DEMO_PORT:-11411} server_select demo.launch \
 	    duration:=$(DEMO_DURATION) output:=log summary_file:=$(BUILD)/demo_summary.json; \
+	  status=$$?; [ ! -f $(DEMO_MD) ] || cat $(DEMO_MD); exit $$status; \
 	fi
 
 # The loopback demo even where the testbed is available.
 demo-loopback: build
-	@$(ROSENV) export ROS_MASTER_URI=http://localhost:$${DEMO_PORT:-11411} && \
+	@$(ROSENV) export ROS_MASTER_URI=http://localhost:$${DEMO_PORT:-11411} && rm -f $(DEMO_MD) && \
 	  roslaunch --port $${DEMO_PORT:-11411} server_select demo.launch \
-	    duration:=$(DEMO_DURATION) output:=log summary_file:=$(BUILD)/demo_summary.json
+	    duration:=$(DEMO_DURATION) output:=log summary_file:=$(BUILD)/demo_summary.json; \
+	  status=$$?; [ ! -f $(DEMO_MD) ] || cat $(DEMO_MD); exit $$status
 
 # Cooperative search: 2 robots, 2 servers, people hidden in a synthetic area; ends when all
 # are found and prints who found what and when.

@@ -1,6 +1,7 @@
 """Listens to a run for ``~duration`` seconds, then prints the per-robot summary."""
 
 import json
+import os
 
 import rospy
 
@@ -73,12 +74,15 @@ class ReportNode(object):
     def finish(self, _event=None):
         summaries = self.report.summaries()   # one moment for the table and the verdict
         table = self.report.table(summaries)
-        print('\nserver_select run summary (a failed task counts at the task timeout, %g s)\n\n'
-              % self.report.timeout + table + '\n\n' + self.report.legend() + '\n\nfound: '
-              + self.report.verdict(summaries) + '\n', flush=True)
+        text = ('\nserver_select run summary (a failed task counts at the task timeout, %g s)'
+                '\n\n' % self.report.timeout + table + '\n\n' + self.report.legend() +
+                '\n\nfound: ' + self.report.verdict(summaries) + '\n')
+        print(text, flush=True)
         if self.output:
             with open(self.output, 'w') as stream:
                 json.dump(summaries, stream, indent=2)
+            with open(os.path.splitext(self.output)[0] + '.md', 'w') as stream:
+                stream.write(text)      # (make demo prints it again after the shutdown lines)
             rospy.loginfo('report: summary written to %s', self.output)
         if not (self.end_launch and end_parent_launch()):
             rospy.signal_shutdown('report done')
