@@ -372,19 +372,3 @@ def test_hot_cold_robots_spread_to_a_new_server_without_a_herd():
         assert min(counts[20:]) >= 5, counts
         assert all(7 <= n <= 13 for n in counts[-10:]), counts
         assert sum(moves.values()) <= 25, moves
-
-
-def test_hot_cold_counts_what_its_tasks_take_beside_the_probes():
-    clock = Clock()
-    rule = hot_cold(clock)
-    feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.015, 0, 0.0)})
-    assert rule.order([1, 2], 'image')[0] == 1
-    for _ in range(5):      # probes of server 1 look fine, its tasks take 0.4 s more
-        rule.started(1)
-        rule.ended(1, 0.51)
-        feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.015, 0, 0.0)}, rounds=1)
-    assert rule.order([1, 2], 'image')[0] == 2
-    assert 'faster' in rule.why
-    clock.now += 5.0        # out of the window: the probes alone again, 1 is nearer
-    feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.015, 0, 0.0)})
-    assert rule.order([1, 2], 'image')[0] == 1

@@ -11,9 +11,10 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
    (their requests queued and in service x the work per task of the kind, per worker:
    what a task sent then would wait for) + the work (the median of what the servers
    report, where it has done none yet); the mean of those, its noise their standard
-   error. Where the round trips of the robot's own tasks there in the window say more
-   (a larger mean), they stand instead: they are what tasks really take (a task
-   connection that backs off after an outage, a queue the probes miss). Robots keep a
+   error. (The robot's own task round trips are not used: they carry the task's own
+   message cost, which the probes do not, so that the robot's own server always looked
+   slower than the others, and robots between near-equal servers moved ten times a
+   minute. A task that fails or times out still ejects its server.) Robots keep a
    task or two out each, so servers and robots make a closed system: a task waits for
    the work in flight ahead of it, whatever the utilization (an open queue's mean wait,
    M/D/c at the reported utilization, grows without bound at saturation and made servers
@@ -82,10 +83,8 @@ class HotCold(Balancer):
         Balancer.__init__(self, **kwargs)
         self.window = float(window)
         # server -> (time, Answer) of its answers: round trip, the others' requests in
-        # flight, their share of the workers' time; and (time, round trip) of the tasks
-        # it answered (or failed) for this robot
+        # flight, their share of the workers' time
         self.answers = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
-        self.tasks = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
         self.current = None
         self.why = 'no task yet'
         self.sends = collections.defaultdict(collections.deque)   # kind -> its task times
@@ -97,9 +96,6 @@ class HotCold(Balancer):
         others = max(0, answer.rif - self.out[answer.server])
         self.answers[answer.server].append(
             (answer.at, Answer(answer.rtt, others, answer.utilization)))
-
-    def _ended(self, server, rtt, now):
-        self.tasks[server].append((now, rtt))
 
     def _recent(self, entries, now, keep=0):
         """The values of ``entries`` ((time, value), oldest first) of the last window,
@@ -126,10 +122,8 @@ class HotCold(Balancer):
         worker)`` of a ``kind`` task at ``newest``'s server (its newest answer), from
         each of the server's answers of the last window (at least :data:`MIN_ANSWERS`):
         round trip + the others' work in flight there per worker (what a task sent then
-        would wait for) + the work, and from the round trips of the robot's tasks it
-        answered in the window (what tasks really take there: a task connection that
-        backs off after an outage, a queue the probes miss); the mean of those and its
-        standard error, and the median of the work in flight. ``joining``: a
+        would wait for) + the work; the mean of those and its standard error, and the
+        median of the work in flight. ``joining``: a
         server the robot is not on is judged with one more robot like it arriving too
         (the robot's ``rate`` x the work, what such a robot keeps in flight): robots that
         read the same reports move together, and a move must pay even then."""
@@ -147,11 +141,7 @@ class HotCold(Balancer):
             tries = max(1.0, a.utilization + mine * (2 if joining else 1))
             latencies.append((a.rtt + queued + extra + work) * tries)
             heat.append(queued)
-        latency = _mean_error(latencies)
-        tasks = self._recent(self.tasks[newest.server], now)
-        if len(tasks) >= 2:      # what tasks took, where it says more than the probes
-            latency = max(latency, _mean_error(tasks))
-        return latency + (statistics.median(heat), work / workers)
+        return _mean_error(latencies) + (statistics.median(heat), work / workers)
 
     def _order(self, servers, kind, now):
         self.sends[kind].append(now)
