@@ -180,9 +180,11 @@ def plot(results, path):
         ax.set_xticklabels(cases, rotation=20, fontsize=8)
         ax.set_title(title, fontsize=10)
     axes[0].axhline(1.0, color='k', lw=0.5)
-    handles, labels = axes[1].get_legend_handles_labels()
-    fig.legend(handles, labels, loc='lower center', ncol=len(labels), fontsize=8,
-               frameon=False)
+    handles, labels = max((ax.get_legend_handles_labels() for ax in axes),
+                          key=lambda hl: len(hl[1]))     # a part may be empty
+    if labels:
+        fig.legend(handles, labels, loc='lower center', ncol=len(labels), fontsize=8,
+                   frameon=False)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(path, dpi=90)
     plt.close(fig)
