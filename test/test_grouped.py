@@ -57,6 +57,24 @@ class GroupedTest(unittest.TestCase):
         self.assertTrue(wait_until(lambda: all(
             sum(1 for _, _, m in self.snapshot('reports') if m.robot_id == r) >= 20
             for r in ROBOTS), 60.0))
+
+        def settled():
+            """Every robot has probed all of its probe set, been flagged and had a task
+            answered since 2 s after the last table (robots that choose per task start
+            sending before that: wait for the state, not for a count of tasks)."""
+            groups, assigned, since = self.table
+            for robot in ROBOTS:
+                after = since + 2.0
+                probed = set().union(*([set(m.server_id) for t, _, m in
+                                        self.snapshot('batches')
+                                        if m.robot_id == robot and t > after] or [set()]))
+                if not probed >= set(probe_set(groups, assigned[robot])) or not any(
+                        m.robot_id == robot and t > after for t, _, m in self.snapshot('flags')) \
+                        or not any(m.robot_id == robot and m.ok and m.header.stamp.to_sec() > after
+                                   for _, _, m in self.snapshot('reports')):
+                    return False
+            return True
+        self.assertTrue(wait_until(settled, 30.0), 'table %s' % (self.table,))
         groups, assigned, since = self.table
         reports = [m for _, _, m in self.snapshot('reports')]
         self.assertEqual([(m.robot_id, m.task_id, m.error) for m in reports if not m.ok], [])
