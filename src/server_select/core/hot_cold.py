@@ -59,7 +59,7 @@ import statistics
 from server_select.core.balancers import Balancer, quantile
 
 MIN_ANSWERS = 3          # answers per server kept however old (a rarely probed server)
-KEEP = 64                # answers and task round trips kept per server at most
+KEEP = 64                # answers kept per server at most
 HOT_QUANTILE = 2 ** -0.25
 Z = 3.0                  # standard errors a challenger must win by
 MAX_AGE = 3.0            # s: an older probe answer does not count (the probes stopped)
