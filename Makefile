@@ -158,9 +158,11 @@ bench-master: build
 bench-fleet: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.fleet_nodes --out results/bench
 
-# Signed fleet messages: us to seal and check a flag, a batch, a result (no master).
+# Signed fleet messages: us to seal and check a flag, a batch, a result (no master); then
+# node CPU and RSS with and without a key, two fleets side by side, 3 runs (~6 min).
 bench-seal: build
-	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.seal_cost --out results/bench
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.seal_cost --out results/bench \
+	  && $(PY) -m server_select.bench.seal_fleet --out results/bench
 
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build

@@ -101,6 +101,22 @@ def test_the_seal_benchmark_runs_and_reports(tmp_path):
     assert '(seal + check) / serialize' in proc.stdout
 
 
+def test_the_fleet_key_benchmark_measures_both_fleets(tmp_path):
+    """`make bench-seal`'s second part, tiny: two fleets side by side, with a key and without."""
+    proc = subprocess.run([sys.executable, '-m', 'server_select.bench.seal_fleet', '--servers',
+                           '2', '--repeats', '1', '--warmup', '3', '--seconds', '4', '--out',
+                           str(tmp_path)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:]
+    run, = json.loads((tmp_path / 'seal_fleet.json').read_text())
+    for keyed in ('key', 'nokey'):
+        counts = dict((role, len(run[keyed][role])) for role in ('robot', 'manager', 'server'))
+        assert counts == {'robot': 1, 'manager': 1, 'server': 2}, (keyed, counts)
+        assert all(finite(u['cpu_percent']) and u['rss_mb'] > 10
+                   for used in run[keyed].values() for u in used), run
+    assert 'robot CPU with the key / without, per run' in proc.stdout
+
+
 def test_the_probe_cost_benchmark_counts_probes(tmp_path):
     """`make bench-probes` in a tiny configuration: the servers count the robot's probes."""
     proc = subprocess.run([sys.executable, '-m', 'server_select.bench.probe_cost',

@@ -20,7 +20,8 @@ import time
 import rosgraph
 import rospy
 
-from server_select.core import names, seal
+from server_select.core import names
+from server_select.core.keys import make_key
 from server_select.core.procs import wait_until
 from server_select.msg import LatencySample
 
@@ -102,7 +103,7 @@ def impostor_run(ros, **args):
 
 def test_with_a_fleet_key_no_impostor_answer_counts(ros, tmp_path):
     key = str(tmp_path / 'fleet.key')
-    seal.make_key(key)
+    make_key(key)
     counts = impostor_run(ros, fleet_key=key)
     assert counts["of them the impostor's"] == 0, counts
     assert counts['robot 1 good samples of servers 1, 2'] >= 10, counts

@@ -16,6 +16,7 @@ import time
 import rospy
 
 from server_select.core import names, seal
+from server_select.core.keys import make_key
 from server_select.core.procs import wait_until
 from server_select.msg import SelectionFlag
 
@@ -29,7 +30,7 @@ SECONDS = 6.0      # of the replays: twice the robots' manager timeout
 
 def test_flags_replayed_to_a_restarted_robot_count_for_nothing(ros, tmp_path):
     key = str(tmp_path / 'fleet.key')
-    seal.make_key(key)
+    make_key(key)
     rec, recorded, lock = ros['rec'], [], threading.Lock()
     rec.clear()
 

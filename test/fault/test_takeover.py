@@ -3,8 +3,9 @@ down) and publishes, unsigned, flags sending robot 1 to another server, 0.1 us s
 it, and wrong results for its tasks (test/fault/spoofer.py as ``manager``).
 
 With a fleet key (``fleet_key:=`` on every node): nothing it sends counts, the robots decide
-alone, and a real manager started again is followed. Without one: robot 1 follows it, as
-ROS 1 lets it (the name is the only check there is).
+alone, and a real manager started again is followed; so too when the impostor signs with a
+robot's role key (a compromised robot's: a robot's key cannot sign a flag). Without one:
+robot 1 follows it, as ROS 1 lets it (the name is the only check there is).
 """
 
 import json
@@ -13,7 +14,7 @@ import subprocess
 import sys
 import time
 
-from server_select.core import seal
+from server_select.core.keys import make_key, make_role_key
 from server_select.core.procs import wait_until
 
 from fleet import Fleet
@@ -27,8 +28,9 @@ SECONDS = 6.0      # of the impostor: twice the robots' manager timeout
 STEADY = dict(STABLE, policy='hysteresis')
 
 
-def takeover(ros, **args):
-    """Counts of one takeover in a fleet launched with ``args``."""
+def takeover(ros, robot_key=None, **args):
+    """Counts of one takeover in a fleet launched with ``args`` (the impostor signs with
+    ``robot_key``, a robot's role key file, when given)."""
     rec = ros['rec']
     rec.clear()
     with Fleet(ros['log'], **dict(STEADY, **args)) as fleet:
@@ -37,7 +39,8 @@ def takeover(ros, **args):
         forged = [s for s in (1, 2, 3) if s != ours][0]
         t_start = time.monotonic()
         out = subprocess.run([sys.executable, os.path.join(HERE, 'spoofer.py'), str(forged),
-                              str(SECONDS), 'manager'], stdout=subprocess.PIPE,
+                              str(SECONDS), 'manager'] + ([robot_key] if robot_key else []),
+                             stdout=subprocess.PIPE,
                              universal_newlines=True, timeout=60, check=True)
         sent = json.loads(out.stdout.strip().splitlines()[-1])
         t_end = time.monotonic()
@@ -58,10 +61,14 @@ def takeover(ros, **args):
         'failed': outcome['failed'], 'never answered': outcome['never answered'],
         "robot 1's warnings naming /manager":
             len(rec.log_lines('/robot1', 'published by /manager')),
+        "... saying a robot's key signed it":
+            len(rec.log_lines('/robot1', 'signed with the robot key')),
         'robot 1 decided alone': bool(rec.log_lines('/robot1', 'from its own probes')),
         'real manager followed again after s': '%.2f' % back if back is not None else '-'}
     show('a node took the manager\'s name for %g s (%s; robot 1 used server %d, the '
-         'impostor named %d):' % (SECONDS, 'fleet key' if args else 'no key', ours, forged),
+         'impostor named %d):' % (SECONDS, 'no key' if not args else 'fleet key; the '
+                                  'impostor signs with a robot\'s key' if robot_key else
+                                  'fleet key', ours, forged),
          [counts])
     assert min(sent['flags'], sent['samples']) > 50 and sent['results'] > 10, sent
     assert len(during) >= 20
@@ -70,13 +77,23 @@ def takeover(ros, **args):
 
 def test_with_a_fleet_key_the_impostor_steers_nothing(ros, tmp_path):
     key = str(tmp_path / 'fleet.key')
-    seal.make_key(key)
+    make_key(key)
     counts = takeover(ros, fleet_key=key)
     assert counts['answered by the server the impostor named'] == 0, counts
     assert (counts['failed'], counts['never answered']) == (0, 0), counts
     assert counts["robot 1's warnings naming /manager"] >= 1, counts
     assert counts['robot 1 decided alone'], counts
     assert counts['real manager followed again after s'] != '-', counts
+
+
+def test_a_robots_key_under_the_managers_name_steers_nothing(ros, tmp_path):
+    key, robot_key = str(tmp_path / 'fleet.key'), str(tmp_path / 'robot.key')
+    make_key(key)
+    make_role_key(key, 'robot', robot_key)
+    counts = takeover(ros, robot_key, fleet_key=key)
+    assert counts['answered by the server the impostor named'] == 0, counts
+    assert (counts['failed'], counts['never answered']) == (0, 0), counts
+    assert counts["... saying a robot's key signed it"] >= 1, counts
 
 
 def test_without_a_key_robot_1_follows_the_impostor(ros):

@@ -14,7 +14,7 @@ import yaml
 from std_msgs.msg import Empty
 
 from server_select.core.params import ParamError
-from server_select.core.seal import make_key
+from server_select.core.keys import make_key
 from server_select.nodes.manager import ManagerNode
 from server_select.nodes.robot import RobotNode
 from server_select.nodes.server import ServerNode
@@ -136,8 +136,34 @@ def test_with_a_key_a_plug_in_whose_result_cannot_carry_a_seal_is_refused(param_
     make_key(path)
     param_server.update(private_params(ROBOT_OK))
     param_server['~fleet_key'] = path
+    seal.announce('/robot1', 'robot')
     assert seal.enabled()
     assert NODES['robot']() is not None          # the built-in task types carry one
     with pytest.raises(ParamError, match="~fleet_key: the result of task type 'x' "
                        r'\(std_msgs/Empty\) has no seal field'):
         seal.require_sealable(Empty, "the result of task type 'x'")
+
+
+def test_a_node_given_another_roles_key_or_type_is_refused_by_name(param_server, tmp_path):
+    """A manager given a robot's key file ends at start naming the key it needs; a robot
+    (its role's file) cannot make a publisher of flags, nor a keyed node without a role."""
+    from server_select.core.keys import make_role_key
+    from server_select.msg import LatencySamples, SelectionFlag
+    fleet, robot = str(tmp_path / 'fleet.key'), str(tmp_path / 'robot.key')
+    make_key(fleet)
+    make_role_key(fleet, 'robot', robot)
+    param_server['~fleet_key'] = robot
+    with pytest.raises(ParamError, match='signs as robot, and this node publishes as manager: '
+                       'give it the manager key'):
+        seal.announce('/manager', 'manager')
+    seal._STATE.clear()
+    seal.announce('/robot1', 'robot')
+    assert seal.SealedPublisher('/samples', LatencySamples, queue_size=1) is not None
+    with pytest.raises(ParamError, match='signs as the robot role, and only the manager role '
+                       'may publish server_select/SelectionFlag'):
+        seal.SealedPublisher('/server_select_flag', SelectionFlag, queue_size=1)
+    seal._STATE.clear()
+    seal.announce('/top', None)                  # a viewer: checks, publishes nothing sealed
+    assert seal.enabled()
+    with pytest.raises(ParamError, match='signs as no role'):
+        seal.SealedPublisher('/samples', LatencySamples, queue_size=1)

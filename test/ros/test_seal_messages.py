@@ -9,12 +9,13 @@ from rospy.numpy_msg import numpy_msg
 
 import server_select.msg
 from server_select.bench.seal_cost import messages
-from server_select.core.seal import Sealer, Verifier
+from server_select.core.seal import Keys, Sealer, Verifier, publisher_role
 from server_select.msg import (FleetServers, GroupAssignments, LatencySample, OrbResult,
                                SelectionFlag, ServerAnnouncement, ServerGroup, SortResult)
 from server_select.ros.seal import check, sealed
 
-KEY = b'k' * 32
+SECRET = b'k' * 32
+KEY = Keys.from_fleet(SECRET, 'server')          # what a server signs with
 TOPIC = '/robot_1/processed_data'
 
 
@@ -41,8 +42,9 @@ def every_message():
 @pytest.mark.parametrize('msg', every_message(), ids=lambda m: m._type)
 def test_a_message_sealed_by_one_node_is_admitted_by_another_after_the_wire(msg):
     verifier = Verifier([KEY])
-    sent = sealed(msg, Sealer(KEY, '/manager'), TOPIC)
-    assert len(sent.seal.mac) == 32
+    sent = sealed(msg, Sealer(Keys.from_fleet(SECRET, publisher_role(msg._type)), '/manager'),
+                  TOPIC)
+    assert len(sent.seal.mac) == 64
     if getattr(msg.__class__, '_has_header', False):
         sent.header.seq = 41            # as rospy's publisher numbers it, after the seal
     plain = getattr(server_select.msg, msg._type.split('/')[1])   # not the numpy view
@@ -59,8 +61,8 @@ def test_a_message_sealed_by_one_node_is_admitted_by_another_after_the_wire(msg)
 
 def test_a_changed_field_or_an_unsigned_message_is_refused():
     verifier = Verifier([KEY])
-    flag = sealed(SelectionFlag(robot_id=1, server_id=2, ranking=[2, 1]), Sealer(KEY, '/m'),
-                  TOPIC)
+    flag = sealed(SelectionFlag(robot_id=1, server_id=2, ranking=[2, 1]),
+                  Sealer(Keys.from_fleet(SECRET, 'manager'), '/m'), TOPIC)
     changed = wire(flag, SelectionFlag)
     changed.server_id = 1
     assert check(changed, '/m', verifier).startswith('wrong signature')

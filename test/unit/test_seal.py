@@ -6,9 +6,10 @@ import stat
 import pytest
 from hypothesis import given, strategies as st
 
-from server_select.core import seal
+from server_select.core import keys as key_files, seal
 
-KEY, NEXT, OTHER = b'k' * 32, b'n' * 32, b'o' * 32
+KEY, NEXT, OTHER = (seal.Keys.from_fleet(secret, 'manager')
+                    for secret in (b'k' * 32, b'n' * 32, b'o' * 32))
 
 
 class Clock(object):
@@ -128,24 +129,24 @@ def test_rotation_accepts_the_next_key_and_the_current_one():
 
 def test_make_key_writes_a_private_key_that_loads_and_keeps_an_existing_file(tmp_path):
     path = str(tmp_path / 'fleet.key')
-    seal.make_key(path)
+    key_files.make_key(path)
     assert stat.S_IMODE(os.stat(path).st_mode) == 0o600
-    key = seal.load_key(path)
-    assert len(key) == seal.KEY_BYTES
+    key = key_files.load_key(path)
+    assert len(key) == key_files.KEY_BYTES
     with pytest.raises(FileExistsError):
-        seal.make_key(path)
-    assert seal.load_key(path) == key
-    assert seal.make_key_cli([str(tmp_path / 'second.key')]) == 0
-    assert seal.load_key(str(tmp_path / 'second.key')) != key
+        key_files.make_key(path)
+    assert key_files.load_key(path) == key
+    assert key_files.make_key_cli([str(tmp_path / 'second.key')]) == 0
+    assert key_files.load_key(str(tmp_path / 'second.key')) != key
 
 
 @pytest.mark.parametrize('mode', [0o640, 0o604, 0o620, 0o666])
 def test_a_key_others_can_read_or_write_is_refused_with_what_to_do(tmp_path, mode):
     path = str(tmp_path / 'fleet.key')
-    seal.make_key(path)
+    key_files.make_key(path)
     os.chmod(path, mode)
-    with pytest.raises(seal.KeyFileError, match='chmod 600 %s' % path):
-        seal.load_key(path)
+    with pytest.raises(key_files.KeyFileError, match='chmod 600 %s' % path):
+        key_files.load_key(path)
 
 
 @pytest.mark.parametrize('text, message', [('zz' * 32, 'not hex'), ('ab' * 8 + 'a', 'not hex'),
@@ -154,7 +155,66 @@ def test_a_key_that_is_not_one_is_refused(tmp_path, text, message):
     path = tmp_path / 'fleet.key'
     path.write_text(text)
     os.chmod(str(path), 0o600)
-    with pytest.raises(seal.KeyFileError, match=message):
-        seal.load_key(str(path))
-    with pytest.raises(seal.KeyFileError, match='cannot read'):
-        seal.load_key(str(tmp_path / 'missing.key'))
+    with pytest.raises(key_files.KeyFileError, match=message):
+        key_files.load_key(str(path))
+    with pytest.raises(key_files.KeyFileError, match='cannot read'):
+        key_files.load_key(str(tmp_path / 'missing.key'))
+
+
+def test_each_role_signs_only_what_the_table_gives_it():
+    clock = Clock()
+    verifier = seal.Verifier([KEY], clock=clock)
+    for role in seal.ROLES:
+        sealer = seal.Sealer(seal.Keys.from_fleet(b'k' * 32, role), '/node', clock)
+        seq = sealer.next_seq()
+        mac = sealer.mac(seq, b'flag')
+        why = verifier.refusal('/node', seq, mac, b'flag', role='manager')
+        if role == 'manager':
+            assert why is None
+        else:
+            assert why == 'signed with the %s key: only the manager role may publish it' % role
+    assert seal.publisher_role('server_select/SelectionFlag') == 'manager'
+    assert seal.publisher_role('server_select/RobotRanking') == 'manager'
+    assert seal.publisher_role('server_select/LatencyProbeResponse') == 'server'
+    assert seal.publisher_role('server_select/LatencySamples') == 'robot'
+    assert seal.publisher_role('wordcount/WordCountResult') == 'server'    # a kind's result
+
+
+def test_a_role_key_file_signs_as_its_role_only_and_checks_every_role(tmp_path):
+    fleet = str(tmp_path / 'fleet.key')
+    key_files.make_key(fleet)
+    robot, observer = str(tmp_path / 'robot.key'), str(tmp_path / 'observer.key')
+    assert key_files.make_key_cli(['--role', 'robot', '--fleet', fleet, robot]) == 0
+    assert key_files.make_key_cli(['--role', 'observer', '--fleet', fleet, observer]) == 0
+    assert stat.S_IMODE(os.stat(robot).st_mode) == 0o600
+    derived = key_files.load_keys(fleet, 'manager')      # the fleet key holds every role
+    keys = key_files.load_keys(robot, 'robot')
+    assert keys.role == 'robot' and keys.private is not None
+    clock = Clock()
+    verifier = seal.Verifier([derived], clock=clock)
+    sealer = seal.Sealer(keys, '/robot1', clock)
+    seq = sealer.next_seq()
+    assert verifier.refusal('/robot1', seq, sealer.mac(seq, b's'), b's', role='robot') is None
+    # the robot's file checks what the manager signs, and cannot make it
+    manager = seal.Sealer(derived, '/manager', clock)
+    seq = manager.next_seq()
+    assert seal.Verifier([keys], clock=clock).refusal(
+        '/manager', seq, manager.mac(seq, b'f'), b'f', role='manager') is None
+    with pytest.raises(key_files.KeyFileError, match='make_key --role manager'):
+        key_files.load_keys(robot, 'manager')
+    with pytest.raises(key_files.KeyFileError, match='signs as nobody'):
+        key_files.load_keys(observer, 'server')
+    watcher = key_files.load_keys(observer)
+    assert watcher.private is None and watcher.role is None
+    with pytest.raises(ValueError):
+        seal.Sealer(watcher, '/top')
+
+
+def test_a_file_that_is_no_key_is_refused_by_name(tmp_path):
+    path = tmp_path / 'junk.key'
+    path.write_text('role robot\nsign zz\n')
+    os.chmod(str(path), 0o600)
+    with pytest.raises(key_files.KeyFileError, match='neither a fleet key nor a role key'):
+        key_files.load_keys(str(path), 'robot')
+    with pytest.raises(SystemExit, match='1'):
+        key_files.make_key_cli(['--role', 'robot', '--fleet', str(path), str(tmp_path / 'o')])

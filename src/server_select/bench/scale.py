@@ -33,7 +33,7 @@ from server_select.bench import cli
 from server_select.bench.harness import PY, Roscore, node_pid
 from server_select.bench.scale_sim import group_table
 from server_select.core.procs import measure, stop_groups, wait_until
-from server_select.core.seal import make_key
+from server_select.core.keys import make_key
 from server_select.core.settings import default
 from server_select.core.stats import summarize
 from server_select.core.tables import fmt, markdown_table

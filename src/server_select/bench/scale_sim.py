@@ -36,7 +36,7 @@ import rospy
 
 from server_select.core import names
 from server_select.core.groups import probe_set
-from server_select.core.seal import Sealer, load_key
+from server_select.core.seal import Sealer, load_keys
 from server_select.msg import (GroupAssignments, LatencySample, LatencySamples, RobotRanking,
                                SelectionFlag)
 from server_select.ros.seal import sealed
@@ -246,7 +246,8 @@ def main(argv=None):
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
-    sealer = Sealer(load_key(args.fleet_key), rospy.get_name()) if args.fleet_key else None
+    sealer = Sealer(load_keys(args.fleet_key, 'robot'), rospy.get_name()) \
+        if args.fleet_key else None
     sim = SimulatedRobots(list(range(args.first, args.first + args.count)), args.servers,
                           args.layout, args.change_every, args.groups, sealer,
                           args.flag_stream)

@@ -19,7 +19,8 @@ import numpy as np
 from rospy.numpy_msg import numpy_msg
 
 from server_select.bench import cli
-from server_select.core.seal import KEY_BYTES, Sealer, Verifier
+from server_select.core.keys import KEY_BYTES, Keys
+from server_select.core.seal import Sealer, Verifier, publisher_role
 from server_select.core.tables import markdown_table
 from server_select.msg import ImageResult, LatencySamples, SelectionFlag, SortResult
 from server_select.ros.seal import check, sealed
@@ -68,9 +69,9 @@ TOPIC = '/bench_topic'     # what a seal binds a message to (any name measures t
 
 def measure(make, count):
     """us per plain serialization, per seal, per check (one run)."""
-    sealer = Sealer(b'k' * KEY_BYTES, '/manager')
-    verifier = Verifier([b'k' * KEY_BYTES], max_age=3600.0)
     msg = make()
+    keys = Keys.from_fleet(b'k' * KEY_BYTES, publisher_role(msg._type))
+    sealer, verifier = Sealer(keys, '/manager'), Verifier([keys], max_age=3600.0)
     plain = per_message_us(lambda: msg.serialize(io.BytesIO()), count)
     seal_us = per_message_us(lambda: sealed(msg, sealer, TOPIC), count)
     copies = [sealed(make(), sealer, TOPIC) for _ in range(count)]   # each seen once

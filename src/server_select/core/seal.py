@@ -1,18 +1,31 @@
-"""Signed fleet messages: an HMAC-SHA256 seal over a message and its publisher's name (no
-rospy; the ROS side is :mod:`server_select.ros.seal`).
+"""Signed fleet messages: an Ed25519 signature of the publisher's role over a message, its
+publisher's name and where it travels (no rospy; the ROS side is
+:mod:`server_select.ros.seal`).
 
 In ROS 1 any process may register under any node name: a name check stops a careless node,
 not one that takes the manager's name. With a fleet key (one secret file per fleet) the
 fleet's advice and results carry a seal:
-``mac = HMAC(key, context, publisher name, seq, message)`` where ``context`` is the topic
-(or service) name and the message type, ``message`` is the serialized message with the MAC
-left empty, and ``seq`` is the publisher's clock in nanoseconds since the epoch, strictly
-increasing per publisher. A receiver with the key admits a message only when
+``mac = sign(role key, context, publisher name, seq, message)`` where ``context`` is the
+topic (or service) name and the message type, ``message`` is the serialized message with
+the MAC left empty, and ``seq`` is the publisher's clock in nanoseconds since the epoch,
+strictly increasing per publisher.
 
-- its MAC is right for one of the receiver's keys (the current one, or the next one while
-  keys are rotated), the name of the node that published it and the topic it came on: a
-  node without the key signs nothing, and a sealed message re-published under another
-  name, or on another topic, fails;
+**Roles.** Each role (:data:`ROLES`: the manager, servers, robots) signs with a key pair of
+its own, derived from the fleet key (HKDF-SHA256 with the role's name: every node given
+the fleet key derives the same), and :data:`PUBLISHERS` is the one table of which role may
+publish which message type. A node given only its role's key file (``make_key --role``)
+holds its role's private key and every role's public key: it checks everything, and signs
+only as its role, so a robot's key cannot sign a flag, nor a server's a ranking. (With
+signatures rather than a shared MAC key, what lets a node check a flag does not let it
+make one.) A role's holders are not told apart from each other: any robot can sign as any
+robot; the name check (the node a message must come from) remains.
+
+A receiver with the keys admits a message only when
+
+- its signature is right by a public key of a role that may publish its type (the current
+  keys, or the next ones while keys are rotated), for the name of the node that published
+  it and the topic it came on: a node without the key signs nothing, and a sealed message
+  re-published under another name, or on another topic, fails;
 - its ``seq`` is no older than ``max_age`` s by the receiver's clock (and no newer: clocks
   of the fleet's hosts agree within that), no older than the receiver's own start less
   :data:`START_SKEW` s, and has not been seen from that publisher before: a recorded
@@ -25,54 +38,29 @@ increasing per publisher. A receiver with the key admits a message only when
 What it does not do: hide anything (ROS 1 topics are plain TCP).
 """
 
-import argparse
-import hashlib
-import hmac
-import os
-import stat
 import struct
 import threading
 import time
 
-KEY_BYTES = 32            # what make_key writes
-MIN_KEY_BYTES = 16
-MAC_BYTES = hashlib.sha256().digest_size
+from server_select.core.keys import (  # noqa: F401 (the key files, for the ROS side)
+    OBSERVER, ROLES, KeyFileError, Keys, load_keys)
+
+SIGNATURE_BYTES = 64      # an Ed25519 signature
 START_SKEW = 2.0          # s: a message signed this much before its receiver started counts
 
-
-class KeyFileError(ValueError):
-    """A key file that cannot be used (named, with what to do)."""
-
-
-def make_key(path, random=os.urandom):
-    """Write a new key (``KEY_BYTES`` random bytes, hex) to ``path``, readable by its owner
-    only; refuses to overwrite a file."""
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-    with os.fdopen(fd, 'w') as stream:
-        stream.write(random(KEY_BYTES).hex() + '\n')
+# which role may sign which message type; any other sealed type is a task kind's result
+# (kinds are plug-ins): servers'
+PUBLISHERS = dict(('server_select/' + name, role) for role, names in (
+    ('manager', ('SelectionFlag', 'RobotRanking', 'FleetServers', 'GroupAssignments')),
+    ('server', ('ServerAnnouncement', 'LatencyProbeResponse', 'Detections')),
+    ('robot', ('LatencySample', 'LatencySamples', 'TaskReport', 'FoundTarget')))
+    for name in names)
+RESULTS = 'server'
 
 
-def load_key(path):
-    """The key in ``path`` (hex text, as :func:`make_key` writes it). Refused
-    (:class:`KeyFileError`) when missing, readable or writable by group or others, not hex, or
-    shorter than ``MIN_KEY_BYTES``."""
-    try:
-        mode = os.stat(path).st_mode
-        with open(path) as stream:
-            text = stream.read().strip()
-    except OSError as error:
-        raise KeyFileError('cannot read fleet key %s: %s' % (path, error.strerror))
-    if mode & (stat.S_IRWXG | stat.S_IRWXO):
-        raise KeyFileError('fleet key %s can be read or written by others (mode %03o): '
-                           'chmod 600 %s' % (path, stat.S_IMODE(mode), path))
-    try:
-        key = bytes.fromhex(text)
-    except ValueError:
-        raise KeyFileError('fleet key %s is not hex text (make one with make_key)' % path)
-    if len(key) < MIN_KEY_BYTES:
-        raise KeyFileError('fleet key %s has %d bytes, fewer than %d'
-                           % (path, len(key), MIN_KEY_BYTES))
-    return key
+def publisher_role(msg_type):
+    """The role that may sign messages of ``msg_type`` (``server_select/SelectionFlag``)."""
+    return PUBLISHERS.get(msg_type, RESULTS)
 
 
 def context(channel, msg_type):
@@ -81,18 +69,20 @@ def context(channel, msg_type):
     return ('%s\0%s' % (channel, msg_type)).encode('utf-8')
 
 
-def mac(key, sender, seq, payload, where=b''):
-    """The seal's MAC of ``payload`` (bytes) published by node ``sender`` with ``seq`` on
+def signed_bytes(sender, seq, payload, where=b''):
+    """What the signature covers: ``payload`` published by ``sender`` with ``seq`` on
     ``where`` (:func:`context`)."""
-    head = where + b'\0' + sender.encode('utf-8') + b'\0' + struct.pack('<Q', seq)
-    return hmac.new(key, head + payload, hashlib.sha256).digest()
+    return where + b'\0' + sender.encode('utf-8') + b'\0' + struct.pack('<Q', seq) + payload
 
 
 class Sealer(object):
-    """The sending side: sequence numbers and MACs for one node (thread-safe)."""
+    """The sending side: sequence numbers and signatures for one node (thread-safe), with
+    ``keys`` (:class:`Keys` holding the private key of the node's role)."""
 
-    def __init__(self, key, sender, clock=time.time_ns):
-        self.key, self.sender, self._clock = key, sender, clock
+    def __init__(self, keys, sender, clock=time.time_ns):
+        if keys.private is None:
+            raise ValueError('a sealer needs a role to sign as')
+        self.keys, self.sender, self._clock = keys, sender, clock
         self._lock = threading.Lock()
         self._last = 0
 
@@ -103,34 +93,59 @@ class Sealer(object):
             return self._last
 
     def mac(self, seq, payload, where=b''):
-        return mac(self.key, self.sender, seq, payload, where)
+        return self.keys.private.sign(signed_bytes(self.sender, seq, payload, where))
+
+
+def _verifies(public, signature, data):
+    from cryptography.exceptions import InvalidSignature
+    try:
+        public.verify(signature, data)
+        return True
+    except InvalidSignature:
+        return False
 
 
 class Verifier(object):
     """The receiving side: whether a sealed message counts (thread-safe).
 
-    ``keys``: the keys a MAC may be made with (the current one, and the next one while
-    keys are rotated). ``max_age``: s a message may be older (or newer) than this host's
-    clock. Sequence numbers seen in the last ``max_age`` s are remembered per publisher;
-    what was signed more than :data:`START_SKEW` s before this verifier was made (its
-    node started) is refused.
+    ``keyrings``: the :class:`Keys` a signature may be made with (the current ones, and the
+    next ones while keys are rotated). ``max_age``: s a message may be older (or newer) than
+    this host's clock. Sequence numbers seen in the last ``max_age`` s are remembered per
+    publisher; what was signed more than :data:`START_SKEW` s before this verifier was made
+    (its node started) is refused.
     """
 
-    def __init__(self, keys, max_age=30.0, clock=time.time_ns):
-        if not keys:
+    def __init__(self, keyrings, max_age=30.0, clock=time.time_ns):
+        if not keyrings:
             raise ValueError('a verifier needs a key')
-        self.keys, self.max_age_ns, self._clock = list(keys), int(max_age * 1e9), clock
+        self.keyrings, self.max_age_ns, self._clock = list(keyrings), int(max_age * 1e9), clock
         self.started_ns = clock()
         self._lock = threading.Lock()
         self._seen = {}           # publisher -> {seq: True}, oldest first
 
-    def refusal(self, sender, seq, mac_, payload, where=b''):
-        """None when the message counts (and its ``seq`` is now seen), else why not."""
+    def _signer(self, mac_, data, role):
+        """Whether ``role`` signed ``data``; else the role that did, or None."""
+        mac_ = bytes(mac_)
+        if len(mac_) != SIGNATURE_BYTES:
+            return None
+        if any(_verifies(k.public[role], mac_, data) for k in self.keyrings):
+            return role
+        return next((r for r in ROLES if r != role and
+                     any(_verifies(k.public[r], mac_, data) for k in self.keyrings)), None)
+
+    def refusal(self, sender, seq, mac_, payload, where=b'', role='manager'):
+        """None when the message counts (and its ``seq`` is now seen), else why not;
+        ``role``: who may sign it (:func:`publisher_role` of its type)."""
         if not mac_:
             return 'not signed'
-        if not any(hmac.compare_digest(mac(k, sender, seq, payload, where), bytes(mac_))
-                   for k in self.keys):
+        signer = self._signer(mac_, signed_bytes(sender, seq, payload, where), role)
+        if signer is None:
             return 'wrong signature (another key, node, topic or type)'
+        if signer != role:
+            return 'signed with the %s key: only the %s role may publish it' % (signer, role)
+        return self._stale(sender, seq)
+
+    def _stale(self, sender, seq):
         now = self._clock()
         if abs(now - seq) > self.max_age_ns:
             return 'signed %.1f s %s this host\'s clock (at most %g s: replayed, or clocks ' \
@@ -150,19 +165,3 @@ class Verifier(object):
                 return 'a copy of a message already received (replayed)'
             seen[seq] = True
         return None
-
-
-def make_key_cli(argv=None):
-    """``make_key FILE``: a new fleet key in FILE (mode 0600; an existing file is kept)."""
-    parser = argparse.ArgumentParser(
-        prog='make_key', description='Write a new fleet key (%d random bytes, hex) to FILE, '
-        'readable by its owner only. Give every node of the fleet a copy (~fleet_key, or '
-        'fleet_key:= of the launch files).' % KEY_BYTES)
-    parser.add_argument('file')
-    args = parser.parse_args(argv)
-    try:
-        make_key(args.file)
-    except OSError as error:
-        parser.exit(1, 'make_key: %s: %s\n' % (args.file, error.strerror))
-    print('fleet key written to %s (mode 0600)' % args.file)
-    return 0

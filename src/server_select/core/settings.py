@@ -170,8 +170,8 @@ PARAMS = {
                         'this node (*: from any)'),
     'task_plugins': Param('', parse_plugins, 'task types added by plug-in (module:Class ...)'),
     'fleet_ns': Param('/', parse_text, 'namespace of the fleet-level topics and services'),
-    'fleet_key': Param('', parse_text, 'key file (make_key): fleet messages leave signed and '
-                       'only signed ones count (empty: off)'),
+    'fleet_key': Param('', parse_text, 'the fleet key, or this role\'s key file (make_key '
+                       '[--role]): messages leave signed, only signed ones count (empty: off)'),
     'fleet_key_next': Param('', parse_text, 'a second key file also accepted (rotation)'),
     'require_key': Param(False, parse_bool, 'refuse to start without ~fleet_key (a fleet '
                          'that must not run unsigned)'),

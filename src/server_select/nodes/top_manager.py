@@ -39,6 +39,7 @@ class TopManagerNode(object):
     :ROS Publishers:
         - ``group_assignments`` (server_select/GroupAssignments, latched)
     """
+    SEAL_ROLE = 'manager'  # what it signs as with a fleet key (core.seal)
 
     def __init__(self):
         self.groups = param('groups')

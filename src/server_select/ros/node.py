@@ -135,8 +135,8 @@ def run(node_name, node_class, argv=None):
     rospy.init_node(node_name, argv=argv)
     quiet_logging()
     try:
-        seal.announce(rospy.get_name())   # a key that cannot be used, or none with
-        #                                   ~require_key, ends the node here
+        # a key that cannot be used, or none with ~require_key, ends the node here
+        seal.announce(rospy.get_name(), getattr(node_class, 'SEAL_ROLE', None))
         node = node_class()
         watcher = getattr(node_class, 'MASTER_WATCHER', False)
         watch = MasterWatch(param('master_watch' if watcher else 'master_check'),

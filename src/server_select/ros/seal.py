@@ -28,7 +28,8 @@ _STATE = {}
 def _configured():
     """(sealer, verifier) of this node, both None without ``~fleet_key``; read once (then
     without the lock: every gated message asks). :class:`ParamError` for a key file that
-    cannot be used."""
+    cannot be used. The node signs as the role :func:`announce` was given (none: it only
+    checks)."""
     done = _STATE.get('done')
     if done is not None:
         return done
@@ -38,25 +39,28 @@ def _configured():
             if paths['fleet_key_next'] and not paths['fleet_key']:
                 raise ParamError('~fleet_key_next: set ~fleet_key too (the key this node '
                                  'signs with)')
-            keys = []
+            role, keys = _STATE.get('role'), []
             for name, path in sorted(paths.items()):       # fleet_key first: it signs
                 if path:
                     try:
-                        keys.append(core.load_key(path))
+                        keys.append(core.load_keys(path, role))
                     except core.KeyFileError as error:
                         raise ParamError('~%s: %s' % (name, error))
-            _STATE['done'] = (core.Sealer(keys[0], rospy.get_name()),
-                              core.Verifier(keys, param('fleet_key_max_age'))) \
-                if keys else (None, None)
+            sealer = core.Sealer(keys[0], rospy.get_name()) if keys and role else None
+            _STATE['done'] = (sealer, core.Verifier(keys, param('fleet_key_max_age'))
+                              if keys else None)
         return _STATE['done']
 
 
-def announce(who):
-    """One line at start: whether ``who`` (this node) signs and checks (``~require_key``
-    without a key: ParamError)."""
+def announce(who, role=None):
+    """One line at start: whether ``who`` (this node, publishing as ``role``, one of
+    :data:`~server_select.core.seal.ROLES`, or None when it publishes nothing sealed)
+    signs and checks (``~require_key`` without a key: ParamError)."""
+    _STATE['role'] = role
     if enabled():
-        rospy.loginfo('%s: fleet key on: signs what it publishes and counts only signed '
-                      'messages and probe answers', who)
+        rospy.loginfo('%s: fleet key on: %s and counts only signed messages and probe '
+                      'answers', who, 'signs what it publishes as the %s role' % role
+                      if role else 'signs nothing (it publishes nothing sealed)')
     elif param('require_key'):
         raise ParamError('~require_key: no ~fleet_key given (make one with make_key and '
                          'give every node of the fleet a copy)')
@@ -81,9 +85,10 @@ def _keyless_heard(msg, sender):
 
 
 def enabled():
-    """Whether this node signs and checks fleet messages (reads the parameters on first
-    use: call it at start-up, where a bad key file ends the node with one clear line)."""
-    return _configured()[0] is not None
+    """Whether this node checks (and, with a role, signs) fleet messages (reads the
+    parameters on first use: call it at start-up, where a bad key file ends the node with
+    one clear line)."""
+    return _configured()[1] is not None
 
 
 def _payload(msg):
@@ -150,7 +155,8 @@ def check(msg, sender, verifier, channel=None):
         payload = _payload(msg)
     finally:
         stamp.mac = mac
-    return verifier.refusal(sender, stamp.seq, mac, payload, core.context(channel, msg._type))
+    return verifier.refusal(sender, stamp.seq, mac, payload, core.context(channel, msg._type),
+                            core.publisher_role(msg._type))
 
 
 def seal_answer(response, service, uri, request):
@@ -185,7 +191,18 @@ def require_sealable(msg_type, what):
 
 class SealedPublisher(rospy.Publisher):
     """A ``rospy.Publisher`` whose messages leave sealed with this node's key (as they are
-    without one)."""
+    without one). With a key, made only for a type the node's role may publish
+    (:data:`~server_select.core.seal.PUBLISHERS`; else ParamError)."""
+
+    def __init__(self, name, data_class, *args, **kwargs):
+        if 'seal' in getattr(data_class, '__slots__', ()) and enabled():
+            sealer, role = _configured()[0], core.publisher_role(data_class._type)
+            if sealer is None or sealer.keys.role != role:
+                raise ParamError('~fleet_key: %s signs as %s, and only the %s role may '
+                                 'publish %s' % (rospy.get_name(), 'the %s role' % sealer.keys
+                                                 .role if sealer else 'no role', role,
+                                                 data_class._type))
+        super(SealedPublisher, self).__init__(name, data_class, *args, **kwargs)
 
     def publish(self, msg):
         if not self.impl.is_latch and not self.impl.has_connections():

@@ -1,0 +1,135 @@
+"""What a fleet key costs the nodes (``make bench-seal``): CPU and memory per role with and
+without a key, side by side.
+
+Each run starts two fleets at once, each under a roscore of its own
+(``demo.launch profile:=fleet``: ``--servers`` servers, one robot sending sort tasks at
+``--task-rate``, the manager): one with a fleet key on every node, one without. After
+``--warmup`` s, the CPU (% of one core) and resident memory of each fleet's robot, manager
+and servers over ``--seconds`` s. ``--repeats`` runs (the keyed fleet on the other port each
+time); printed: median (min-max) per role with and without the key, and the keyed robot's
+CPU over the unkeyed one's, per run. Nothing is asserted.
+"""
+
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import xmlrpc.client
+
+from server_select.bench import cli
+from server_select.bench.harness import Roscore
+from server_select.core.keys import make_key
+from server_select.core.procs import measure, stop_group, wait_until
+from server_select.core.tables import markdown_table
+
+ROLES = ('robot', 'manager', 'server')
+
+
+def node_pids(master, nodes):
+    """``{pid: node}`` of the nodes registered at ``master`` (a URI); None if any is not."""
+    pids = {}
+    try:
+        for node in nodes:
+            code, _, api = xmlrpc.client.ServerProxy(master).lookupNode('/bench', node)
+            if code != 1:
+                return None
+            pids[xmlrpc.client.ServerProxy(api).getPid('/bench')[2]] = node
+    except OSError:
+        return None
+    return pids
+
+
+def launch(master, args, log):
+    """``demo.launch`` with ``args`` under ``master``, started in a session of its own."""
+    env = dict(os.environ, ROS_MASTER_URI=master)
+    return subprocess.Popen(['roslaunch', 'server_select', 'demo.launch', 'output:=log',
+                             'profile:=fleet'] + args, stdout=log,
+                            stderr=subprocess.STDOUT, env=env, start_new_session=True)
+
+
+def one_run(options, key, work, repeat):
+    """``{keyed: {role: [usage of each node]}}`` of one run of the two fleets."""
+    nodes = ['/manager', '/robot1'] + ['/server%d' % s for s in range(1, options.servers + 1)]
+    fleet_args = ['n_robots:=1', 'n_servers:=%d' % options.servers,
+                  'task_rate:=%g' % options.task_rate]
+    with Roscore(work) as first, Roscore(work) as second:
+        masters = (first.uri, second.uri) if repeat % 2 else (second.uri, first.uri)
+        procs, logs = [], []
+        try:
+            for keyed, master in zip((True, False), masters):
+                logs.append(open(os.path.join(work, 'run%d_%s.log' % (
+                    repeat, 'key' if keyed else 'nokey')), 'w'))
+                procs.append(launch(master, fleet_args + (['fleet_key:=%s' % key]
+                                                          if keyed else []), logs[-1]))
+            pids = [None, None]
+            for i, master in enumerate(masters):
+                if not wait_until(lambda: node_pids(master, nodes) is not None, 60.0, 0.5):
+                    raise RuntimeError('a fleet did not come up (see %s)' % logs[i].name)
+                pids[i] = node_pids(master, nodes)
+            time.sleep(options.warmup)           # tasks flow, windows fill
+            usage = measure([p for each in pids for p in each], options.seconds)
+        finally:
+            for proc in procs:
+                stop_group(proc, timeout=20.0)
+            for log in logs:
+                log.close()
+    result = {}
+    for keyed, each in zip((True, False), pids):
+        result[keyed] = dict((role, [usage[p] for p, node in each.items()
+                                     if p in usage and node.strip('/').rstrip('0123456789')
+                                     == role]) for role in ROLES)
+    return result
+
+
+def _cell(values):
+    return '%.2f (%.2f-%.2f)' % (statistics.median(values), min(values), max(values)) \
+        if values else '-'
+
+
+def table(runs):
+    """Median (min-max) over the runs of each role's CPU and RSS, with and without a key."""
+    rows = []
+    for role in ROLES:
+        for keyed in (True, False):
+            cpu = [statistics.mean(u['cpu_percent'] for u in run[keyed][role])
+                   for run in runs if run[keyed][role]]
+            rss = [statistics.mean(u['rss_mb'] for u in run[keyed][role])
+                   for run in runs if run[keyed][role]]
+            rows.append([role, 'on' if keyed else 'off', _cell(cpu), _cell(rss)])
+    ratios = [statistics.mean(u['cpu_percent'] for u in run[True]['robot']) /
+              statistics.mean(u['cpu_percent'] for u in run[False]['robot'])
+              for run in runs if run[True]['robot'] and run[False]['robot']]
+    return markdown_table(['node', 'key', 'CPU % of a core', 'RSS MiB'], rows), ratios
+
+
+def main(argv=None):
+    parser = cli.parser(__doc__)
+    parser.add_argument('--servers', type=int, default=4)
+    parser.add_argument('--task-rate', type=float, default=2.0, help='sort tasks per s')
+    parser.add_argument('--warmup', type=float, default=20.0)
+    parser.add_argument('--seconds', type=float, default=60.0)
+    parser.add_argument('--repeats', type=int, default=3)
+    options = parser.parse_args(argv)
+    work = tempfile.mkdtemp(prefix='seal_fleet_')
+    key = os.path.join(work, 'fleet.key')
+    make_key(key)
+    runs = []
+    for repeat in range(1, options.repeats + 1):
+        runs.append(one_run(options, key, work, repeat))
+        print('run %d of %d done' % (repeat, options.repeats), file=sys.stderr, flush=True)
+    text, ratios = table(runs)
+    text += '\nrobot CPU with the key / without, per run: %s (median %.3f)\n' % (
+        ', '.join('%.3f' % r for r in ratios), statistics.median(ratios) if ratios else 0)
+    cli.write(options.out, 'seal_fleet.json', [dict((('key' if k else 'nokey'), v)
+                                                    for k, v in run.items()) for run in runs])
+    cli.write(options.out, 'seal_fleet.md', text)
+    print('a fleet key\'s cost: 1 robot, %d servers, sort tasks at %g/s, %d runs of %g s '
+          '(logs in %s):\n%s' % (options.servers, options.task_rate, options.repeats,
+                                 options.seconds, work, text))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
