@@ -39,6 +39,7 @@ LAUNCH_ONLY = {
                 'loaded with find and arg substitution',
 }
 ARG = re.compile(r'\$\(arg ([A-Za-z_][A-Za-z0-9_]*)\)')
+EVAL_ARG = re.compile(r"arg\('([A-Za-z_][A-Za-z0-9_]*)'\)")
 
 
 def launch_path(name, top=TOP):
@@ -61,7 +62,8 @@ def read_launch(path):
             params[param.get('name')] = match.group(1) if match else None
         texts = [node.get(k, '') for k in ('name', 'output', 'machine')]
         texts += [r.get('file', '') for r in node.iter('rosparam')]
-        used.update(arg for text in texts for arg in ARG.findall(text))
+        used.update(arg for text in texts for pattern in (ARG, EVAL_ARG)
+                    for arg in pattern.findall(text))
     return args, params, used
 
 
@@ -87,6 +89,25 @@ def problems(top=TOP):
         found += ['node list: %r is not in the table' % p for p in params if p not in PARAMS]
     found += ['table: %r is set by no launch file and read by no listed node' % p
               for p in sorted(set(PARAMS) - named)]
+    return found + listing_problems(top)
+
+
+def listing_problems(top=TOP):
+    """Arguments ``roslaunch <file> --ros-args`` would list badly: without a doc, or with an
+    empty default (roslaunch lists those as required: an argument left to the node's default
+    has ``-``)."""
+    found = []
+    for name in sorted(os.listdir(os.path.join(top, 'launch'))):
+        root = ET.parse(launch_path(name, top)).getroot()
+        for arg in root.findall('arg'):
+            if arg.get('value') is not None:
+                continue
+            if not arg.get('doc'):
+                found.append('%s: argument %r has no doc' % (name, arg.get('name')))
+            if arg.get('default') == '':
+                found.append('%s: argument %r defaults to "" (roslaunch --ros-args lists it '
+                             'as required): "-" leaves the node\'s default'
+                             % (name, arg.get('name')))
     return found
 
 
@@ -120,7 +141,8 @@ def render(top=TOP):
            'Made by `python3 -m server_select.paramdoc --write` from the parameter table '
            '(`src/server_select/core/settings.py`) and the launch files; `make test` checks '
            'that it is current and that the two agree. Every parameter is private (`~name`). '
-           'A launch argument left empty (the default of all but ids) leaves the node\'s '
+           'A launch argument left at `-` (the default of all but ids; empty is the same) '
+           'leaves the node\'s '
            'default, the `paper` column or, with `profile:=fleet`, the `fleet` column; a '
            'parameter set explicitly always wins. Id lists are YAML lists or strings: '
            '`[1, 2, 3]`, `"1,2,3"`, `"1 2 3"`. An invalid value stops the node with one '
@@ -134,7 +156,7 @@ def render(top=TOP):
         out += [row(param, arg or '(fixed)') for param, arg in params.items()]
         others = [a for a in args if a not in params.values()]
         out += ['| `%s` | – | %s | same | %s |' % (a, '`%s`' % args[a][0] if args[a][0]
-                                                   else '(none)',
+                                                   not in ('', '-') else '(none)',
                                                    LAUNCH_ONLY.get(a) or args[a][1])
                 for a in others]
         out.append('')
