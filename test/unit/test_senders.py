@@ -73,3 +73,25 @@ def test_the_robot_node_pattern_that_would_admit_a_robot_named_otherwise():
     assert node_pattern_of('/fleetA/tb3_12/robot', 12) == '/fleetA/tb3_{id}/robot'
     assert node_pattern_of('/tb3_12/robot', 2) is None        # 12 is not 2
     assert node_pattern_of('/spoofer', 1) is None
+
+
+def test_a_claimed_key_is_the_first_senders_while_it_lives_then_the_next_ones():
+    """A robot is known by the id it announces: the first node that sends for robot 2 is
+    robot 2, whatever its name; another node is refused while the first answers."""
+    living = {'/tb3_2/robot': True, '/robot2': True}
+    asked = []
+
+    def alive(node):
+        asked.append(node)
+        return living.get(node, False)
+    rule = ExpectedSender(alive=alive, within=True)
+    assert rule.refusal('/tb3_2/robot', 2) is None
+    assert rule.refusal('/tb3_2/robot/prober', 2) is None       # a node in its namespace
+    assert rule.refusal('/tb3_1/robot', 1) is None              # each key its own claim
+    assert asked == []                                          # no look-up while it matches
+    assert rule.refusal('/robot2', 2) == '/tb3_2/robot'         # a second claim, refused
+    living['/tb3_2/robot'] = False                              # the first one is gone
+    assert rule.refusal('/robot2', 2) is None
+    assert rule.refusal('/tb3_2/robot', 2) == '/robot2'         # the claim moved
+    with pytest.raises(ValueError):
+        ExpectedSender('/manager', alive=alive)

@@ -186,8 +186,11 @@ def parse_publisher(name, value):
 
 
 def parse_node_pattern(name, value):
-    """A node name with ``{id}`` (``/robot{id}``); ``*`` (or empty) for any node: None."""
+    """A node name with ``{id}`` (``/robot{id}``); ``first`` as it is; ``*`` (or empty) for
+    any node: None."""
     pattern = parse_publisher(name, value)
+    if pattern == 'first':
+        return pattern
     try:
         pattern and pattern.format(id=1)
     except (KeyError, IndexError, ValueError) as error:

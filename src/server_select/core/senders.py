@@ -3,8 +3,10 @@ publisher (no rospy; the ROS side is :class:`server_select.ros.senders.SenderGat
 
 In ROS 1 a subscriber hears every publisher of its topic. The fleet's messages count only
 from the node that should send them: a flag from the manager, a result from the node that
-serves the server's probe service, samples of robot ``r`` from robot ``r``'s node (or a node
-in its namespace: a robot's nodes may live in ``/robot1/``).
+serves the server's probe service, samples of robot ``r`` from the node known as robot
+``r`` (or a node in its namespace): by default the first node that sent for ``r`` while it
+lives, whatever its name (a robot is known by the id it announces; with a fleet key only
+a robot's key can announce one).
 """
 
 import re
@@ -24,13 +26,18 @@ class ExpectedSender(object):
     ``expected`` is a resolved node name, or None: any node counts. ``lookup(key, refresh)``
     instead names the node of a key (None: unknown, any counts); a message from another
     node makes it look once more with ``refresh=True`` (the node may have been restarted
-    elsewhere). ``within``: a node in the expected node's namespace counts too.
+    elsewhere). ``alive(node)`` instead makes the first node that sends for a key that
+    key's node (a claim) until ``alive`` says it is gone, when the next sender's claim
+    counts. ``within``: a node in the expected node's namespace counts too.
     """
 
-    def __init__(self, expected=None, lookup=None, within=False):
-        if expected is not None and lookup is not None:
-            raise ValueError('give expected or lookup, not both')
+    def __init__(self, expected=None, lookup=None, within=False, alive=None):
+        if sum(x is not None for x in (expected, lookup, alive)) > 1:
+            raise ValueError('give expected, lookup or alive, not two')
         self.expected, self.lookup, self.within = expected, lookup, within
+        self.alive = alive
+        self._claims = {}          # key -> the node that claimed it
+        self._lock = threading.Lock()
 
     def _matches(self, sender, expected):
         return expected is None or (owned_by(sender, expected) if self.within
@@ -38,6 +45,8 @@ class ExpectedSender(object):
 
     def refusal(self, sender, key=None):
         """None when ``sender``'s message counts, else the node that should have sent it."""
+        if self.alive is not None:
+            return self._claim(sender, key)
         if self.lookup is None:
             return None if self._matches(sender, self.expected) else self.expected
         expected = self.lookup(key, False)
@@ -45,6 +54,18 @@ class ExpectedSender(object):
             return None
         expected = self.lookup(key, True)
         return None if self._matches(sender, expected) else expected
+
+    def _claim(self, sender, key):
+        with self._lock:
+            owner = self._claims.setdefault(key, sender)
+        if self._matches(sender, owner):
+            return None
+        if self.alive(owner):
+            return owner
+        with self._lock:             # gone: this sender's claim counts from now on
+            if self._claims.get(key) == owner:
+                self._claims[key] = sender
+        return None
 
 
 def node_pattern_of(sender, key):

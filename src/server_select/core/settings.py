@@ -166,8 +166,9 @@ PARAMS = {
     'retry_floor': Param(0.25, parse_positive, "shortest attempt deadline (s)"),
     'manager_node': Param('/manager', parse_publisher, 'flags count only from this node '
                           '(*: from any)'),
-    'robot_node': Param('/robot{id}', parse_node_pattern, 'samples of robot {id} count only from '
-                        'this node (*: from any)'),
+    'robot_node': Param('first', parse_node_pattern, 'samples of robot {id} count from the '
+                        'first node that sends them while it lives (first), only from this '
+                        'node or its namespace (/name{id}), or from any (*)'),
     'task_plugins': Param('', parse_plugins, 'task types added by plug-in (module:Class ...)'),
     'fleet_ns': Param('/', parse_text, 'namespace of the fleet-level topics and services'),
     'fleet_key': Param('', parse_text, 'the fleet key, or this role\'s key file (make_key '

@@ -17,7 +17,7 @@ from server_select.ros.flags import FlagPublisher
 from server_select.ros.graph import publisher_of
 from server_select.ros.membership import GroupAssignmentsListener, ServerRegistry
 from server_select.ros.node import fleet, param, run
-from server_select.ros.senders import SenderGate, node_pattern
+from server_select.ros.senders import robot_senders
 
 
 SLICES = 10     # the periodic flags go out in this many slices of the robots
@@ -39,7 +39,9 @@ class ManagerNode(object):
     receive times: robot and manager clocks are not shared. A robot gets no flag before its first
     sample (a restarted manager does not publish an empty ranking over a robot's working
     choice). Samples claiming another pair, with an impossible round trip, or not
-    published by ``~robot_node`` are ignored with a throttled warning naming the publisher.
+    published by robot r (``~robot_node``: by default the first node that sent for r, while
+    it answers, whatever its name or namespace) are ignored with a throttled warning naming
+    the publisher.
 
     :ROS Parameters:
         - ``~profile`` (``paper``): ``fleet`` sets the defaults marked (fleet) below.
@@ -67,8 +69,9 @@ class ManagerNode(object):
         - ``~task_memory`` (s, 0; fleet: 5): with ``~passive``, a server's task cost above
           its probes is added to its probe samples, fading with this time constant once
           the robot's tasks stop going there (``core/passive.py``, TaskCost).
-        - ``~robot_node`` (``/robot{id}``): the node, or the namespace of the nodes, whose
-          samples count for robot {id} (``*``: any publisher).
+        - ``~robot_node`` (``first``): whose samples count for robot {id}: the first node
+          that sends them while it answers its API (``first``), only that node or namespace
+          (``/robot{id}``), or any publisher (``*``).
         - ``~fleet_ns`` (``/``): namespace of the fleet-level topics and services.
         - ``~group`` (none): a grouped deployment's manager of group {group}: ranks that
           group's servers for the robots ``~top_manager_node`` (``/top_manager``) assigns
@@ -107,10 +110,7 @@ class ManagerNode(object):
                                  '~sample_stream robot: one topic per pair)' % name)
         self.publish_rate = param('publish_rate')
         self.update_rate = param('update_rate')
-        pattern = param('robot_node')      # None: any publisher
-        self.senders = SenderGate('manager', 'robot {key}', within=True,
-                                  lookup=node_pattern(pattern) if pattern else None,
-                                  hint=robot_node_hint)
+        self.senders = robot_senders('manager', param('robot_node'), robot_node_hint)
         self._locks = {}          # robot -> lock of its ranking and flag
         self._choosers = {}       # robot -> its Chooser (the policy's state)
         self._slice = 0

@@ -13,7 +13,7 @@ from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet, param, run
 from server_select.ros import seal
 from server_select.ros.seal import SealedPublisher
-from server_select.ros.senders import SenderGate, node_pattern
+from server_select.ros.senders import robot_senders
 
 RESEAL = 5.0      # s between two copies of the unchanged table, with a fleet key
 
@@ -32,7 +32,7 @@ class TopManagerNode(object):
     :ROS Parameters:
         - ``~groups`` (required): ``{group id: [server ids]}``
         - ``~window`` (s, 5.0), ``~group_margin`` (s, 0.001)
-        - ``~robot_node`` (``/robot{id}``): whose samples count for robot {id} (``*``: any)
+        - ``~robot_node`` (``first``): whose samples count for robot {id} (as the manager's)
         - ``~fleet_ns`` (``/``)
     :ROS Subscribers:
         - ``latency_samples`` (server_select/LatencySamples)
@@ -44,9 +44,7 @@ class TopManagerNode(object):
     def __init__(self):
         self.groups = param('groups')
         self.assigner = GroupAssigner(self.groups, param('window'), param('group_margin'))
-        pattern = param('robot_node')      # None: any publisher
-        self.senders = SenderGate('top manager', 'robot {key}', within=True,
-                                  lookup=node_pattern(pattern) if pattern else None)
+        self.senders = robot_senders('top manager', param('robot_node'))
         self._dirty = threading.Event()
         self._published = time.monotonic()
         self.pub = self.sub = self.timer = None

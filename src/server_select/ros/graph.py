@@ -31,6 +31,32 @@ def node_pid(node_name, caller_id='/server_select_graph', master=None, timeout=5
     return pid
 
 
+class Liveness(object):
+    """``alive(node)``: whether ``node`` answers its XML-RPC API (a node killed without a word
+    stays registered at the master, but answers nothing); asked at most once every
+    ``period`` s per node, the answer kept meanwhile."""
+
+    def __init__(self, period=1.0, timeout=1.0, clock=time.monotonic):
+        self.period, self.timeout, self._clock = period, timeout, clock
+        self._lock = threading.Lock()
+        self._known = {}          # node -> (asked at, alive)
+
+    def __call__(self, node):
+        now = self._clock()
+        with self._lock:
+            known = self._known.get(node)
+        if known is not None and now - known[0] < self.period:
+            return known[1]
+        try:
+            node_pid(node, timeout=self.timeout)
+            alive = True
+        except (rosgraph.MasterError, OSError):
+            alive = False
+        with self._lock:
+            self._known[node] = (now, alive)
+        return alive
+
+
 def publisher_of(msg):
     """The node that published ``msg`` (its connection's caller id), or '?'."""
     return (getattr(msg, '_connection_header', None) or {}).get('callerid', '?')

@@ -4,7 +4,7 @@ import rospy
 
 from server_select.core.senders import ExpectedSender, Throttle
 from server_select.ros import seal
-from server_select.ros.graph import publisher_of
+from server_select.ros.graph import Liveness, publisher_of
 
 
 class SenderGate(object):
@@ -17,10 +17,11 @@ class SenderGate(object):
     """
 
     def __init__(self, who, role, expected=None, lookup=None, within=False, period=5.0,
-                 hint=None):
-        """``hint(sender, key)``: the fix to name when ``sender`` is refused (or None)."""
+                 hint=None, alive=None):
+        """``hint(sender, key)``: the fix to name when ``sender`` is refused (or None);
+        ``alive``: keys are claimed (ExpectedSender)."""
         self.who, self.role, self.hint = who, role, hint
-        self.rule = ExpectedSender(expected, lookup, within)
+        self.rule = ExpectedSender(expected, lookup, within, alive)
         self.throttle = Throttle(period)
 
     def expect(self, expected):
@@ -66,3 +67,17 @@ def node_pattern(pattern):
             name = names[key] = rospy.resolve_name(pattern.format(id=key))
         return name
     return lookup
+
+
+FIRST = 'first'         # ~robot_node: a robot is the first node that sends for its id
+
+
+def robot_senders(who, pattern, hint=None):
+    """The gate of robots' messages: robot ``{key}`` is the node ``pattern`` names
+    (``/robot{id}``), or with :data:`FIRST` the first node that sent for it while that node
+    answers (:class:`~server_select.ros.graph.Liveness`), or any node (None); nodes in its
+    namespace count too."""
+    if pattern == FIRST:
+        return SenderGate(who, 'robot {key}', within=True, alive=Liveness())
+    return SenderGate(who, 'robot {key}', within=True,
+                      lookup=node_pattern(pattern) if pattern else None, hint=hint)
