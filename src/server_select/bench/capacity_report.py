@@ -157,9 +157,9 @@ def plot(results, path):
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-    from server_select.testbed.plots import plain_log_ticks
+    from server_select.testbed.plots import legend_beside, plain_log_ticks
     kinds = list(results['kinds'])
-    fig, axes = plt.subplots(2, len(kinds), figsize=(6 * len(kinds), 7), squeeze=False)
+    fig, axes = plt.subplots(2, len(kinds), figsize=(8 * len(kinds), 7), squeeze=False)
     for column, kind in enumerate(kinds):
         info = results['kinds'][kind]
         by_variant = collections.defaultdict(lambda: collections.defaultdict(list))
@@ -183,7 +183,7 @@ def plot(results, path):
         for axis in (top, bottom):
             axis.set_xlabel('offered tasks per s (all robots)')
             axis.grid(True, alpha=0.3)
-            axis.legend(fontsize='small')
+            legend_beside(axis)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)

@@ -27,6 +27,15 @@ def _labels(axes):
              if ax.get_legend() else []} for ax in axes]
 
 
+def legend_beside(ax, handles=None, labels=None, **kwargs):
+    """The panel's legend to the right of it, outside, where it hides no point (with
+    ``fig.tight_layout()``, which makes room for it)."""
+    args = (handles, labels) if handles is not None else ()
+    kwargs.setdefault('fontsize', 'small')
+    ax.legend(*args, loc='upper left', bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+              **kwargs)
+
+
 def _changes(flags):
     """The flags (sorted by time) that select another server than the one before."""
     return [f for f, before in zip(flags[1:], flags) if f.server != before.server]
@@ -46,7 +55,7 @@ def plot_task_rtt(runs, path):
     each panel says (:func:`_labels`)."""
     plt = pyplot()
     robots = sorted(set(r.robot for run in runs.values() for r in run.reports))
-    fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
+    fig, axes = plt.subplots(len(robots), 1, figsize=(12, 3.2 * len(robots)), squeeze=False)
     for ax, robot in zip(axes[:, 0], robots):
         for mode, run in runs.items():
             reports = sorted((r for r in run.reports if r.robot == robot), key=lambda r: r.t)
@@ -70,7 +79,7 @@ def plot_task_rtt(runs, path):
         ax.set_yscale('log')
         plain_log_ticks(ax)
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize='small')
+        legend_beside(ax)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
@@ -88,7 +97,7 @@ def plot_latency(run, path, title):
     servers = sorted(set(s.server for s in run.samples) |
                      set(s for f in run.flags for s in f.ranking))
     colors = dict((s, 'C%d' % i) for i, s in enumerate(servers))
-    fig, axes = plt.subplots(len(robots), 1, figsize=(9, 3.2 * len(robots)), squeeze=False)
+    fig, axes = plt.subplots(len(robots), 1, figsize=(12, 3.2 * len(robots)), squeeze=False)
     for ax, robot in zip(axes[:, 0], robots):
         samples = [s for s in run.samples if s.robot == robot]
         flags = sorted((f for f in run.flags if f.robot == robot), key=lambda f: f.t)
@@ -120,7 +129,7 @@ def plot_latency(run, path, title):
         ax.set_xlabel(time_label(run))
         ax.set_ylabel('round trip (ms)')
         ax.grid(True, alpha=0.3)
-        ax.legend(handles, labels, loc='upper left', fontsize='small')
+        legend_beside(ax, handles, labels)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)

@@ -2,7 +2,7 @@
 
 import collections
 
-from server_select.testbed.plots import pyplot
+from server_select.testbed.plots import legend_beside, pyplot
 
 SHOWN = ('fixed', 'oracle', 'paper', 'fleet')     # drawn bold; the other variants thin
 
@@ -24,7 +24,7 @@ def plot_time(run, owners, changes, timeout, path, title):
     plt = pyplot()
     per_robot = _by_robot(run, owners)
     robots = sorted(per_robot)
-    fig, axes = plt.subplots(len(robots), 1, figsize=(11, 3.4 * len(robots)), squeeze=False)
+    fig, axes = plt.subplots(len(robots), 1, figsize=(14, 3.4 * len(robots)), squeeze=False)
     for ax, robot in zip(axes[:, 0], robots):
         for index, (variant, reports) in enumerate(sorted(per_robot[robot].items())):
             color = 'C%d' % index
@@ -46,7 +46,7 @@ def plot_time(run, owners, changes, timeout, path, title):
         ax.set_xlabel('scenario time (s)')
         ax.set_ylabel('task round trip (ms, log)')
         ax.grid(True, alpha=0.3)
-        ax.legend(loc='upper left', fontsize='x-small', ncol=4)
+        legend_beside(ax, fontsize='x-small')
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -59,7 +59,7 @@ def plot_cdf(run, owners, timeout, start, path, title):
     for report in run.reports:
         if report.robot in owners and report.t >= start:
             values[owners[report.robot][0]].append(report.rtt if report.ok else timeout)
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig, ax = plt.subplots(figsize=(10, 5))
     for variant, rtts in sorted(values.items()):
         rtts = sorted(v * 1e3 for v in rtts)
         ax.step(rtts, [(i + 1) / float(len(rtts)) for i in range(len(rtts))], where='post',
@@ -69,7 +69,7 @@ def plot_cdf(run, owners, timeout, start, path, title):
     ax.set_ylabel('fraction of tasks')
     ax.set_title('%s: round trips of all robots' % title)
     ax.grid(True, alpha=0.3)
-    ax.legend(loc='lower right', fontsize='small')
+    legend_beside(ax)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
