@@ -117,6 +117,19 @@ def test_the_fleet_key_benchmark_measures_both_fleets(tmp_path):
     assert 'robot CPU with the key / without, per run' in proc.stdout
 
 
+def test_the_top_benchmark_measures_top_beside_a_fleet(tmp_path):
+    """`make bench-top`, tiny: top in a pseudo-terminal beside 2 robots x 2 servers."""
+    proc = subprocess.run([sys.executable, '-m', 'server_select.bench.top_cost', '--robots',
+                           '2', '--servers', '2', '--repeats', '1', '--warmup', '3',
+                           '--seconds', '3', '--out', str(tmp_path)], stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, universal_newlines=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:]
+    run, = json.loads((tmp_path / 'top_cost.json').read_text())
+    assert all(finite(run[k]) for k in ('top_cpu', 'robot_cpu')) and run['top_cpu'] > 0, run
+    assert run['top_rss'] > 10, run
+    assert 'top beside a fleet of 2 robots x 2 servers' in proc.stdout
+
+
 def test_the_probe_cost_benchmark_counts_probes(tmp_path):
     """`make bench-probes` in a tiny configuration: the servers count the robot's probes."""
     proc = subprocess.run([sys.executable, '-m', 'server_select.bench.probe_cost',
