@@ -7,8 +7,8 @@ import time
 import rospy
 from rospy.numpy_msg import numpy_msg
 
-from server_select.core import names
-from server_select.core.procs import wait_until
+from server_select.core.config import names
+from server_select.core.util.procs import wait_until
 from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask, TaskReport
 
 Received = collections.namedtuple('Received', 'time msg')

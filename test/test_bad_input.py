@@ -14,8 +14,8 @@ import rospy
 import rostest
 from rospy.numpy_msg import numpy_msg
 
-from server_select.core import names
-from server_select.core.procs import stop_group, wait_until
+from server_select.core.config import names
+from server_select.core.util.procs import stop_group, wait_until
 from server_select.msg import SortResult, SortTask
 
 from fleet_recorder import until_answered

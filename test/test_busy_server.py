@@ -25,7 +25,7 @@ import numpy as np
 import rospy
 import rostest
 
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
 from server_select.srv import LatencyProbe
 

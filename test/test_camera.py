@@ -17,7 +17,7 @@ import rospy
 import rostest
 from sensor_msgs.msg import CompressedImage, Image
 
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 from server_select.msg import Detections, ImageResult, ImageTask, SelectionFlag, TaskReport
 from server_select.vision.detection import iou
 from server_select.vision.image_codec import encode, from_array

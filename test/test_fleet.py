@@ -22,8 +22,8 @@ import rospy
 import rostest
 from rosgraph_msgs.msg import Log
 
-from server_select.core import names
-from server_select.core.params import parse_id_list
+from server_select.core.config import names
+from server_select.core.config.params import parse_id_list
 from server_select.msg import SelectionFlag
 
 from fleet_recorder import FleetRecorder

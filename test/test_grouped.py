@@ -14,9 +14,9 @@ import unittest
 import rospy
 import rostest
 
-from server_select.core import names
-from server_select.core.groups import probe_set
-from server_select.core.procs import wait_until
+from server_select.core.config import names
+from server_select.core.fleet.groups import probe_set
+from server_select.core.util.procs import wait_until
 from server_select.msg import GroupAssignments, LatencySamples, SelectionFlag, TaskReport
 from server_select.ros.graph import publisher_of
 

@@ -20,8 +20,8 @@ import rostest
 from sensor_msgs.msg import Image
 from std_msgs.msg import Header
 
-from server_select.core import names
-from server_select.core.procs import wait_until
+from server_select.core.config import names
+from server_select.core.util.procs import wait_until
 from server_select.vision.detection import iou
 from server_select.vision.image_codec import from_array
 from server_select.msg import Detections, FoundTarget, ImageResult, ImageTask

@@ -14,7 +14,7 @@ import unittest
 import rospy
 import rostest
 
-from server_select.core import names
+from server_select.core.config import names
 from server_select.msg import LatencySample
 
 from fleet_recorder import FleetRecorder

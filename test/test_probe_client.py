@@ -17,8 +17,8 @@ import unittest
 import rospy
 import rostest
 
-from server_select.core import names
-from server_select.core.procs import stop_group, wait_until
+from server_select.core.config import names
+from server_select.core.util.procs import stop_group, wait_until
 from server_select.ros.graph import node_pid
 from server_select.ros.probe_client import ProbeTimeout, TimedServiceProxy
 from server_select.srv import LatencyProbe, LatencyProbeRequest, LatencyProbeResponse

@@ -16,7 +16,7 @@ import unittest
 import rospy
 import rostest
 
-from server_select.core.params import parse_id_list
+from server_select.core.config.params import parse_id_list
 from server_select.ros.graph import node_pid
 
 from fleet_recorder import FleetRecorder

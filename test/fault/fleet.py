@@ -10,8 +10,8 @@ import time
 import rospy
 from rosgraph_msgs.msg import Log
 
-from server_select.core import names
-from server_select.core.procs import stop_group, wait_until
+from server_select.core.config import names
+from server_select.core.util.procs import stop_group, wait_until
 from server_select.msg import SelectionFlag, TaskReport
 from server_select.ros.graph import node_pid, publisher_of
 

@@ -20,7 +20,7 @@ import threading
 import rosgraph
 import rospy
 
-from server_select.core import names
+from server_select.core.config import names
 from server_select.srv import LatencyProbe, LatencyProbeResponse
 
 

@@ -14,7 +14,7 @@ import time
 
 import rospy
 
-from server_select.core import names
+from server_select.core.config import names
 from server_select.msg import SelectionFlag
 
 

@@ -20,8 +20,8 @@ import numpy as np
 import rospy
 from rospy.numpy_msg import numpy_msg
 
-from server_select.core import names
-from server_select.core.seal import Sealer, load_keys
+from server_select.core.config import names
+from server_select.core.trust.seal import Sealer, load_keys
 from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask
 from server_select.ros.seal import sealed
 

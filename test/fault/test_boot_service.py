@@ -19,7 +19,7 @@ import psutil
 import pytest
 
 from server_select.bench.harness import free_port
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 from server_select.service_unit import main, parse_unit
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -17,7 +17,7 @@ import xmlrpc.client
 import pytest
 import rosgraph
 
-from server_select.core.procs import stop_group, wait_until
+from server_select.core.util.procs import stop_group, wait_until
 
 from fleet import NODES, Fleet, kill
 

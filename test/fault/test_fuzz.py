@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 from server_select.msg import (Detection, Detections, FoundTarget, ImageResult, ImageTask,
                                LatencySample, LatencySamples, OrbTask, RobotRanking,
                                SelectionFlag, ServerAnnouncement, SortResult, SortTask)

@@ -16,7 +16,7 @@ import time
 
 import rospy
 
-from server_select.core.procs import stop_groups, wait_until
+from server_select.core.util.procs import stop_groups, wait_until
 from server_select.msg import FleetServers
 from server_select.ros.graph import publisher_of
 

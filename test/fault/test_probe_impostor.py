@@ -20,9 +20,9 @@ import time
 import rosgraph
 import rospy
 
-from server_select.core import names
-from server_select.core.keys import make_key
-from server_select.core.procs import wait_until
+from server_select.core.config import names
+from server_select.core.trust.keys import make_key
+from server_select.core.util.procs import wait_until
 from server_select.msg import LatencySample
 
 from fleet import Fleet

@@ -15,9 +15,11 @@ import time
 
 import rospy
 
-from server_select.core import names, seal
-from server_select.core.keys import make_key
-from server_select.core.procs import wait_until
+from server_select.core.config import names
+
+from server_select.core.trust import seal
+from server_select.core.trust.keys import make_key
+from server_select.core.util.procs import wait_until
 from server_select.msg import SelectionFlag
 
 from fleet import Fleet

@@ -18,9 +18,9 @@ import time
 import pytest
 import rospy
 
-from server_select.core.procs import alive, wait_until
-from server_select.core import names
-from server_select.core.outcome import STOPPED
+from server_select.core.util.procs import alive, wait_until
+from server_select.core.config import names
+from server_select.core.flow.outcome import STOPPED
 from server_select.msg import SortTask
 from server_select.srv import LatencyProbe
 

@@ -14,8 +14,8 @@ import subprocess
 import sys
 import time
 
-from server_select.core.keys import make_key, make_role_key
-from server_select.core.procs import wait_until
+from server_select.core.trust.keys import make_key, make_role_key
+from server_select.core.util.procs import wait_until
 
 from fleet import Fleet
 from test_faults import STABLE, TASK_TIMEOUT, answered, current_server, show, warm_up

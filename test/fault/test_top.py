@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 
 from fleet import Fleet
 from test_faults import STABLE, show, warm_up

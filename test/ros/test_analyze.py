@@ -7,7 +7,7 @@ import rosbag
 import rospy
 from std_msgs.msg import String
 
-from server_select.core.outcome import STOPPED
+from server_select.core.flow.outcome import STOPPED
 from server_select.msg import SelectionFlag, TaskReport
 from server_select.testbed import bag_analysis
 from server_select.testbed.analyze import main

@@ -1,6 +1,6 @@
 """The ROS-free core's constants are the messages' own."""
 
-from server_select.core.outcome import LOCAL, NO_SERVER
+from server_select.core.flow.outcome import LOCAL, NO_SERVER
 from server_select.msg import SelectionFlag, TaskReport
 
 

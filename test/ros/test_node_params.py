@@ -13,8 +13,8 @@ import rospy
 import yaml
 from std_msgs.msg import Empty
 
-from server_select.core.params import ParamError
-from server_select.core.keys import make_key
+from server_select.core.config.params import ParamError
+from server_select.core.trust.keys import make_key
 from server_select.nodes.manager import ManagerNode
 from server_select.nodes.robot import RobotNode
 from server_select.nodes.server import ServerNode
@@ -109,7 +109,7 @@ def test_good_parameters_are_accepted(param_server, kind, args):
 
 
 def test_a_fleet_key_that_cannot_be_used_ends_the_node_by_name(param_server, tmp_path):
-    """``node.run`` reads the key before it builds the node (seal.enabled())."""
+    """``runner.run`` reads the key before it builds the node (seal.enabled())."""
     path = str(tmp_path / 'fleet.key')
     make_key(path)
     os.chmod(path, 0o644)
@@ -147,7 +147,7 @@ def test_with_a_key_a_plug_in_whose_result_cannot_carry_a_seal_is_refused(param_
 def test_a_node_given_another_roles_key_or_type_is_refused_by_name(param_server, tmp_path):
     """A manager given a robot's key file ends at start naming the key it needs; a robot
     (its role's file) cannot make a publisher of flags, nor a keyed node without a role."""
-    from server_select.core.keys import make_role_key
+    from server_select.core.trust.keys import make_role_key
     from server_select.msg import LatencySamples, SelectionFlag
     fleet, robot = str(tmp_path / 'fleet.key'), str(tmp_path / 'robot.key')
     make_key(fleet)

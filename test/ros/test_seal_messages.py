@@ -9,7 +9,7 @@ from rospy.numpy_msg import numpy_msg
 
 import server_select.msg
 from server_select.bench.seal_cost import messages
-from server_select.core.seal import Keys, Sealer, Verifier, publisher_role
+from server_select.core.trust.seal import Keys, Sealer, Verifier, publisher_role
 from server_select.msg import (FleetServers, GroupAssignments, LatencySample, OrbResult,
                                SelectionFlag, ServerAnnouncement, ServerGroup, SortResult)
 from server_select.ros.seal import check, sealed

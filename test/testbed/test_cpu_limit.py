@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from server_select.core.procs import measure, wait_until
+from server_select.core.util.procs import measure, wait_until
 from server_select.testbed.cpu import CpuLimit, controller
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed import netns
@@ -66,7 +66,7 @@ def test_a_process_in_a_cpu_limited_group_sees_the_cores_it_may_use():
     testbed host the quota holds but cannot be read: ``ip netns exec`` mounts a /sys of
     its own, without the cgroup files; the testbed tells its servers ``workers``.)"""
     cores = len(os.sched_getaffinity(0))
-    code = 'from server_select.core.procs import usable_cpus; print(usable_cpus())'
+    code = 'from server_select.core.util.procs import usable_cpus; print(usable_cpus())'
     seen = {}
     for share in (0.25, max(0.5, cores - 0.5)):
         limit = CpuLimit('sscpus-%g' % share, share).create()

@@ -22,7 +22,7 @@ import time
 
 import pytest
 
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 from server_select.testbed import netns
 from server_select.testbed.runner import HostRun
 from server_select.testbed.scenario import Scenario

@@ -1,4 +1,4 @@
-"""The league's peers, each on its defining behaviour (core/balancers.py)."""
+"""The league's peers, each on its defining behaviour (core/selection/balancers.py)."""
 
 import collections
 import random
@@ -6,10 +6,10 @@ import random
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from server_select.core import balancers
-from server_select.core.balancers import PeakEwma, Prequal, quantile
-from server_select.core.load import Load
-from server_select.core.task_flow import TaskFlow
+from server_select.core.selection import balancers
+from server_select.core.selection.balancers import PeakEwma, Prequal, quantile
+from server_select.core.load.work_queue import Load
+from server_select.core.flow.task_flow import TaskFlow
 
 from fake_clock import Clock
 

@@ -1,6 +1,6 @@
-"""What ``top`` shows (core/fleet_view.py): robots, servers, switches, alerts."""
+"""What ``top`` shows (core/observe/fleet_view.py): robots, servers, switches, alerts."""
 
-from server_select.core.fleet_view import FleetView, Load
+from server_select.core.observe.fleet_view import FleetView, Load
 
 
 def row(lines, head, key):

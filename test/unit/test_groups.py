@@ -2,8 +2,8 @@
 
 import pytest
 
-from server_select.core.groups import GroupAssigner, parse_groups, probe_set, representatives
-from server_select.core.params import ParamError
+from server_select.core.fleet.groups import GroupAssigner, parse_groups, probe_set, representatives
+from server_select.core.config.params import ParamError
 
 GROUPS = {1: [1, 2, 3], 2: [4, 5, 6], 3: [7]}
 

@@ -83,3 +83,74 @@ def test_nothing_finds_files_above_the_package():
     """Installed packages have no ``../../config``: files are found through the package."""
     offenders = [module_name(p) for p in modules() if "'..', '..'" in open(p).read()]
     assert offenders == []
+
+
+# core's topics, each importing only those before it (core/__init__.py says what each owns)
+CORE_ORDER = ('util', 'config', 'trust', 'load', 'selection', 'flow', 'fleet', 'settings',
+              'observe')
+
+
+def core_imports():
+    """``{(importing topic, imported topic)}`` of core's modules (a topic is a sub-package,
+    or the ``settings`` module)."""
+    found = set()
+    for path in modules('core'):
+        rel = os.path.relpath(path, os.path.join(SRC, 'core')).split(os.sep)
+        topic = rel[0] if len(rel) > 1 else rel[0][:-3]
+        with open(path) as stream:
+            tree = ast.parse(stream.read(), path)
+        for node in ast.walk(tree):
+            names = [node.module or ''] if isinstance(node, ast.ImportFrom) else \
+                [a.name for a in node.names] if isinstance(node, ast.Import) else []
+            for name in names:
+                parts = name.split('.')
+                if parts[:2] == ['server_select', 'core'] and len(parts) > 2 \
+                        and parts[2] != topic:
+                    found.add((topic, parts[2]))
+    return found
+
+
+def test_core_topics_import_only_those_below_them():
+    assert {'selection', 'config', 'settings'} <= set(t for pair in core_imports() for t in pair)
+    upward = sorted((a, b) for a, b in core_imports()
+                    if b not in CORE_ORDER or a not in CORE_ORDER
+                    or CORE_ORDER.index(b) >= CORE_ORDER.index(a))
+    assert upward == []
+    topics = set(name[:-3] if name.endswith('.py') else name
+                 for name in os.listdir(os.path.join(SRC, 'core'))
+                 if name not in ('__init__.py', '__pycache__'))
+    assert topics == set(CORE_ORDER)
+
+
+def imports_of(path):
+    """The package's modules that ``path`` imports (anywhere in it, in functions too)."""
+    with open(path) as stream:
+        tree = ast.parse(stream.read(), path)
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and (node.module or '').startswith('server_select'):
+            found.update('%s.%s' % (node.module, a.name) for a in node.names)
+            found.add(node.module)
+        elif isinstance(node, ast.Import):
+            found.update(a.name for a in node.names if a.name.startswith('server_select'))
+    return found
+
+
+def test_no_module_imports_itself_through_others():
+    """No import cycle in the package (a cycle is a module two layers claim)."""
+    graph = dict((module_name(p), imports_of(p)) for p in modules())
+    graph = dict((m, set(i for i in deps if i in graph and i != m)) for m, deps in graph.items())
+    cycles, done = [], set()
+
+    def visit(module, path):
+        if module in path:
+            cycles.append(path[path.index(module):] + [module])
+            return
+        if module in done:
+            return
+        for dep in sorted(graph[module]):
+            visit(dep, path + [module])
+        done.add(module)
+    for module in sorted(graph):
+        visit(module, [])
+    assert cycles == []

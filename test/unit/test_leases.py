@@ -1,8 +1,8 @@
-"""Fleet membership by leases (core/leases.py)."""
+"""Fleet membership by leases (core/fleet/leases.py)."""
 
 import pytest
 
-from server_select.core.leases import Leases
+from server_select.core.fleet.leases import Leases
 
 
 def test_an_announced_server_is_a_member_until_its_lease_ends():

@@ -5,10 +5,10 @@ import threading
 
 import pytest
 
-from server_select.core.budget import RetryBudget
-from server_select.core.demand import Arrivals, Demand
-from server_select.core.load import Load, ServiceTimes, WorkQueue
-from server_select.core.load_board import LoadBoard, queueing
+from server_select.core.flow.budget import RetryBudget
+from server_select.core.load.demand import Arrivals, Demand
+from server_select.core.load.work_queue import Load, ServiceTimes, WorkQueue
+from server_select.core.load.board import LoadBoard, queueing
 
 from fake_clock import Clock
 

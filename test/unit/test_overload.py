@@ -4,9 +4,9 @@ with the newest frame winning, attempt deadlines that follow the load."""
 
 import pytest
 
-from server_select.core.attempts import AttemptClock
-from server_select.core.budget import RetryBudget
-from server_select.core.task_flow import RETRIED
+from server_select.core.flow.attempts import AttemptClock
+from server_select.core.flow.budget import RetryBudget
+from server_select.core.flow.task_flow import RETRIED
 
 from fake_clock import Clock
 from test_task_flow import World

@@ -1,9 +1,9 @@
 import pytest
 
-from server_select.core import names
-from server_select.core.params import (ParamError, parse_fixed_server, parse_id, parse_id_list,
-                                       parse_members, parse_mode, parse_non_negative,
-                                       parse_positive)
+from server_select.core.config import names
+from server_select.core.config.params import (ParamError, parse_fixed_server, parse_id,
+                                              parse_id_list, parse_members, parse_mode,
+                                              parse_non_negative, parse_positive)
 
 
 @pytest.mark.parametrize('value, expected', [

@@ -5,9 +5,9 @@ import random
 
 import pytest
 
-from server_select.core.policy import Chooser, Policy, from_params
-from server_select.core.ranking import NO_SERVER, rank_servers
-from server_select.core.window import LatencyWindow
+from server_select.core.selection.policy import Chooser, Policy, from_params
+from server_select.core.selection.rank import NO_SERVER, rank_servers
+from server_select.core.selection.window import LatencyWindow
 
 
 def run(truth, policy, statistic='mean', rate=1.0, window=5.0, until=60.0, tau=1.0,

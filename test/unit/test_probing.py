@@ -1,15 +1,15 @@
 """Adaptive probing: contenders from intervals, probe rates, a far server that comes near,
-and the window with uneven sampling (core/probing.py, core/window.py)."""
+and the window with uneven sampling (core/selection/probing.py, core/selection/window.py)."""
 
 import collections
 import random
 
 import pytest
 
-from server_select.core.policy import Policy
-from server_select.core.probing import ContenderRule, ProbePlan, from_params
-from server_select.core.rankings import FleetRankings
-from server_select.core.window import EMPTY, LatencyWindow, PairStats
+from server_select.core.selection.policy import Policy
+from server_select.core.selection.probing import ContenderRule, ProbePlan, from_params
+from server_select.core.selection.fleet_rankings import FleetRankings
+from server_select.core.selection.window import EMPTY, LatencyWindow, PairStats
 
 MS = 1e-3
 

@@ -1,8 +1,8 @@
 import pytest
 
-from server_select.core.policy import Policy
-from server_select.core.ranking import NO_SERVER, rank_servers
-from server_select.core.window import LatencyWindow, PairStats
+from server_select.core.selection.policy import Policy
+from server_select.core.selection.rank import NO_SERVER, rank_servers
+from server_select.core.selection.window import LatencyWindow, PairStats
 
 
 def stats(**means):

@@ -4,9 +4,9 @@ import random
 
 import pytest
 
-from server_select.core.policy import Chooser, Policy
-from server_select.core.ranking import NO_SERVER, rank_servers
-from server_select.core.rankings import FleetRankings
+from server_select.core.selection.policy import Chooser, Policy
+from server_select.core.selection.rank import NO_SERVER, rank_servers
+from server_select.core.selection.fleet_rankings import FleetRankings
 from server_select.core.settings import PARAMS, PROFILES, default
 
 

@@ -1,7 +1,7 @@
 import pytest
 
-from server_select.core.report import RunReport, switch_count
-from server_select.core.stats import format_ms, summarize
+from server_select.core.observe.summary import RunReport, switch_count
+from server_select.core.util.stats import format_ms, summarize
 
 
 def test_summarize():
@@ -39,7 +39,7 @@ def test_run_report_counts_switches_and_tasks():
 
 
 def test_median_and_range_of_repeated_runs():
-    from server_select.core.tables import median_range
+    from server_select.core.util.tables import median_range
     assert median_range([3.0, 1.0, 2.0]) == '2.0 (1.0-3.0)'
     assert median_range([1.0, 4.0], '%.0f') == '2 (1-4)'   # 2.5 rounds to even
     assert median_range([7], '%d') == '7'

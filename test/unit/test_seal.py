@@ -1,4 +1,4 @@
-"""Signed fleet messages: key files, seals, replay and rotation (server_select.core.seal)."""
+"""Signed fleet messages: key files, seals, replay and rotation (server_select.core.trust.seal)."""
 
 import os
 import stat
@@ -6,7 +6,9 @@ import stat
 import pytest
 from hypothesis import given, strategies as st
 
-from server_select.core import keys as key_files, seal
+from server_select.core.trust import keys as key_files
+
+from server_select.core.trust import seal
 
 KEY, NEXT, OTHER = (seal.Keys.from_fleet(secret, 'manager')
                     for secret in (b'k' * 32, b'n' * 32, b'o' * 32))

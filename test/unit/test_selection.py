@@ -2,10 +2,10 @@ import math
 
 import pytest
 
-from server_select.core.health import ServerHealth
-from server_select.core.policy import Policy
-from server_select.core.selection import Selection
-from server_select.core.task_flow import LOCAL, NO_SERVER
+from server_select.core.selection.health import ServerHealth
+from server_select.core.selection.policy import Policy
+from server_select.core.selection.candidates import Selection
+from server_select.core.flow.task_flow import LOCAL, NO_SERVER
 
 from fake_clock import Clock
 

@@ -3,7 +3,7 @@
 import pytest
 
 from fake_clock import Clock
-from server_select.core.senders import ExpectedSender, Throttle, owned_by
+from server_select.core.trust.senders import ExpectedSender, Throttle, owned_by
 
 
 def test_a_node_owns_itself_and_its_namespace_only():
@@ -68,7 +68,7 @@ def test_a_throttle_writes_one_line_a_period_and_counts_the_rest():
 
 
 def test_the_robot_node_pattern_that_would_admit_a_robot_named_otherwise():
-    from server_select.core.senders import node_pattern_of
+    from server_select.core.trust.senders import node_pattern_of
     assert node_pattern_of('/tb3_2/robot2', 2) == '/tb3_{id}/robot{id}'
     assert node_pattern_of('/fleetA/tb3_12/robot', 12) == '/fleetA/tb3_{id}/robot'
     assert node_pattern_of('/tb3_12/robot', 2) is None        # 12 is not 2

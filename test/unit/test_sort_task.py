@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from server_select.core.sort_task import (TaskError, check_sorted, fingerprint, make_values,
-                                          sort_values)
+from server_select.core.flow.sort_kernel import (TaskError, check_sorted, fingerprint, make_values,
+                                                 sort_values)
 
 
 def test_make_values_is_int32_of_requested_size_and_reproducible():

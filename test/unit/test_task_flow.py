@@ -5,9 +5,9 @@ import itertools
 
 import pytest
 
-from server_select.core.attempts import AttemptClock
-from server_select.core.task_flow import (DUPLICATE, FOREIGN, LATE, LOCAL, NO_SERVER, RETRIED,
-                                          UNKNOWN, TaskFlow)
+from server_select.core.flow.attempts import AttemptClock
+from server_select.core.flow.task_flow import (DUPLICATE, FOREIGN, LATE, LOCAL, NO_SERVER, RETRIED,
+                                               UNKNOWN, TaskFlow)
 
 from fake_clock import Clock
 

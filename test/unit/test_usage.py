@@ -1,7 +1,7 @@
 import os
 import time
 
-from server_select.core.procs import measure
+from server_select.core.util.procs import measure
 
 
 def busy(seconds):

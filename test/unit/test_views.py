@@ -1,14 +1,15 @@
-"""Robots that rank for themselves (~sample_stream view): core/views.py, core/ranking.py."""
+"""Robots that rank for themselves (~sample_stream view): core/selection/robot_views.py and
+core/selection/rank.py."""
 
 import math
 
 import pytest
 
-from server_select.core.policy import Policy
-from server_select.core.ranking import Ranking, from_view, only, rank_servers, view_key
-from server_select.core.rankings import FleetRankings
-from server_select.core.selection import Selection
-from server_select.core.views import EMPTY, ViewRankings
+from server_select.core.selection.policy import Policy
+from server_select.core.selection.rank import Ranking, from_view, only, rank_servers, view_key
+from server_select.core.selection.fleet_rankings import FleetRankings
+from server_select.core.selection.candidates import Selection
+from server_select.core.selection.robot_views import EMPTY, ViewRankings
 
 
 def ranking(servers, means, excluded=()):

@@ -9,7 +9,7 @@ import unittest
 import rospy
 import rostest
 
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 from server_select.msg import TaskReport
 from wordcount_task.msg import WordCountResult
 

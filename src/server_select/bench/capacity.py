@@ -39,7 +39,7 @@ from rospy.numpy_msg import numpy_msg
 
 from server_select.bench import capacity_report, cli
 from server_select.bench.capacity_report import static_assignment
-from server_select.core.sort_task import sort_values
+from server_select.core.flow.sort_kernel import sort_values
 from server_select.msg import SortResult, SortTask
 from server_select.bench.harness import scenario_run
 from server_select.testbed.suite import PREVIOUS_FLEET, RULES, peer_params

@@ -8,7 +8,7 @@ import statistics
 
 import numpy as np
 
-from server_select.core.tables import fmt, markdown_table, median_range
+from server_select.core.util.tables import fmt, markdown_table, median_range
 
 COLUMNS = (('offered', 'offered /s', '%.2f', 1.0), ('sent', 'sent /s', '%.2f', 1.0),
            ('goodput', 'goodput /s', '%.2f', 1.0),

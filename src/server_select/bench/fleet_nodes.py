@@ -26,9 +26,9 @@ import rospy
 
 from server_select.bench import cli
 from server_select.bench.harness import Roscore, node_pid
-from server_select.core import names
-from server_select.core.procs import measure, stop_group, wait_until
-from server_select.core.tables import fmt, markdown_table
+from server_select.core.config import names
+from server_select.core.util.procs import measure, stop_group, wait_until
+from server_select.core.util.tables import fmt, markdown_table
 
 LAYOUTS = {'samples': ['sample_stream:=robot', 'flag_stream:=shared'], 'views': []}
 INPUTS = {'samples': (names.SAMPLES_TOPIC, names.TASK_SAMPLES_TOPIC),

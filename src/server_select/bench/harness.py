@@ -10,9 +10,9 @@ import threading
 import time
 import xmlrpc.client
 
-from server_select.core import names
-from server_select.core.outcome import cut_off
-from server_select.core.procs import stop_group, wait_until
+from server_select.core.config import names
+from server_select.core.flow.outcome import cut_off
+from server_select.core.util.procs import stop_group, wait_until
 from server_select.ros.graph import node_pid as graph_node_pid
 
 PY = [sys.executable, '-m']

@@ -17,7 +17,7 @@ import numpy as np
 
 from server_select.bench import cli
 from server_select.bench.harness import scenario_run
-from server_select.core.tables import markdown_table, median_range
+from server_select.core.util.tables import markdown_table, median_range
 from server_select.testbed import bag_analysis
 
 TIMEOUT = 2.0

@@ -19,7 +19,7 @@ import sys
 import threading
 import time
 
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 from server_select.bench.netbench import connect, recv_frame, send_frame
 
 STAMP = struct.Struct('!d')

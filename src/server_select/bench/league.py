@@ -1,5 +1,5 @@
 """The league (``make league``): the fleet profile beside the rules a user would pick instead
-(core/balancers.py), on every scenario at once. Root and TUN (testbed).
+(core/selection/balancers.py), on every scenario at once. Root and TUN (testbed).
 
 Network scenarios (the suite's): every variant side by side in one run (shared servers and
 links, robots of their own), ``--repeats`` runs each. Capacity scenarios (the capacity
@@ -19,8 +19,8 @@ import os
 import sys
 
 from server_select.bench import capacity_report, cli
-from server_select.core.balancers import PEERS
-from server_select.core.tables import markdown_table, median_range
+from server_select.core.selection.balancers import PEERS
+from server_select.core.util.tables import markdown_table, median_range
 
 NETWORK = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
            'hung_server')

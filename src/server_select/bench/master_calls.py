@@ -25,8 +25,8 @@ import rosgraph
 
 from server_select.bench import cli
 from server_select.bench.harness import Roscore
-from server_select.core.procs import stop_group, wait_until
-from server_select.core.tables import markdown_table
+from server_select.core.util.procs import stop_group, wait_until
+from server_select.core.util.tables import markdown_table
 
 
 class CountingProxy(object):

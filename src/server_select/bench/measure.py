@@ -9,9 +9,9 @@ import time
 import numpy as np
 
 from server_select.bench.harness import PY, fleet, free_port, node_pid, us
-from server_select.core.procs import measure
+from server_select.core.util.procs import measure
 from server_select.core.settings import default
-from server_select.core.stats import summarize
+from server_select.core.util.stats import summarize
 
 
 # -- Table 2: topic vs socket ------------------------------------------------------------
@@ -144,7 +144,7 @@ def bench_sort_breakdown(tiny, log, listener):
     """Where a sort task's round trip goes: (de)serialization, sort, transport."""
     from rospy.numpy_msg import numpy_msg
     from server_select.msg import SortResult, SortTask
-    from server_select.core.sort_task import make_values, sort_values
+    from server_select.core.flow.sort_kernel import make_values, sort_values
     rng = np.random.default_rng(0)
     rows = []
     for size in ([1000] if tiny else [1000, 1000000]):

@@ -16,8 +16,8 @@ import psutil
 
 from server_select.bench import cli
 from server_select.bench.harness import Roscore, node_pid
-from server_select.core.procs import stop_group, wait_until
-from server_select.core.tables import markdown_table
+from server_select.core.util.procs import stop_group, wait_until
+from server_select.core.util.tables import markdown_table
 
 NODES = ('/manager', '/server1', '/server2', '/server3', '/robot1', '/robot2')
 

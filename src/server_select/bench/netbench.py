@@ -18,7 +18,7 @@ import struct
 import sys
 import time
 
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 HEADER = struct.Struct('!I')
 
 
@@ -106,7 +106,7 @@ def echo_client(host, port, count, size=4, interval=0.01, warmup=5, nodelay=True
 def probe_client(server_id, count, interval=0.05, timeout=1.0, warmup=3):
     """LatencyProbe round trips through the package's own persistent, timed proxy."""
     import rospy
-    from server_select.core import names
+    from server_select.core.config import names
     from server_select.ros.probe_client import TimedServiceProxy
     from server_select.srv import LatencyProbe, LatencyProbeRequest
     rospy.init_node('probe_bench', anonymous=True, disable_signals=True)

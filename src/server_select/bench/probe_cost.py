@@ -30,9 +30,9 @@ import rospy
 
 from server_select.bench import cli
 from server_select.bench.harness import Roscore, node_pid
-from server_select.core import names
-from server_select.core.procs import measure, stop_groups, wait_until
-from server_select.core.tables import markdown_table, median_range
+from server_select.core.config import names
+from server_select.core.util.procs import measure, stop_groups, wait_until
+from server_select.core.util.tables import markdown_table, median_range
 from server_select.srv import LatencyProbe, LatencyProbeResponse
 
 VARIANTS = {'uniform': ['_contender_rate:=0'], 'adaptive': []}

@@ -2,7 +2,7 @@
 
 import os
 
-from server_select.core.tables import markdown_table
+from server_select.core.util.tables import markdown_table
 
 PAPER_TABLE2 = {'ros': {'max_us': 881, 'mean_us': 408, 'sd_us': 47.2},
                 'socket': {'max_us': 544, 'mean_us': 346, 'sd_us': 83.9}}

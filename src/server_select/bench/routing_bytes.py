@@ -16,7 +16,7 @@ import tempfile
 from server_select.bench import cli
 from server_select.bench.harness import link_bytes, scenario_run
 from server_select.ros.paths import package_file
-from server_select.core.tables import markdown_table
+from server_select.core.util.tables import markdown_table
 from server_select.testbed import bag_analysis
 from server_select.testbed.runner import at_once
 

@@ -32,11 +32,11 @@ import psutil
 from server_select.bench import cli
 from server_select.bench.harness import PY, Roscore, node_pid
 from server_select.bench.scale_sim import group_table
-from server_select.core.procs import measure, stop_groups, wait_until
-from server_select.core.keys import make_key
+from server_select.core.util.procs import measure, stop_groups, wait_until
+from server_select.core.trust.keys import make_key
 from server_select.core.settings import default
-from server_select.core.stats import summarize
-from server_select.core.tables import fmt, markdown_table
+from server_select.core.util.stats import summarize
+from server_select.core.util.tables import fmt, markdown_table
 
 SIZES = '2x3,10x10,50x50,100x50,200x100,500x100'
 GROUPED = '200x100:4,500x500:10,1000x1000:20'

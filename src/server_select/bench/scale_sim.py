@@ -34,9 +34,9 @@ import time
 
 import rospy
 
-from server_select.core import names
-from server_select.core.groups import probe_set
-from server_select.core.seal import Sealer, load_keys
+from server_select.core.config import names
+from server_select.core.fleet.groups import probe_set
+from server_select.core.trust.seal import Sealer, load_keys
 from server_select.msg import (GroupAssignments, LatencySample, LatencySamples, RobotRanking,
                                SelectionFlag)
 from server_select.ros.seal import sealed

@@ -19,9 +19,9 @@ import numpy as np
 from rospy.numpy_msg import numpy_msg
 
 from server_select.bench import cli
-from server_select.core.keys import KEY_BYTES, Keys
-from server_select.core.seal import Sealer, Verifier, publisher_role
-from server_select.core.tables import markdown_table
+from server_select.core.trust.keys import KEY_BYTES, Keys
+from server_select.core.trust.seal import Sealer, Verifier, publisher_role
+from server_select.core.util.tables import markdown_table
 from server_select.msg import ImageResult, LatencySamples, SelectionFlag, SortResult
 from server_select.ros.seal import check, sealed
 

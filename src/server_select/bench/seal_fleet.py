@@ -20,9 +20,9 @@ import xmlrpc.client
 
 from server_select.bench import cli
 from server_select.bench.harness import Roscore
-from server_select.core.keys import make_key
-from server_select.core.procs import measure, stop_group, wait_until
-from server_select.core.tables import markdown_table
+from server_select.core.trust.keys import make_key
+from server_select.core.util.procs import measure, stop_group, wait_until
+from server_select.core.util.tables import markdown_table
 
 ROLES = ('robot', 'manager', 'server')
 

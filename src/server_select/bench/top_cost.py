@@ -22,8 +22,8 @@ import time
 
 from server_select.bench import cli
 from server_select.bench.harness import Roscore, node_pid
-from server_select.core.procs import measure, stop_group, wait_until
-from server_select.core.tables import markdown_table
+from server_select.core.util.procs import measure, stop_group, wait_until
+from server_select.core.util.tables import markdown_table
 
 ROWS, COLUMNS = 60, 140
 

@@ -16,8 +16,8 @@ import tempfile
 from server_select.bench import cli
 from server_select.bench.harness import link_bytes, scenario_run
 from server_select.ros.paths import package_file
-from server_select.core.stats import summarize
-from server_select.core.tables import markdown_table, median_range
+from server_select.core.util.stats import summarize
+from server_select.core.util.tables import markdown_table, median_range
 from server_select.testbed import bag_analysis
 
 TIMEOUT = 5.0

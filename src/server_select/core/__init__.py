@@ -1,0 +1,18 @@
+"""The package's logic, free of rospy and of generated messages (``test_layout`` checks it):
+what a node decides, unit-tested without a master. Nodes (``nodes/``) are thin wiring over
+it through ``ros/``.
+
+One sub-package per topic, each importing only those listed before it (``test_layout``
+checks the direction and that there is no cycle):
+
+- ``util``: waiting, processes, Markdown tables, summary statistics.
+- ``config``: parameter parsers, graph names and the ids that stand for no server.
+- ``trust``: fleet key files, seals (who may sign what) and the publisher check.
+- ``load``: a server's work queue and load reports; what robots announce they send.
+- ``selection``: latency windows, rankings, the selection rules (``hot_cold`` and the
+  peers), probing plans, passive samples, a robot's health table.
+- ``flow``: a task's life at the robot: send, re-send, hedge, check, report once.
+- ``fleet``: membership by leases, server groups.
+- ``settings``: the table of every node parameter (a module: it names every rule's choices).
+- ``observe``: what a run did (summaries) and what ``top`` shows.
+"""

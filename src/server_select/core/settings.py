@@ -7,14 +7,14 @@ node's default", and the evaluation takes its defaults from it.
 
 import collections
 
-from server_select.core.groups import parse_groups
-from server_select.core.leases import LEASE_PERIODS
-from server_select.core.policy import POLICIES
-from server_select.core.params import (one_of, parse_bool, parse_count, parse_id,
-                                       parse_members, parse_mode, parse_names, parse_non_negative,
-                                       parse_node_pattern, parse_number, parse_plugins,
-                                       parse_positive, parse_positive_int, parse_publisher,
-                                       parse_quantile, parse_text)
+from server_select.core.fleet.groups import parse_groups
+from server_select.core.fleet.leases import LEASE_PERIODS
+from server_select.core.selection.policy import POLICIES
+from server_select.core.config.params import (one_of, parse_bool, parse_count, parse_id,
+                                              parse_members, parse_mode, parse_names,
+                                              parse_non_negative, parse_node_pattern, parse_number,
+                                              parse_plugins, parse_positive, parse_positive_int,
+                                              parse_publisher, parse_quantile, parse_text)
 
 REQUIRED = object()
 

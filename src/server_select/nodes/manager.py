@@ -4,19 +4,20 @@ import threading
 
 import rospy
 
-from server_select.core import names
-from server_select.core.params import ParamError
-from server_select.core.policy import Chooser, from_params
-from server_select.core.rankings import FleetRankings
-from server_select.core.window import RTT_RANGE, valid_rtt
-from server_select.core.ranking import from_view
-from server_select.core.senders import node_pattern_of
-from server_select.core.views import ViewRankings
+from server_select.core.config import names
+from server_select.core.config.params import ParamError
+from server_select.core.selection.policy import Chooser, from_params
+from server_select.core.selection.fleet_rankings import FleetRankings
+from server_select.core.selection.window import RTT_RANGE, valid_rtt
+from server_select.core.selection.rank import from_view
+from server_select.core.trust.senders import node_pattern_of
+from server_select.core.selection.robot_views import ViewRankings
 from server_select.msg import LatencySample, LatencySamples, RobotRanking
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.graph import publisher_of
 from server_select.ros.membership import GroupAssignmentsListener, ServerRegistry
-from server_select.ros.node import fleet, param, run
+from server_select.ros.node import fleet, param
+from server_select.ros.runner import run
 from server_select.ros.senders import robot_senders
 
 
@@ -63,12 +64,12 @@ class ManagerNode(object):
         - ``~policy`` (``mean``), ``~statistic`` (``mean``), ``~hysteresis`` (s, 0.0),
           ``~dwell``, ``~margin_z``, ``~latency_bound``, ``~ewma_tau``, ``~fail_fast``: the
           selection policy
-          (``core/policy.py``; the defaults are the paper: always the lowest mean).
+          (``core/selection/policy.py``; the defaults are the paper: always the lowest mean).
         - ``~passive`` (false): also take the robots' answered tasks on ``task_samples``
           as samples (what tasks really get: network, queueing and work).
         - ``~task_memory`` (s, 0; fleet: 5): with ``~passive``, a server's task cost above
           its probes is added to its probe samples, fading with this time constant once
-          the robot's tasks stop going there (``core/passive.py``, TaskCost).
+          the robot's tasks stop going there (``core/selection/passive.py``, TaskCost).
         - ``~robot_node`` (``first``): whose samples count for robot {id}: the first node
           that sends them while it answers its API (``first``), only that node or namespace
           (``/robot{id}``), or any publisher (``*``).

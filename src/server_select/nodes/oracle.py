@@ -2,10 +2,11 @@
 
 import rospy
 
-from server_select.core.ranking import NO_SERVER, Ranking
-from server_select.core.params import ParamError
+from server_select.core.selection.rank import NO_SERVER, Ranking
+from server_select.core.config.params import ParamError
 from server_select.ros.flags import FlagPublisher
-from server_select.ros.node import param, run
+from server_select.ros.node import param
+from server_select.ros.runner import run
 from server_select.testbed.scenario import Scenario, ScenarioError
 
 

@@ -5,12 +5,13 @@ import os
 
 import rospy
 
-from server_select.core import names
-from server_select.core.outcome import cut_off
-from server_select.core.params import parse_id_list
-from server_select.core.report import RunReport
+from server_select.core.config import names
+from server_select.core.flow.outcome import cut_off
+from server_select.core.config.params import parse_id_list
+from server_select.core.observe.summary import RunReport
 from server_select.msg import LatencySample, LatencySamples, SelectionFlag, TaskReport
-from server_select.ros.node import end_parent_launch, fleet, param, run
+from server_select.ros.node import end_parent_launch, fleet, param
+from server_select.ros.runner import run
 from server_select.ros.senders import SenderGate
 
 

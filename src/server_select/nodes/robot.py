@@ -6,14 +6,16 @@ import time
 
 import rospy
 
-from server_select.core import names, probing
-from server_select.core.attempts import AttemptClock
-from server_select.core.budget import RetryBudget
-from server_select.core.health import ServerHealth
-from server_select.core.params import ParamError, parse_fixed_server
-from server_select.core.policy import from_params
-from server_select.core.selection import Selection
-from server_select.core.task_flow import LOCAL, NO_SERVER
+from server_select.core.config import names
+
+from server_select.core.selection import probing
+from server_select.core.flow.attempts import AttemptClock
+from server_select.core.flow.budget import RetryBudget
+from server_select.core.selection.health import ServerHealth
+from server_select.core.config.params import ParamError, parse_fixed_server
+from server_select.core.selection.policy import from_params
+from server_select.core.selection.candidates import Selection
+from server_select.core.flow.task_flow import LOCAL, NO_SERVER
 from server_select.msg import SelectionFlag
 from server_select.ros.camera import TopicSource
 from server_select.ros.flags import flag_topic
@@ -21,7 +23,8 @@ from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.load import RobotLoad
 from server_select.ros import seal
 from server_select.ros.membership import GroupFollower, ProbeAddresses, ServerAnnouncements
-from server_select.ros.node import fleet, param, run
+from server_select.ros.node import fleet, param
+from server_select.ros.runner import run
 from server_select.ros.passive import TaskSamples
 from server_select.ros.prober import STILL_OUT, Prober
 from server_select.ros.routing import ROUTES

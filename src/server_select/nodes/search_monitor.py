@@ -5,11 +5,12 @@ import threading
 
 import rospy
 
-from server_select.core import names
-from server_select.core.params import ParamError
-from server_select.core.tables import markdown_table
+from server_select.core.config import names
+from server_select.core.config.params import ParamError
+from server_select.core.util.tables import markdown_table
 from server_select.msg import FoundTarget
-from server_select.ros.node import fleet, param, run
+from server_select.ros.node import fleet, param
+from server_select.ros.runner import run
 from server_select.ros.senders import SenderGate
 from server_select.vision.search import SearchError, SearchWorld
 

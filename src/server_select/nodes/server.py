@@ -5,12 +5,13 @@ import time
 
 import rospy
 
-from server_select.core import names
-from server_select.core.params import ParamError
-from server_select.core.procs import usable_cpus
+from server_select.core.config import names
+from server_select.core.config.params import ParamError
+from server_select.core.util.procs import usable_cpus
 from server_select.ros import seal
 from server_select.ros.membership import ServerAnnouncer
-from server_select.ros.node import fleet, live_param, param, run
+from server_select.ros.node import fleet, live_param, param
+from server_select.ros.runner import run
 from server_select.ros.plugins import PluginHandler
 from server_select.ros.server_work import ServerWork
 from server_select.ros.task_kinds import server_kinds

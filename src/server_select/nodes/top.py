@@ -19,7 +19,7 @@ import sys
 import threading
 import time
 
-from server_select.core.fleet_view import FleetView, Load
+from server_select.core.observe.fleet_view import FleetView, Load
 
 TOPICS = ('task_report', 'server_select_flag', 'latency_samples', 'server_announcements',
           'rosout_agg', 'rosout')
@@ -64,7 +64,7 @@ class LiveFleet(object):
     def __init__(self, feed, servers):
         import rospy
         from rosgraph_msgs.msg import Log
-        from server_select.core import names
+        from server_select.core.config import names
         from server_select.msg import (LatencySamples, SelectionFlag, ServerAnnouncement,
                                        TaskReport)
         from server_select.ros.node import fleet

@@ -5,12 +5,13 @@ import time
 
 import rospy
 
-from server_select.core import names
-from server_select.core.groups import GroupAssigner
-from server_select.core.window import valid_rtt
+from server_select.core.config import names
+from server_select.core.fleet.groups import GroupAssigner
+from server_select.core.selection.window import valid_rtt
 from server_select.msg import GroupAssignments, LatencySamples, ServerGroup
 from server_select.ros.graph import publisher_of
-from server_select.ros.node import fleet, param, run
+from server_select.ros.node import fleet, param
+from server_select.ros.runner import run
 from server_select.ros import seal
 from server_select.ros.seal import SealedPublisher
 from server_select.ros.senders import robot_senders

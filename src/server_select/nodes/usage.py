@@ -3,10 +3,11 @@
 import rosgraph
 import rospy
 
-from server_select.core.procs import measure
-from server_select.core.tables import markdown_table
+from server_select.core.util.procs import measure
+from server_select.core.util.tables import markdown_table
 from server_select.ros.graph import node_pid
-from server_select.ros.node import end_parent_launch, param, run
+from server_select.ros.node import end_parent_launch, param
+from server_select.ros.runner import run
 
 
 class UsageNode(object):

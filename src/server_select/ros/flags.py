@@ -4,7 +4,7 @@ import threading
 
 import rospy
 
-from server_select.core import names
+from server_select.core.config import names
 from server_select.msg import SelectionFlag
 from server_select.ros.node import fleet, param
 from server_select.ros.seal import SealedPublisher
@@ -48,7 +48,7 @@ class FlagPublisher(object):
 
     def offer(self, robot, ranking, only_on_change, choose=None):
         """Publish ``robot``'s flag for ``ranking`` (a
-        :class:`~server_select.core.ranking.Ranking`) unless ``only_on_change`` and nothing
+        :class:`~server_select.core.selection.rank.Ranking`) unless ``only_on_change`` and nothing
         changed; True if published. ``choose(previous)`` picks the server given the one
         published before (None at first); default: the ranking's best.
         :meth:`selected` then tells the server chosen."""

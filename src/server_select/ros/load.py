@@ -1,16 +1,16 @@
 """A load-aware robot's view of its servers' load, fed by its probe answers
-(:class:`~server_select.core.load_board.LoadBoard`), and what its probes announce."""
+(:class:`~server_select.core.load.board.LoadBoard`), and what its probes announce."""
 
 import threading
 import time
 
-from server_select.core.demand import Arrivals
-from server_select.core.load import Load
-from server_select.core.load_board import LoadBoard
+from server_select.core.load.demand import Arrivals
+from server_select.core.load.work_queue import Load
+from server_select.core.load.board import LoadBoard
 
 
 def load_of(response):
-    """The :class:`~server_select.core.load.Load` a LatencyProbe answer reports."""
+    """The :class:`~server_select.core.load.work_queue.Load` a LatencyProbe answer reports."""
     return Load(response.queued, response.in_service, max(1, response.workers),
                 response.backlog, dict(zip(response.kinds, response.service_time)),
                 response.utilization)
@@ -20,7 +20,7 @@ class RobotLoad(object):
     """What the robot's tasks would wait for at each server: ``mix`` is ``{kind: tasks
     per second}`` of the robot's streams. ``target()`` names the server the robot's next
     task goes to: a probe of it announces the rate the robot sends tasks at (measured from
-    its sends, :class:`~server_select.core.demand.Arrivals`; a kind's rate in ``mix``
+    its sends, :class:`~server_select.core.load.demand.Arrivals`; a kind's rate in ``mix``
     until its first task is sent), a probe of any other announces none, so that servers
     count the robot where its tasks go now. Thread-safe."""
 

@@ -1,7 +1,7 @@
 """Servers that come and go at run time (fleet profile).
 
 Every server announces itself, latched, on ``server_announcements`` every
-``~announce_period`` s with a lease of a few periods (:mod:`server_select.core.leases`),
+``~announce_period`` s with a lease of a few periods (:mod:`server_select.core.fleet.leases`),
 and says when it leaves. The manager keeps the leases and publishes the members' ids,
 latched, on ``fleet_servers`` when they change; robots with ``~discover`` probe what it
 lists on top of their static ``~servers``. Nobody asks the master: a server that shuts
@@ -14,9 +14,9 @@ import warnings
 
 import rospy
 
-from server_select.core import names
-from server_select.core.groups import probe_set
-from server_select.core.leases import LEASE_PERIODS, Leases
+from server_select.core.config import names
+from server_select.core.fleet.groups import probe_set
+from server_select.core.fleet.leases import LEASE_PERIODS, Leases
 from server_select.msg import FleetServers, GroupAssignments, ServerAnnouncement
 from server_select.ros.graph import publisher_of
 from server_select.ros.senders import SenderGate

@@ -2,17 +2,14 @@
 
 import os
 import signal
-import sys
 
 import rosgraph
 import rosgraph.names
 import rospy
 
-from server_select.core import names
-from server_select.core.params import ParamError
-from server_select.core.procs import wait_until
+from server_select.core.config.params import ParamError
+from server_select.core.util.procs import wait_until
 from server_select.core.settings import PARAMS, REQUIRED, default as profile_default
-from server_select.ros.master_watch import MasterWatch
 
 _FLEET_NS = None
 _PROFILE = None
@@ -51,18 +48,6 @@ def live_param(name):
             rospy.set_param(private, profile_default(name, profile()))
         _LIVE.add(private)
     return PARAMS[name].parse(private, rospy.get_param_cached(private))
-
-
-def _follow_again(what):
-    """After a roscore restart (its parameter server starts empty): the followed
-    parameters' values back on it, and their subscriptions with it."""
-    if what != 'restarted':
-        return
-    master = rosgraph.Master(rospy.get_name())
-    for private in sorted(_LIVE):
-        value = rospy.get_param_cached(private)          # this node's cache: no call
-        rospy.set_param(private, value)
-        master.subscribeParam(rospy.core.get_node_uri(), rospy.resolve_name(private))
 
 
 def quiet_logging():
@@ -120,34 +105,3 @@ def flush(publisher, timeout=1.0):
     return wait_until(lambda: not any(getattr(c, '_queue', None)
                                       for c in list(publisher.impl.connections)),
                       timeout, period=0.01)
-
-
-def run(node_name, node_class, argv=None):
-    """Initialise the node, build ``node_class()``, start it and spin until shutdown.
-
-    A ParamError becomes one ``logfatal`` line and exit status 2, so that a launch file
-    with a bad ``<arg>`` fails loudly instead of running half-configured. Every node
-    registers again with a restarted roscore (:class:`MasterWatch`): a node whose class
-    says ``MASTER_WATCHER`` (the manager) checks every ``~master_watch`` s and tells the
-    others on ``master_pid``, which check every ``~master_check`` s by themselves.
-    """
-    from server_select.ros import seal     # (it reads parameters through this module)
-    rospy.init_node(node_name, argv=argv)
-    quiet_logging()
-    try:
-        # a key that cannot be used, or none with ~require_key, ends the node here
-        seal.announce(rospy.get_name(), getattr(node_class, 'SEAL_ROLE', None))
-        node = node_class()
-        watcher = getattr(node_class, 'MASTER_WATCHER', False)
-        watch = MasterWatch(param('master_watch' if watcher else 'master_check'),
-                            on_change=_follow_again, watcher=watcher,
-                            topic=fleet(names.MASTER_PID_TOPIC))
-    except ParamError as error:
-        rospy.logfatal('invalid parameter: %s', error)
-        rospy.signal_shutdown('invalid parameter')
-        sys.exit(2)
-    start = getattr(node, 'start', None)
-    if start is not None:
-        start()
-    watch.start()
-    rospy.spin()

@@ -5,16 +5,16 @@ import threading
 
 import rospy
 
-from server_select.core import names
-from server_select.core.passive import TaskBaseline
+from server_select.core.config import names
+from server_select.core.selection.passive import TaskBaseline
 from server_select.msg import LatencySamples
 from server_select.ros.node import fleet
 from server_select.ros.seal import SealedPublisher
 
 
 class TaskSamples(object):
-    """Turns answered tasks into samples (:mod:`server_select.core.passive`) for a
-    :class:`~server_select.core.selection.Selection` and publishes each on
+    """Turns answered tasks into samples (:mod:`server_select.core.selection.passive`) for a
+    :class:`~server_select.core.selection.candidates.Selection` and publishes each on
     ``task_samples`` (one LatencySamples per answered task).
 
     A task's round trip enters less its kind's baseline, the least any server's tasks

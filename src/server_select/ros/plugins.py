@@ -3,7 +3,7 @@
 The built-in sort and image tasks are task types like any other
 (:mod:`server_select.tasks`); more are added without editing the nodes, named
 ``module:Class`` in the robot's and the server's ``~task_plugins``. A robot sends every
-type's tasks through a :class:`~server_select.core.task_flow.TaskFlow` (selection, failover,
+type's tasks through a :class:`~server_select.core.flow.task_flow.TaskFlow` (selection, failover,
 one ``task_report`` each); a server answers every type through a :class:`PluginHandler`. A
 plug-in's own settings are the private parameters under its kind (``~orb/rate``,
 ``~orb/source``, ...).
@@ -15,7 +15,7 @@ import time
 
 import rospy
 
-from server_select.core.params import ParamError
+from server_select.core.config.params import ParamError
 from server_select.ros.graph import publisher_of
 from server_select.ros import seal
 from server_select.ros.routing import ServerEndpoint

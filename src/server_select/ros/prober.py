@@ -8,8 +8,8 @@ import time
 
 import rospy
 
-from server_select.core import names
-from server_select.core.senders import Throttle
+from server_select.core.config import names
+from server_select.core.trust.senders import Throttle
 from server_select.msg import LatencySample, LatencySamples
 from server_select.ros import seal
 from server_select.ros.node import fleet
@@ -40,11 +40,11 @@ class _Round(object):
 
 
 class Prober(object):
-    """Probes the servers when ``plan`` (a :class:`~server_select.core.probing.ProbePlan`)
+    """Probes the servers when ``plan`` (a :class:`~server_select.core.selection.probing.ProbePlan`)
     says, one round per tick of the plan, and publishes each sample, failed ones too.
     ``contenders``, for adaptive plans, is ``(rule, view)``: a
-    :class:`~server_select.core.probing.ContenderRule` and the robot's
-    :class:`~server_select.core.selection.Selection`, whose ``contenders(rule)`` the plan
+    :class:`~server_select.core.selection.probing.ContenderRule` and the robot's
+    :class:`~server_select.core.selection.candidates.Selection`, whose ``contenders(rule)`` the plan
     takes each tick; a sample of a background server that lands near them
     (``view.near(rule, value)``, after ``on_sample`` has entered it) makes that server a
     contender at once (a fast re-check).

@@ -13,7 +13,7 @@ import time
 
 import rospy
 
-from server_select.core import names
+from server_select.core.config import names
 from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet
 from server_select.ros.seal import SealedPublisher

@@ -1,4 +1,4 @@
-"""Signed fleet messages, the ROS side (:mod:`server_select.core.seal` has the rule).
+"""Signed fleet messages, the ROS side (:mod:`server_select.core.trust.seal` has the rule).
 
 A node with ``~fleet_key`` (a key file) seals what it publishes on the fleet's topics
 (:class:`SealedPublisher`: flags, sample batches, task samples, server lists, group
@@ -16,9 +16,9 @@ import threading
 
 import rospy
 
-from server_select.core import seal as core
-from server_select.core.params import ParamError
-from server_select.core.senders import Throttle
+from server_select.core.trust import seal as core
+from server_select.core.config.params import ParamError
+from server_select.core.trust.senders import Throttle
 from server_select.ros.node import param
 
 _LOCK = threading.Lock()
@@ -54,7 +54,7 @@ def _configured():
 
 def announce(who, role=None):
     """One line at start: whether ``who`` (this node, publishing as ``role``, one of
-    :data:`~server_select.core.seal.ROLES`, or None when it publishes nothing sealed)
+    :data:`~server_select.core.trust.seal.ROLES`, or None when it publishes nothing sealed)
     signs and checks (``~require_key`` without a key: ParamError)."""
     _STATE['role'] = role
     if enabled():
@@ -124,7 +124,7 @@ def refusal(msg, sender):
 
 
 def sealed(msg, sealer, channel):
-    """``msg`` sealed by ``sealer`` (a :class:`~server_select.core.seal.Sealer`; None:
+    """``msg`` sealed by ``sealer`` (a :class:`~server_select.core.trust.seal.Sealer`; None:
     unchanged) for topic or service ``channel``."""
     if sealer is None or not hasattr(msg, 'seal'):
         return msg
@@ -192,7 +192,7 @@ def require_sealable(msg_type, what):
 class SealedPublisher(rospy.Publisher):
     """A ``rospy.Publisher`` whose messages leave sealed with this node's key (as they are
     without one). With a key, made only for a type the node's role may publish
-    (:data:`~server_select.core.seal.PUBLISHERS`; else ParamError)."""
+    (:data:`~server_select.core.trust.seal.PUBLISHERS`; else ParamError)."""
 
     def __init__(self, name, data_class, *args, **kwargs):
         if 'seal' in getattr(data_class, '__slots__', ()) and enabled():

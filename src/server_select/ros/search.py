@@ -6,7 +6,7 @@ import threading
 import rospy
 from std_msgs.msg import Header
 
-from server_select.core import names
+from server_select.core.config import names
 from server_select.msg import Detections, FoundTarget
 from server_select.ros.node import fleet
 from server_select.ros.seal import SealedPublisher

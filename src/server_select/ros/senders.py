@@ -2,14 +2,14 @@
 
 import rospy
 
-from server_select.core.senders import ExpectedSender, Throttle
+from server_select.core.trust.senders import ExpectedSender, Throttle
 from server_select.ros import seal
 from server_select.ros.graph import Liveness, publisher_of
 
 
 class SenderGate(object):
     """Admits a message only from the node that should send it
-    (:class:`~server_select.core.senders.ExpectedSender`); anything else is dropped with a
+    (:class:`~server_select.core.trust.senders.ExpectedSender`); anything else is dropped with a
     warning naming the publisher, at most one every ``period`` s for this gate.
 
     ``who`` starts the warning (``robot 1``), ``role`` names the expected node in it

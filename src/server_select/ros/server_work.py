@@ -1,12 +1,12 @@
 """A server's workers: the tasks of every kind through one bounded queue
-(:class:`~server_select.core.load.WorkQueue`), answered by ``workers`` threads."""
+(:class:`~server_select.core.load.work_queue.WorkQueue`), answered by ``workers`` threads."""
 
 import threading
 import time
 
 import rospy
 
-from server_select.core.load import WorkQueue
+from server_select.core.load.work_queue import WorkQueue
 
 
 class ServerWork(object):

@@ -8,7 +8,7 @@ The built-in types take their settings from the node's own parameters (``~task_s
 (a task may be sent again elsewhere).
 """
 
-from server_select.core.params import ParamError
+from server_select.core.config.params import ParamError
 from server_select.ros.camera import TopicSource
 from server_select.ros.plugins import load as load_plugin
 from server_select.ros.search import SearchParticipant

@@ -9,10 +9,10 @@ import time
 
 import rospy
 
-from server_select.core import names
-from server_select.core.stats import format_ms, summarize
-from server_select.core.outcome import STOPPED
-from server_select.core.task_flow import ENDED, RETRIED, TaskFlow
+from server_select.core.config import names
+from server_select.core.util.stats import format_ms, summarize
+from server_select.core.flow.outcome import STOPPED
+from server_select.core.flow.task_flow import ENDED, RETRIED, TaskFlow
 from server_select.msg import TaskReport
 from server_select.ros.graph import publisher_of
 from server_select.ros.senders import SenderGate

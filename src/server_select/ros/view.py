@@ -4,8 +4,8 @@ import threading
 
 import rospy
 
-from server_select.core import names
-from server_select.core.ranking import view_key
+from server_select.core.config import names
+from server_select.core.selection.rank import view_key
 from server_select.msg import RobotRanking
 from server_select.ros.node import fleet
 from server_select.ros.seal import SealedPublisher
@@ -13,7 +13,7 @@ from server_select.ros.seal import SealedPublisher
 
 class RankingSender(object):
     """Publishes ``selection.view()`` on ``robot_rankings`` when what the manager needs of
-    it changes (:func:`~server_select.core.ranking.view_key`: the servers ranked, those
+    it changes (:func:`~server_select.core.selection.rank.view_key`: the servers ranked, those
     left out, the policy's pick from the flagged server), checked whenever a sample may
     have changed it, and every ``1/rate`` s regardless (a restarted manager, fresh means,
     the order below the pick)."""

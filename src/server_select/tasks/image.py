@@ -14,7 +14,7 @@ import time
 from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 from std_msgs.msg import Header
 
-from server_select.core import names
+from server_select.core.config import names
 from server_select.msg import Detection, Detections, ImageResult, ImageTask
 from server_select.ros.node import fleet
 from server_select.ros.plugins import TaskPlugin

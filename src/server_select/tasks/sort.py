@@ -9,8 +9,8 @@ from rospy.numpy_msg import numpy_msg
 
 import numpy as np
 
-from server_select.core import names
-from server_select.core.sort_task import check_sorted, fingerprint, make_values, sort_values
+from server_select.core.config import names
+from server_select.core.flow.sort_kernel import check_sorted, fingerprint, make_values, sort_values
 from server_select.msg import SortResult, SortTask
 from server_select.ros.plugins import TaskPlugin
 

@@ -10,11 +10,11 @@ import math
 import os
 
 from server_select.testbed.scenario import Scenario
-from server_select.core.outcome import cut_off
-from server_select.core.report import switch_count
+from server_select.core.flow.outcome import cut_off
+from server_select.core.observe.summary import switch_count
 from server_select.core.settings import default
-from server_select.core.stats import summarize
-from server_select.core.tables import fmt, markdown_table
+from server_select.core.util.stats import summarize
+from server_select.core.util.tables import fmt, markdown_table
 
 Flag = collections.namedtuple('Flag', 't robot server ranking means')
 Report = collections.namedtuple('Report', 't robot task ok rtt server answered_by error attempts')

@@ -17,7 +17,7 @@ import subprocess
 import sys
 import time
 
-from server_select.core.procs import alive, kill_all, stop_group, stop_groups
+from server_select.core.util.procs import alive, kill_all, stop_group, stop_groups
 from server_select.testbed import cpu
 from server_select.testbed.linkemu import EmulatorError
 

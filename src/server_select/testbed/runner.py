@@ -11,7 +11,7 @@ import signal
 import sys
 import threading
 
-from server_select.core.procs import wait_until
+from server_select.core.util.procs import wait_until
 from server_select.core.settings import default
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.scenario import ScenarioError

@@ -35,7 +35,7 @@ import collections
 
 import yaml
 
-from server_select.core.ranking import NO_SERVER
+from server_select.core.selection.rank import NO_SERVER
 from server_select.testbed.fields import (ScenarioError, hang_times,  # noqa: F401 (re-exported)
                                           number as _number, work_times)
 

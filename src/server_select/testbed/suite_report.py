@@ -15,8 +15,8 @@ import json
 import os
 import statistics
 
-from server_select.core.stats import summarize
-from server_select.core.tables import fmt, markdown_table, median_range
+from server_select.core.util.stats import summarize
+from server_select.core.util.tables import fmt, markdown_table, median_range
 from server_select.testbed.bag_analysis import oracle_changes, reaction_times
 from server_select.testbed.scenario import Scenario
 from server_select.testbed.suite import VARIANTS

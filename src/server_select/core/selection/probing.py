@@ -28,7 +28,7 @@ as one round; the manager sees the same uneven rounds in the robot's sample batc
 
 import math
 
-from server_select.core.ranking import NO_SERVER, latency
+from server_select.core.selection.rank import NO_SERVER, latency
 
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0     # phases i x GOLDEN mod 1 spread evenly
 
@@ -182,7 +182,8 @@ def from_params(get, policy):
     """The :class:`ProbePlan` and (adaptive plans) the :class:`ContenderRule` that
     parameters ask for (``get(name)``: ``probe_rate``, ``contender_rate``,
     ``background_rate``, ``contender_budget``, ``window``), around ``policy``'s margin
-    (a :class:`~server_select.core.policy.Policy`; 3 standard errors unless it has a z)."""
+    (a :class:`~server_select.core.selection.policy.Policy`; 3 standard errors unless it has a
+    z)."""
     plan = ProbePlan(get('probe_rate'), get('contender_rate'), get('background_rate'),
                      get('contender_budget'), hold=get('window'))
     return plan, ContenderRule(policy.margin, policy.z or 3.0) if plan.adaptive else None

@@ -2,7 +2,7 @@
 
 import collections
 
-from server_select.core.outcome import NO_SERVER  # noqa: F401 (re-exported)
+from server_select.core.config.names import NO_SERVER  # noqa: F401 (re-exported)
 
 Ranking = collections.namedtuple('Ranking',
                                  'selected ranking means counts excluded errors waits')
@@ -22,7 +22,7 @@ def latency(stats):
 def rank_servers(pair_stats, fail_fast=0):
     """Rank servers by latency statistic, lowest first.
 
-    ``pair_stats`` maps server id to :class:`server_select.core.window.PairStats`. Servers
+    ``pair_stats`` maps server id to :class:`server_select.core.selection.window.PairStats`. Servers
     with no successful sample in the window are excluded, and with ``fail_fast`` > 0 those
     whose ``fail_fast`` newest samples failed (a server that stopped answering is left
     then, not when its last good sample leaves the window). The candidates are put in

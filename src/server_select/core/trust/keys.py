@@ -1,6 +1,6 @@
 """Fleet key files (no rospy): the fleet key (``make_key``), the key pair of each role
 derived from it, and role key files (``make_key --role``): what
-:mod:`server_select.core.seal` signs and checks with.
+:mod:`server_select.core.trust.seal` signs and checks with.
 
 The fleet key is 32 random bytes, hex, in a file of mode 0600. Each role's Ed25519 key
 pair is derived from it with HKDF-SHA256 (info ``server_select role <role>``), so every

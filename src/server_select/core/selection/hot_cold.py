@@ -1,7 +1,7 @@
 """The fleet profile's selection rule, ``hot_cold`` (no rospy): Prequal's lexicographic
 comparison (avoid the hot, then take the fastest), made sticky for robots.
 
-Per task, from the robot's own evidence (a :class:`~server_select.core.balancers.Balancer`:
+Per task, from the robot's own evidence (a :class:`~server_select.core.selection.balancer.Balancer`:
 the robot tells it its probe answers, its attempts, and the kind of task it sends):
 
 1. The candidates are the servers the robot's health has not ejected (the caller's list).
@@ -56,7 +56,7 @@ import collections
 import math
 import statistics
 
-from server_select.core.balancers import Balancer, quantile
+from server_select.core.selection.balancer import Balancer, quantile
 
 MIN_ANSWERS = 3          # answers per server kept however old (a rarely probed server)
 KEEP = 64                # answers kept per server at most

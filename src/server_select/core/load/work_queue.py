@@ -6,7 +6,7 @@ server's :class:`Load` (tasks queued and in service, workers, the *backlog*: sec
 task sent now would wait for a worker, the *utilization*: the share of the workers' time
 the other robots' tasks take at the rates they announce, and the recent work per task of
 each kind), and a robot ranks servers by round trip + expected wait + work for the tasks it
-sends (C3's expected completion, NSDI '15; :mod:`server_select.core.load_board`).
+sends (C3's expected completion, NSDI '15; :mod:`server_select.core.load.board`).
 
 The backlog is what a task sent now waits for: what an attempt's deadline follows. It is
 also a poor forecast of the next task's wait: a server that does a frame in 0.7 s for two
@@ -17,7 +17,7 @@ says the rate at which it sends tasks to that server now (its rate to the server
 task goes to, none to the others), so a robot that moves loads its new server in the
 others' eyes at its next probe, not after its tasks have arrived for a while (robots that
 all saw an idle server came up idle moved to it together). The tasks of a robot that
-announces nothing count at the rate they arrive (:mod:`server_select.core.demand`).
+announces nothing count at the rate they arrive (:mod:`server_select.core.load.demand`).
 
 Server side, :class:`WorkQueue` holds the tasks waiting for the workers. A task carries
 its *deadline* (when its robot stops waiting): one that cannot be finished by then is
@@ -31,7 +31,7 @@ import statistics
 import threading
 import time
 
-from server_select.core.demand import Demand
+from server_select.core.load.demand import Demand
 
 Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization')
 Load.__new__.__defaults__ = (0.0,)
@@ -86,7 +86,7 @@ class WorkQueue(object):
     deadline: busy); workers :meth:`take` the oldest (None once closed), ask
     :meth:`stale` whether its deadline has passed meanwhile, and call :meth:`done` with the
     seconds it took, which teach :class:`ServiceTimes`. :meth:`announce` hears what a
-    robot's probe says it sends here (:class:`~server_select.core.demand.Demand`: kept
+    robot's probe says it sends here (:class:`~server_select.core.load.demand.Demand`: kept
     ``announce_age`` s; a robot that announces nothing counts by its arrivals over
     ``horizon`` s). Deadlines and times are those of ``clock``.
     """

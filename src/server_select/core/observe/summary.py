@@ -2,10 +2,10 @@
 
 import collections
 
-from server_select.core.ranking import NO_SERVER
+from server_select.core.selection.rank import NO_SERVER
 from server_select.core.settings import default
-from server_select.core.stats import summarize
-from server_select.core.tables import markdown_table
+from server_select.core.util.stats import summarize
+from server_select.core.util.tables import markdown_table
 
 
 def switch_count(servers):

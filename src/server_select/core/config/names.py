@@ -1,7 +1,12 @@
 """Graph names shared by every node (docs/design.md, "Nodes").
 
-All names are relative so that they follow the node's namespace and can be remapped.
+All names are relative so that they follow the node's namespace and can be remapped. Also
+the ids that stand for no server in messages (the unit tests pin them equal to
+``TaskReport``'s and ``SelectionFlag``'s).
 """
+
+NO_SERVER = -1      # TaskReport.NO_SERVER, SelectionFlag.NO_SERVER: no server
+LOCAL = -2          # TaskReport.LOCAL: the robot did the work itself
 
 SELECTION_TOPIC = 'server_select_flag'
 SORT_TASK_TOPIC = 'data'

@@ -12,8 +12,8 @@ import threading
 
 import yaml
 
-from server_select.core.params import ParamError, parse_id, parse_id_list
-from server_select.core.window import LatencyWindow
+from server_select.core.config.params import ParamError, parse_id, parse_id_list
+from server_select.core.selection.window import LatencyWindow
 
 
 def parse_groups(name, value):

@@ -64,7 +64,7 @@ class Arrivals(object):
 
 class Demand(object):
     """Tasks per second of each kind that robots send a server (not thread-safe: the
-    :class:`~server_select.core.load.WorkQueue` holds its lock)."""
+    :class:`~server_select.core.load.work_queue.WorkQueue` holds its lock)."""
 
     def __init__(self, horizon=10.0, announce_age=3.0):
         if not announce_age > 0:

@@ -1,6 +1,6 @@
 """What a robot makes of its servers' load reports (no rospy).
 
-A probe answer carries the server's :class:`~server_select.core.load.Load`. A robot ranks
+A probe answer carries the server's :class:`~server_select.core.load.work_queue.Load`. A robot ranks
 servers by expected completion for the tasks it sends: round trip + the mean wait for a
 worker + the work (C3, NSDI '15). The mean wait comes from the utilization the server
 reports (the other robots' tasks at the rates they arrive), not from its backlog at the

@@ -2,24 +2,24 @@
 
 ``select`` follows the manager's ranking while its flags are fresh, and ranks the servers
 itself from its own probe samples, with the manager's policy, when they are stale or name
-no server; with a peer's policy (:mod:`~server_select.core.balancers`) it asks that rule per
+no server; with a peer's policy (:mod:`~server_select.core.selection.balancers`) it asks that
+rule per
 task and the flags are for the record only; ``fixed`` always names one server (the paper's
 baseline); ``local`` keeps the work in the robot. In ``select`` mode the robot's own
-evidence comes first: servers its :class:`~server_select.core.health.ServerHealth` has
+evidence comes first: servers its :class:`~server_select.core.selection.health.ServerHealth` has
 ejected are skipped.
 """
 
 import threading
 import time
 
-from server_select.core import balancers
-from server_select.core.policy import Chooser, Policy
-from server_select.core.ranking import NO_SERVER, rank_servers
-from server_select.core.rankings import FleetRankings
-from server_select.core.task_flow import LOCAL
-from server_select.core.window import LatencyWindow
-
-MODES = ('select', 'fixed', 'local')
+from server_select.core.selection import balancers
+from server_select.core.selection.policy import Chooser, Policy
+from server_select.core.selection.rank import NO_SERVER, rank_servers
+from server_select.core.selection.fleet_rankings import FleetRankings
+from server_select.core.config.names import LOCAL
+from server_select.core.config.params import MODES  # noqa: F401 (re-exported)
+from server_select.core.selection.window import LatencyWindow
 
 
 class Selection(object):
@@ -118,7 +118,8 @@ class Selection(object):
         return ranking
 
     def contenders(self, rule):
-        """The servers that ``rule`` (a :class:`~server_select.core.probing.ContenderRule`)
+        """The servers that ``rule`` (a
+        :class:`~server_select.core.selection.probing.ContenderRule`)
         calls contenders by the robot's own window, around where the next task goes."""
         now = self._clock()
         with self._lock:

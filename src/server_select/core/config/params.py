@@ -1,4 +1,5 @@
-"""Parsers of node parameters (no rospy); the table of parameters is in :mod:`settings`.
+"""Parsers of node parameters (no rospy); the table of parameters is
+:mod:`server_select.core.settings`.
 
 Values arrive from the parameter server as whatever YAML made of them (a launch ``<arg>``
 is a string, ``rosparam`` gives lists and numbers), so each parser accepts the forms a
@@ -9,7 +10,7 @@ parameter otherwise.
 import math
 import re
 
-from server_select.core.selection import MODES
+MODES = ('select', 'fixed', 'local')      # a robot's ~mode
 
 
 class ParamError(ValueError):

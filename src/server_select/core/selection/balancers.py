@@ -4,7 +4,8 @@
 Each chooses per task, in the robot, from the robot's own evidence, and returns every
 server it may use in its order of preference (the first gets the task; a re-send or hedge
 takes the next): :meth:`Balancer.order`. What the robot tells them: its probe answers
-(:meth:`Balancer.probed`: round trip and the server's :class:`~server_select.core.load.Load`),
+(:meth:`Balancer.probed`: round trip and the server's
+:class:`~server_select.core.load.work_queue.Load`),
 its attempts (:meth:`Balancer.started`, :meth:`Balancer.ended`: round trip of an answer, or
 of an attempt that failed), and the kind of task it is about to send.
 
@@ -39,9 +40,9 @@ selection applies to them.
 
 import collections
 import math
-import random
-import threading
-import time
+
+from server_select.core.selection.balancer import Balancer, quantile
+from server_select.core.selection.hot_cold import HotCold
 
 PEERS = ('p2c_peak_ewma', 'least_request', 'prequal', 'round_robin', 'replicate')
 
@@ -68,75 +69,6 @@ class PeakEwma(object):
     def get(self, now):
         self.observe(0.0, now)
         return self.estimate
-
-
-ProbeAnswer = collections.namedtuple('ProbeAnswer',
-                                     'server rtt rif service workers at utilization')
-ProbeAnswer.__doc__ = """One probe answer as a balancer keeps it: round trip (s), requests
-in flight (queued + in service), ``{kind: work s}``, workers, when it arrived, and the
-share of the workers' time the other robots' tasks take."""
-
-
-class Balancer(object):
-    """The state every peer keeps: this robot's attempts out per server, the newest probe
-    answer of each, and a random source (``rng``). Thread-safe."""
-
-    name = None
-    copies = 1
-
-    def __init__(self, rng=None, clock=time.monotonic):
-        self.rng = rng or random.Random()
-        self._clock = clock
-        self._lock = threading.Lock()
-        self.out = collections.Counter()     # server -> this robot's attempts out there
-        self.probes = {}                     # server -> its newest ProbeAnswer
-        self.last = None                     # where the last task went
-
-    def probed(self, server, rtt, load=None):
-        """A good probe answer: round trip ``rtt`` and ``load`` (a Load, or None)."""
-        answer = ProbeAnswer(server, rtt, (load.queued + load.in_service) if load else 0,
-                             dict(load.service) if load else {},
-                             max(1, load.workers) if load else 1, self._clock(),
-                             load.utilization if load else 0.0)
-        with self._lock:
-            self.probes[server] = answer
-            self._probed(answer)
-
-    def _probed(self, answer):
-        """Subclasses: a probe answer arrived (lock held)."""
-
-    def started(self, server):
-        with self._lock:
-            self.out[server] += 1
-
-    def ended(self, server, rtt=None):
-        """An attempt at ``server`` ended: ``rtt`` its round trip (answered, or failed
-        after that long), None when it just stopped counting (another attempt won)."""
-        with self._lock:
-            if self.out[server] > 0:
-                self.out[server] -= 1
-            if rtt is not None:
-                self._ended(server, rtt, self._clock())
-
-    def _ended(self, server, rtt, now):
-        """Subclasses: an attempt's round trip (lock held)."""
-
-    def order(self, servers, kind=None):
-        """``servers`` (the usable ones) in this rule's order for the next ``kind`` task."""
-        servers = list(servers)
-        if not servers:
-            return []
-        with self._lock:
-            ordered = self._order(servers, kind, self._clock())
-        self.last = ordered[0]
-        return ordered
-
-    def _order(self, servers, kind, now):
-        raise NotImplementedError
-
-    def _two(self, servers):
-        """Two distinct servers drawn at random (one when there is one)."""
-        return self.rng.sample(servers, min(2, len(servers)))
 
 
 def _pair_first(drawn, servers, key):
@@ -216,15 +148,6 @@ class Replicate(Balancer):
         return sorted(servers, key=lambda s: (mean(s), servers.index(s)))
 
 
-def quantile(values, q):
-    """The ``q`` quantile of ``values`` by linear interpolation (numpy's default)."""
-    ordered = sorted(values)
-    position = q * (len(ordered) - 1)
-    low = int(math.floor(position))
-    high = min(low + 1, len(ordered) - 1)
-    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
-
-
 class Prequal(Balancer):
     """Prequal's probe pool and hot-cold rule (the module docstring says what is adapted)."""
     name = 'prequal'
@@ -285,7 +208,6 @@ _CLASSES = dict((c.name, c) for c in (P2CPeakEwma, LeastRequest, Prequal, RoundR
 def make(name, **kwargs):
     """The balancer called ``name`` (one of :data:`PEERS`, or the fleet's ``hot_cold``)."""
     if name == 'hot_cold':
-        from server_select.core.hot_cold import HotCold    # it builds on this module
         return HotCold(**kwargs)
     if name not in _CLASSES:
         raise ValueError('unknown balancer %r (expected one of %s)' % (name, ', '.join(PEERS)))

@@ -27,10 +27,10 @@ import itertools
 import threading
 import time
 
-from server_select.core.attempts import AttemptClock
-from server_select.core.outcome import (DUPLICATE, ENDED, FOREIGN, LATE,  # noqa: F401
-                                        LOCAL, NO_SERVER, RETRIED, UNKNOWN, EndedTasks,
-                                        Outcome, Pending, Resolution)
+from server_select.core.flow.attempts import AttemptClock
+from server_select.core.flow.outcome import (DUPLICATE, ENDED, FOREIGN, LATE,  # noqa: F401
+                                             LOCAL, NO_SERVER, RETRIED, UNKNOWN, EndedTasks,
+                                             Outcome, Pending, Resolution)
 
 
 class TaskFlow(object):
@@ -50,11 +50,11 @@ class TaskFlow(object):
     :param on_answer: ``(server, rtt)``: an accepted answer of a task sent once, and its
         round trip (a latency sample of what tasks get; the answer of a hedged or re-sent
         task is not one: only the faster of two servers answers it).
-    :param deadlines: an :class:`~server_select.core.attempts.AttemptClock`.
+    :param deadlines: an :class:`~server_select.core.flow.attempts.AttemptClock`.
     :param ids: iterator of task ids (shared by the robot's streams: ids are per robot).
     :param hedge: None, or the quantile of a server's round trips after which an
         unanswered task is also sent to the next candidate.
-    :param budget: a :class:`~server_select.core.budget.RetryBudget` (None: no limit).
+    :param budget: a :class:`~server_select.core.flow.budget.RetryBudget` (None: no limit).
     :param max_in_flight: at most this many tasks out at once (0: no limit); a send that
         finds them all out is held back (no task is made) until one ends (:meth:`due`).
     :param newest_wins: a task whose attempt deadline passes, or that is refused as busy,
@@ -63,7 +63,7 @@ class TaskFlow(object):
         ``ended(server, rtt)`` once, when its answer came (``rtt``: since it was sent), it
         failed (an error, or its deadline passed: ``rtt`` is how long that took), or it
         stopped counting (``rtt`` None: a busy answer, another attempt won, the task
-        ended); a :class:`~server_select.core.balancers.Balancer`.
+        ended); a :class:`~server_select.core.selection.balancers.Balancer`.
     :param copies: each task goes to this many candidates at once (replication; the
         copies are not paid from ``budget``).
     """

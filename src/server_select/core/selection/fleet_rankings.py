@@ -19,9 +19,9 @@ out, which :meth:`FleetRankings.add` reports).
 import heapq
 import threading
 
-from server_select.core.passive import TaskCost
-from server_select.core.ranking import NO_SERVER, latency, rank_servers
-from server_select.core.window import LatencyWindow
+from server_select.core.selection.passive import TaskCost
+from server_select.core.selection.rank import NO_SERVER, latency, rank_servers
+from server_select.core.selection.window import LatencyWindow
 
 
 class Members(object):
@@ -69,13 +69,14 @@ class Members(object):
 
 
 class FleetRankings(Members):
-    """Samples in, :class:`~server_select.core.ranking.Ranking` per robot out. Thread-safe."""
+    """Samples in, :class:`~server_select.core.selection.rank.Ranking` per robot out.
+    Thread-safe."""
 
     def __init__(self, window, robots=(), servers=(), statistic='mean', tau=1.0,
                  fail_fast=0, robust=False, task_memory=0.0, keep=0, horizon=None):
         Members.__init__(self, robots, servers)
         self.window = LatencyWindow(window, statistic, tau, robust, keep, horizon)
-        # task samples' cost above the probes, remembered (core/passive.py; 0: off)
+        # task samples' cost above the probes, remembered (core/selection/passive.py; 0: off)
         self.cost = TaskCost(task_memory) if task_memory > 0 else None
         self.fail_fast = fail_fast
         self._servers = self._heard               # robot -> set of servers heard for it

@@ -42,7 +42,7 @@ import struct
 import threading
 import time
 
-from server_select.core.keys import (  # noqa: F401 (the key files, for the ROS side)
+from server_select.core.trust.keys import (  # noqa: F401 (the key files, for the ROS side)
     OBSERVER, ROLES, KeyFileError, Keys, load_keys)
 
 SIGNATURE_BYTES = 64      # an Ed25519 signature

@@ -4,8 +4,7 @@ unit tests pin the constants equal to ``TaskReport``'s)."""
 
 import collections
 
-NO_SERVER = -1      # TaskReport.NO_SERVER, SelectionFlag.NO_SERVER: no server
-LOCAL = -2          # TaskReport.LOCAL: the robot did the work itself
+from server_select.core.config.names import LOCAL, NO_SERVER  # noqa: F401 (re-exported)
 # The error of a task the robot still had out when it stopped (Ctrl-C, the end of a run, a
 # newer copy taking its name): reported so that no task goes unsaid, but the run's end cut
 # it off, so the evaluation leaves it out of a run's figures (:func:`cut_off`).

@@ -1,0 +1,89 @@
+"""What every per-task rule keeps (no rospy): :class:`Balancer`, the state a robot's rule
+is told (its attempts out per server, each server's newest probe answer, a random source),
+and :func:`quantile`. The rules build on it: the league's peers (:mod:`balancers`) and the
+fleet profile's ``hot_cold`` (:mod:`hot_cold`).
+"""
+
+import collections
+import math
+import random
+import threading
+import time
+
+
+ProbeAnswer = collections.namedtuple('ProbeAnswer',
+                                     'server rtt rif service workers at utilization')
+ProbeAnswer.__doc__ = """One probe answer as a balancer keeps it: round trip (s), requests
+in flight (queued + in service), ``{kind: work s}``, workers, when it arrived, and the
+share of the workers' time the other robots' tasks take."""
+
+
+class Balancer(object):
+    """The state every peer keeps: this robot's attempts out per server, the newest probe
+    answer of each, and a random source (``rng``). Thread-safe."""
+
+    name = None
+    copies = 1
+
+    def __init__(self, rng=None, clock=time.monotonic):
+        self.rng = rng or random.Random()
+        self._clock = clock
+        self._lock = threading.Lock()
+        self.out = collections.Counter()     # server -> this robot's attempts out there
+        self.probes = {}                     # server -> its newest ProbeAnswer
+        self.last = None                     # where the last task went
+
+    def probed(self, server, rtt, load=None):
+        """A good probe answer: round trip ``rtt`` and ``load`` (a Load, or None)."""
+        answer = ProbeAnswer(server, rtt, (load.queued + load.in_service) if load else 0,
+                             dict(load.service) if load else {},
+                             max(1, load.workers) if load else 1, self._clock(),
+                             load.utilization if load else 0.0)
+        with self._lock:
+            self.probes[server] = answer
+            self._probed(answer)
+
+    def _probed(self, answer):
+        """Subclasses: a probe answer arrived (lock held)."""
+
+    def started(self, server):
+        with self._lock:
+            self.out[server] += 1
+
+    def ended(self, server, rtt=None):
+        """An attempt at ``server`` ended: ``rtt`` its round trip (answered, or failed
+        after that long), None when it just stopped counting (another attempt won)."""
+        with self._lock:
+            if self.out[server] > 0:
+                self.out[server] -= 1
+            if rtt is not None:
+                self._ended(server, rtt, self._clock())
+
+    def _ended(self, server, rtt, now):
+        """Subclasses: an attempt's round trip (lock held)."""
+
+    def order(self, servers, kind=None):
+        """``servers`` (the usable ones) in this rule's order for the next ``kind`` task."""
+        servers = list(servers)
+        if not servers:
+            return []
+        with self._lock:
+            ordered = self._order(servers, kind, self._clock())
+        self.last = ordered[0]
+        return ordered
+
+    def _order(self, servers, kind, now):
+        raise NotImplementedError
+
+    def _two(self, servers):
+        """Two distinct servers drawn at random (one when there is one)."""
+        return self.rng.sample(servers, min(2, len(servers)))
+
+
+def quantile(values, q):
+    """The ``q`` quantile of ``values`` by linear interpolation (numpy's default)."""
+    ordered = sorted(values)
+    position = q * (len(ordered) - 1)
+    low = int(math.floor(position))
+    high = min(low + 1, len(ordered) - 1)
+    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
