@@ -113,8 +113,8 @@ def test_server_probe_service(nodes, robot, seq):
 def test_manager_samples(nodes, claim, pair, ok, rtt, sender):
     robot, server = claim or pair           # None: the sample claims its own topic's pair
     sender = sender if sender is not None else '/robot%d' % pair[0]   # None: the robot
-    nodes['manager'].on_sample(sent_by(LatencySample(robot_id=robot, server_id=server, ok=ok,
-                                                     rtt=rtt), sender), pair)
+    nodes['manager'].intake.on_sample(sent_by(LatencySample(robot_id=robot, server_id=server, ok=ok,
+                                                            rtt=rtt), sender), pair)
     window = nodes['manager'].rankings.window
     for means in window.robot_stats(pair[0], [1, 2], rospy.get_time()).values():
         assert means.mean is None or (math.isfinite(means.mean) and means.mean >= 0)
@@ -132,8 +132,8 @@ def test_manager_sample_batches(nodes, robot, samples, ragged, sender):
     oks = oks[:len(oks) - ragged] if ragged == 1 else oks
     rtts = rtts + [0.0] if ragged == 2 else rtts
     batch = LatencySamples(robot_id=robot, server_id=servers, ok=oks, rtt=rtts)
-    nodes['manager'].on_batch(sent_by(batch, sender if sender is not None else
-                                      '/robot%d' % robot))
+    nodes['manager'].intake.on_batch(sent_by(batch, sender if sender is not None else
+                                             '/robot%d' % robot))
     window = nodes['manager'].rankings.window
     for means in window.robot_stats(robot, [1, 2], rospy.get_time()).values():
         assert means.mean is None or (math.isfinite(means.mean) and means.mean >= 0)
@@ -165,10 +165,10 @@ def test_manager_robot_rankings(view_manager, robot, entries, waits, excluded, s
     manager, _ = view_manager
     servers, means, errors, counts = (list(x) for x in zip(*entries)) if entries else \
         ([], [], [], [])
-    manager.on_view(sent_by(RobotRanking(robot_id=robot, ranking=servers, mean_latency=means,
-                                         error=errors, sample_count=counts, wait=waits,
-                                         excluded=excluded),
-                            sender if sender is not None else '/robot%d' % robot))
+    manager.intake.on_view(sent_by(RobotRanking(robot_id=robot, ranking=servers, mean_latency=means,
+                                                error=errors, sample_count=counts, wait=waits,
+                                                excluded=excluded),
+                                   sender if sender is not None else '/robot%d' % robot))
     ranking = manager.rankings.rank(robot, rospy.get_time())
     assert all(math.isfinite(m) and m > 0 for m in ranking.means)
     assert ranking.means == sorted(ranking.means)
@@ -234,8 +234,8 @@ def test_every_node_still_serves(nodes):
                                    data=np.asarray([3, 1, 2], np.int32)))
     assert result.ok and list(result.data) == [1, 2, 3] and sort.done == done + 1
     manager = nodes['manager']
-    manager.on_sample(sent_by(LatencySample(robot_id=1, server_id=1, ok=True, rtt=0.002),
-                              '/robot1'), (1, 1))
+    manager.intake.on_sample(sent_by(LatencySample(robot_id=1, server_id=1, ok=True, rtt=0.002),
+                                     '/robot1'), (1, 1))
     assert manager.rankings.window.stats(1, 1, rospy.get_time()).ok_count >= 1
     robot = nodes['robot']
     robot.on_flag(sent_by(SelectionFlag(robot_id=1, server_id=2, ranking=[2, 1]), '/manager'))

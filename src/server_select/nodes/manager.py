@@ -8,16 +8,14 @@ from server_select.core.config import names
 from server_select.core.config.params import ParamError
 from server_select.core.selection.policy import Chooser, from_params
 from server_select.core.selection.fleet_rankings import FleetRankings
-from server_select.core.selection.window import RTT_RANGE, valid_rtt
-from server_select.core.selection.rank import from_view
 from server_select.core.trust.senders import node_pattern_of
 from server_select.core.selection.robot_views import ViewRankings
 from server_select.msg import LatencySample, LatencySamples, RobotRanking
 from server_select.ros.flags import FlagPublisher
-from server_select.ros.graph import publisher_of
 from server_select.ros.membership import GroupAssignmentsListener, ServerRegistry
 from server_select.ros.node import fleet, param
 from server_select.ros.runner import run
+from server_select.ros.intake import SampleIntake
 from server_select.ros.senders import robot_senders
 
 
@@ -44,39 +42,21 @@ class ManagerNode(object):
     it answers, whatever its name or namespace) are ignored with a throttled warning naming
     the publisher.
 
-    :ROS Parameters:
-        - ``~profile`` (``paper``): ``fleet`` sets the defaults marked (fleet) below.
-        - ``~robots``, ``~servers`` (lists of int; required in the paper profile; (fleet)
-          empty: robots are whoever sends samples, servers whatever they probe)
-        - ``~sample_stream`` (``pair``; (fleet) ``view``): samples on ``latency_R<r>S<s>``
-          per pair, batches on ``latency_samples`` (``robot``), or each robot's own ranking
-          on ``robot_rankings`` (``view``: the robot keeps its samples as this node would;
-          this node keeps the policy's state and flags; a ranking older
-          than 3 / ``~view_rate`` s counts as none).
-        - ``~flag_stream`` (``shared``; (fleet) ``robot``): every flag on
-          ``server_select_flag``, or each on its robot's own latched
-          ``robot_<r>/server_select_flag`` (and on ``server_select_flag`` only while a
-          recorder listens there).
-        - ``~discover`` (false; (fleet) true): list the servers that announce themselves
-          on ``server_announcements`` (with a lease of 3 x ``~announce_period``, 2 s) on
-          ``fleet_servers``, the first list ``~announce_period`` s after the start.
-        - ``~window`` (s, 5.0), ``~publish_rate`` (Hz, 1.0), ``~update_rate`` (Hz, 10.0)
-        - ``~policy`` (``mean``), ``~statistic`` (``mean``), ``~hysteresis`` (s, 0.0),
-          ``~dwell``, ``~margin_z``, ``~latency_bound``, ``~ewma_tau``, ``~fail_fast``: the
-          selection policy
-          (``core/selection/policy.py``; the defaults are the paper: always the lowest mean).
-        - ``~passive`` (false): also take the robots' answered tasks on ``task_samples``
-          as samples (what tasks really get: network, queueing and work).
-        - ``~task_memory`` (s, 0; fleet: 5): with ``~passive``, a server's task cost above
-          its probes is added to its probe samples, fading with this time constant once
-          the robot's tasks stop going there (``core/selection/passive.py``, TaskCost).
-        - ``~robot_node`` (``first``): whose samples count for robot {id}: the first node
-          that sends them while it answers its API (``first``), only that node or namespace
-          (``/robot{id}``), or any publisher (``*``).
-        - ``~fleet_ns`` (``/``): namespace of the fleet-level topics and services.
-        - ``~group`` (none): a grouped deployment's manager of group {group}: ranks that
-          group's servers for the robots ``~top_manager_node`` (``/top_manager``) assigns
-          to it (``group_assignments``), and ignores the others' samples.
+    :ROS Parameters: (all, with both profiles' defaults: docs/parameters.md)
+        - ``~robots``, ``~servers`` (required in the paper profile; fleet: whoever sends
+          samples, whatever they probe); ``~profile``; ``~fleet_ns``; ``~robot_node``
+        - ``~sample_stream``: samples per pair on ``latency_R<r>S<s>``, batches on
+          ``latency_samples`` (``robot``), or each robot's own ranking on
+          ``robot_rankings`` (``view``, the fleet's: this node keeps the policy's state
+          and the flags; a ranking older than 3 / ``~view_rate`` s counts as none)
+        - ``~flag_stream``: every flag on ``server_select_flag`` (``shared``), or each on
+          its robot's own latched ``robot_<r>/server_select_flag`` (``robot``)
+        - ``~discover``: list the servers that announce themselves (leases of 3 x
+          ``~announce_period``) on ``fleet_servers``
+        - ``~window``, ``~publish_rate``, ``~update_rate``, ``~policy`` and its options
+          (``core/selection/policy.py``), ``~passive``, ``~task_memory``
+        - ``~group``: a grouped deployment's manager of that group, for the robots
+          ``~top_manager_node`` assigns to it
     :ROS Subscribers:
         - ``latency_R<r>S<s>`` (server_select/LatencySample) for every robot r and server s,
           or ``latency_samples`` (server_select/LatencySamples), or ``robot_rankings``
@@ -111,7 +91,6 @@ class ManagerNode(object):
                                  '~sample_stream robot: one topic per pair)' % name)
         self.publish_rate = param('publish_rate')
         self.update_rate = param('update_rate')
-        self.senders = robot_senders('manager', param('robot_node'), robot_node_hint)
         self._locks = {}          # robot -> lock of its ranking and flag
         self._choosers = {}       # robot -> its Chooser (the policy's state)
         self._slice = 0
@@ -124,6 +103,9 @@ class ManagerNode(object):
             self.assignments = GroupAssignmentsListener(
                 param('top_manager_node') or '/top_manager', self.on_assignments,
                 'manager of group %d' % self.group)
+        self.intake = SampleIntake(self.rankings, robot_senders(
+            'manager', param('robot_node'), robot_node_hint), self.group,
+            lambda robot: self.update(robot, only_on_change=True))
         self.flags = FlagPublisher('manager' if self.group is None else
                                    'manager of group %d' % self.group,
                                    max(100, 4 * len(self.rankings.fixed_robots)))
@@ -134,20 +116,20 @@ class ManagerNode(object):
         if self.stream == 'pair':
             self.sample_subs = [
                 rospy.Subscriber(fleet(names.sample_topic(r, s)), LatencySample,
-                                 self.on_sample, callback_args=(r, s), queue_size=100,
+                                 self.intake.on_sample, callback_args=(r, s), queue_size=100,
                                  tcp_nodelay=True)
                 for r in self.rankings.fixed_robots for s in self.rankings.fixed_servers]
         elif self.stream == 'view':
             self.sample_subs = [rospy.Subscriber(fleet(names.RANKINGS_TOPIC), RobotRanking,
-                                                 self.on_view, queue_size=1000,
+                                                 self.intake.on_view, queue_size=1000,
                                                  tcp_nodelay=True)]
         else:
             self.sample_subs = [rospy.Subscriber(fleet(names.SAMPLES_TOPIC), LatencySamples,
-                                                 self.on_batch, queue_size=1000,
+                                                 self.intake.on_batch, queue_size=1000,
                                                  tcp_nodelay=True)]
         if self.passive:      # answered tasks: samples of what the robots really get
             self.sample_subs.append(rospy.Subscriber(
-                fleet(names.TASK_SAMPLES_TOPIC), LatencySamples, self.on_batch,
+                fleet(names.TASK_SAMPLES_TOPIC), LatencySamples, self.intake.on_batch,
                 callback_args=names.TASK_SAMPLES_TOPIC, queue_size=1000, tcp_nodelay=True))
         for part in (self.discovery, self.assignments):
             if part is not None:
@@ -161,43 +143,12 @@ class ManagerNode(object):
                       self.describe_input(),
                       ' and answered tasks' if self.passive else '')
 
-    def on_sample(self, sample, pair):
-        """One sample on the topic of ``pair`` (paper layout)."""
-        if not self.senders.admits(sample, lambda: 'a sample on %s' % names.sample_topic(*pair),
-                                   pair[0]):
-            return
-        why = self.refuse(sample, pair[0], pair)
-        if why:
-            self.warn(names.sample_topic(*pair), sample, why)
-        else:
-            self.take(pair[0], pair[1], sample.ok, sample.rtt, rospy.get_time())
-
     def describe_input(self):
         if self.stream == 'view':
             return "the robots' own rankings"
         return 'window %.3g s of %s, samples %s' % (
             self.rankings.window.window, self.rankings.window.statistic,
             'per pair' if self.stream == 'pair' else 'in one batch per robot round')
-
-    def on_view(self, msg):
-        """A robot's own ranking (``~sample_stream view``)."""
-        robot = msg.robot_id
-        if self.group is not None and self.rankings.robot_refusal(robot):
-            return      # a robot of another group
-        if not self.senders.admits(msg, lambda: 'a ranking on %s' % names.RANKINGS_TOPIC,
-                                   robot):
-            return
-        why = self.refuse(msg, robot)
-        try:
-            ranking = from_view(msg.ranking, msg.mean_latency, msg.error, msg.sample_count,
-                                msg.wait, msg.excluded, msg.selected) if why is None else None
-        except ValueError as error:
-            why = str(error)
-        if why:
-            self.warn(names.RANKINGS_TOPIC, msg, why)
-            return
-        self.rankings.take(robot, rospy.get_time(), ranking)
-        self.update(robot, only_on_change=True)
 
     def on_assignments(self, groups, assigned):
         """The top manager's table: this group's servers and robots."""
@@ -206,59 +157,6 @@ class ManagerNode(object):
                                    '(groups %s)' % (self.group, self.group, sorted(groups)))
         robots = [r for r, g in assigned.items() if g == self.group]
         self.rankings.set_members(robots, groups.get(self.group, []))
-
-    def on_batch(self, batch, topic=names.SAMPLES_TOPIC):
-        """One robot's probe round (fleet layout), or its answered tasks (``~passive``)."""
-        robot = batch.robot_id
-        if self.group is not None and self.rankings.robot_refusal(robot):
-            return      # a robot of another group: not ours to rank
-        count = len(batch.server_id)
-        if not self.senders.admits(batch, lambda: 'samples on %s' % topic, robot):
-            return
-        why = self.refuse(batch, robot)
-        waits = batch.wait or [0.0] * count     # load-aware robots: rank by rtt + wait
-        if why is None and not len(batch.ok) == len(batch.rtt) == len(waits) == count:
-            why = 'arrays of %d servers, %d ok, %d rtt, %d wait' % (
-                count, len(batch.ok), len(batch.rtt), len(batch.wait))
-        if why:
-            self.warn(topic, batch, why)
-            return
-        now = rospy.get_time()
-        changed = False
-        for server, ok, rtt, wait in zip(batch.server_id, batch.ok, batch.rtt, waits):
-            why = self.rankings.refusal(robot, server)
-            if why is not None and self.group is not None:
-                continue    # another group's representative: probed for the top manager
-            if why is None and ok and not (valid_rtt(rtt) and valid_rtt(wait)):
-                why = 'round trip %r + wait %r of server %d is not %s' % (
-                    rtt, wait, server, RTT_RANGE)
-            if why:
-                self.warn(topic, batch, why)
-                continue
-            if self.rankings.add(robot, server, now, ok, rtt + wait,
-                                 probe=topic != names.TASK_SAMPLES_TOPIC,
-                                 wait=wait if batch.wait else None):
-                changed = True
-        if changed:     # one ranking per batch: O(1) per sample
-            self.update(robot, only_on_change=True)
-
-    def take(self, robot, server, ok, rtt, now):
-        if self.rankings.add(robot, server, now, ok, rtt):
-            self.update(robot, only_on_change=True)
-
-    def refuse(self, msg, robot, pair=None):
-        """Why ``msg`` (a sample, or a batch when ``pair`` is None) must be ignored."""
-        if pair is not None and (msg.robot_id, msg.server_id) != pair:
-            return 'it claims robot %d / server %d' % (msg.robot_id, msg.server_id)
-        if pair is not None and msg.ok and not valid_rtt(msg.rtt):
-            return 'round trip %r is not %s' % (msg.rtt, RTT_RANGE)
-        if pair is None and self.rankings.robot_refusal(robot):
-            return self.rankings.robot_refusal(robot)
-        return None
-
-    def warn(self, topic, msg, why):
-        rospy.logwarn_throttle(5.0, 'manager: ignored a sample on %s published by %s: %s'
-                               % (topic, publisher_of(msg), why))
 
     def on_leave(self, servers):
         """Servers left the fleet (``~discover``): out of every ranking at once."""
