@@ -1,36 +1,27 @@
 """Robot: probes every server, follows the manager's selection and sends tasks."""
 
-import functools
 import itertools
 import time
 
 import rospy
 
 from server_select.core.config import names
-
-from server_select.core.selection import probing
-from server_select.core.flow.attempts import AttemptClock
 from server_select.core.flow.budget import RetryBudget
-from server_select.core.selection.health import ServerHealth
-from server_select.core.config.params import ParamError, parse_fixed_server
-from server_select.core.selection.policy import from_params
-from server_select.core.selection.candidates import Selection
+from server_select.core.config.params import ParamError
 from server_select.core.flow.task_flow import LOCAL, NO_SERVER
 from server_select.msg import SelectionFlag
 from server_select.ros.camera import TopicSource
 from server_select.ros.flags import flag_topic
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.load import RobotLoad
-from server_select.ros import seal
-from server_select.ros.membership import GroupFollower, ProbeAddresses, ServerAnnouncements
+from server_select.ros.membership import GroupFollower, ServerAnnouncements
+from server_select.ros.prober import STILL_OUT
+from server_select.ros.robot_parts import robot_prober, robot_selection, task_stream
 from server_select.ros.node import fleet, param
 from server_select.ros.runner import run
 from server_select.ros.passive import TaskSamples
-from server_select.ros.prober import STILL_OUT, Prober
-from server_select.ros.routing import ROUTES
 from server_select.ros.senders import SenderGate
 from server_select.ros.task_kinds import stream_kinds
-from server_select.ros.task_stream import TaskStream
 from server_select.ros.view import RankingSender
 from server_select.tasks.image import Frames
 
@@ -78,7 +69,8 @@ class RobotNode(object):
                                                     param('top_manager_node'))):
             raise ParamError('~servers: expected a non-empty list of ids (an empty one needs '
                              '~discover, and a mode other than fixed)')
-        self.selection = self._selection(servers, mode)
+        self.selection, self.health, self.policy = robot_selection(self.robot_id, servers,
+                                                                   mode)
         kinds = stream_kinds(self.robot_id, mode, param)
         image = next((k for k, _ in kinds if isinstance(k, Frames)), None)
         self.search = image.search if image else None
@@ -91,7 +83,7 @@ class RobotNode(object):
         if hasattr(self.selection.balancer, 'on_move'):     # the fleet's rule: say why
             self.selection.balancer.on_move = lambda server, why: rospy.loginfo(
                 'robot %d: tasks go to server %d now (%s)', self.robot_id, server, why)
-        self.prober = self._prober(servers)
+        self.addresses, self.prober = robot_prober(self, servers)
         self.view = RankingSender(self.robot_id, self.selection, self.policy, param('view_rate')) \
             if param('sample_stream') == 'view' and mode == 'select' else None
         self.start_delay = param('start_delay')
@@ -103,7 +95,7 @@ class RobotNode(object):
         self.providers = ServiceProviders(rospy.get_name())
         # one retry budget and one series of task ids for all of the robot's streams
         self.budget, self._task_ids = RetryBudget(param('retry_budget')), itertools.count(1)
-        self.streams = [self._stream(kind, rate, mode) for kind, rate in kinds]
+        self.streams = [task_stream(self, kind, rate, mode) for kind, rate in kinds]
         top = param('top_manager_node')     # grouped: servers and manager from its table
         self.announcements = GroupFollower(self.robot_id, servers, top, self.on_servers,
                                            self.on_group) if top else ServerAnnouncements(
@@ -111,57 +103,6 @@ class RobotNode(object):
             else None
         self._start_after, self._local_decision = None, False
         self.timers = []
-
-    def _selection(self, servers, mode):
-        fixed = param('fixed_server', default=servers[0] if servers else None,
-                      parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
-        eject_time, eject_max = param('eject_time'), param('eject_max')
-        if eject_time > eject_max:
-            raise ParamError('~eject_time %g is longer than ~eject_max %g'
-                             % (eject_time, eject_max))
-        self.health = ServerHealth(servers, eject_time, eject_max, param('probation_probes'))
-        self.policy, statistic = from_params(param)
-        return Selection(self.robot_id, servers, mode, fixed, self.health, param('window'),
-                         self.policy, param('manager_timeout'), statistic=statistic,
-                         tau=param('ewma_tau'), passive=param('passive') and mode == 'select',
-                         task_memory=param('task_memory'), keep=param('window_samples'),
-                         horizon=param('window_max'), fail_fast=param('fail_fast'))
-
-    def _prober(self, servers):
-        plan, rule = probing.from_params(param, self.policy)
-        # with a fleet key: servers probed where their sealed announcements say
-        self.addresses = ProbeAddresses('robot %d' % self.robot_id) if seal.enabled() \
-            else None
-        return Prober(self.robot_id, servers, plan, param('probe_timeout'),
-                      on_sample=self.on_sample, stream=param('sample_stream'),
-                      load_of=self.load.on_answer if self.load else None,
-                      announce=self.load.announcement if self.load else None,
-                      contenders=(rule, self.selection) if rule else None,
-                      node_of=self.server_node, addresses=self.addresses)
-
-    def _stream(self, kind, rate, mode):
-        timeout, fresh = param('task_timeout'), param('fresh_factor')
-        return TaskStream(self.robot_id, kind, rate, param('tasks'), self.ready, dict(
-            timeout=timeout, candidates=functools.partial(self.selection.candidates, kind.kind),
-            attempts=self.selection.balancer, on_failure=self.on_failure,
-            on_success=self.health.task_ok, ids=self._task_ids,
-            on_busy=functools.partial(self.on_busy, kind.kind),
-            hedge=param('hedge_quantile') if param('hedge') else None, budget=self.budget,
-            copies=self.selection.balancer.copies if self.selection.balancer else 1,
-            max_in_flight=param('max_in_flight'),
-            newest_wins=kind.newest_wins,
-            # load-aware: a server's first answers may take half the timeout (its work is
-            # not known yet; its probes say whether it is up)
-            deadlines=AttemptClock(timeout, factor=param('retry_factor'),
-                                   floor=param('retry_floor'),
-                                   first=timeout / 2.0 if self.load else 1.0,
-                                   expected=self.load.expected(kind.kind) if self.load
-                                   else None,
-                                   fresh=self.load.fresh_for(kind.kind, fresh, 1.0 / rate)
-                                   if self.load and kind.newest_wins and fresh > 0 else None),
-            on_answer=functools.partial(self.passive.on_answer, kind.kind)
-            if self.passive else None), local=mode == 'local',
-            expected_publisher=self.server_node, route=ROUTES[param('routing')], load=self.load)
 
     def start(self):
         self._start_after = time.monotonic() + self.start_delay
