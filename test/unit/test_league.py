@@ -1,6 +1,7 @@
 """The league's pure parts: runs added to an --out that has some, and its tables."""
 
-from server_select.bench.league import capacity_table, merge, network_table
+from server_select.bench.league import merge
+from server_select.bench.league_report import capacity_table, network_table
 
 
 def row(variant, load, repeat, goodput=1.0, capacity=2.0):

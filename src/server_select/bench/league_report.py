@@ -1,0 +1,127 @@
+"""The league's report (``make league``; :mod:`server_select.bench.league` runs it): what it
+runs, the tables (median (min-max) of the runs per variant) and the plot."""
+
+import collections
+import os
+
+from server_select.core.selection.balancers import PEERS
+from server_select.core.util.tables import markdown_table, median_range
+
+NETWORK = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
+           'hung_server')
+NETWORK_VARIANTS = ('oracle_fleet', 'fleet', 'fleet_hysteresis') + PEERS
+# capacity cases: the capacity benchmark's scenario and what the league changes in it
+CAPACITY = collections.OrderedDict([
+    ('crowd', ['--scenario', 'crowd']),
+    # the issue's case: 6 robots, servers of 10, 15 and 20 % of a core, half to twice that
+    ('overload_unequal', ['--scenario', 'overload', '--shares', '0.10,0.15,0.20']),
+    ('herd', ['--scenario', 'herd']),
+])
+CAPACITY_VARIANTS = ('static', 'fleet', 'fleet_hysteresis') + PEERS
+
+
+def _cell(values, spec, scale=1.0):
+    known = [scale * v for v in values if v is not None]
+    return median_range(known, spec) if known else '-'
+
+
+NETWORK_COLUMNS = (('mean', 'mean ms', '%.1f', 1e3), ('p99', 'p99 ms', '%.0f', 1e3),
+                   ('failed', 'failed', '%d', 1), ('switches_per_min', 'switches /min /robot',
+                                                   '%.2f', 1),
+                   ('reaction_mean', 'reaction s', '%.2f', 1),
+                   ('extra_sends', 'extra sends %', '%.1f', 1),
+                   ('samples_per_s', 'probes /s', '%.0f', 1), ('robot_cpu', 'robot CPU %',
+                                                               '%.1f', 1))
+CAPACITY_COLUMNS = (('goodput_share', 'goodput % of capacity', '%.0f', 100),
+                    ('wanted', 'work still wanted %', '%.0f', 100),
+                    ('failed', 'failed', '%d', 1), ('mean', 'mean ms', '%.0f', 1e3),
+                    ('p99', 'p99 ms', '%.0f', 1e3),
+                    ('switches', 'switches /min /robot', '%.1f', 1),
+                    ('settled', 'settled switches', '%.1f', 1),
+                    ('extra', 'extra sends %', '%.0f', 100))
+
+
+def network_table(per_run):
+    """One row per variant; mean and p99 also as a ratio to the oracle of the same run."""
+    variants = [v for v in per_run[0]]
+    rows = []
+    for v in variants:
+        runs = [r[v] for r in per_run if v in r]
+        oracle = [r.get('oracle_fleet') for r in per_run if v in r]
+        ratio = [f['mean'] / o['mean'] if o and o['mean'] and f['mean'] else None
+                 for f, o in zip(runs, oracle)]
+        cells = [_cell([f[k] for f in runs], spec, scale)
+                 for k, _, spec, scale in NETWORK_COLUMNS]
+        rows.append([v, len(runs)] + cells[:2] + [_cell(ratio, '%.3f')] + cells[2:])
+    return markdown_table(['variant', 'runs', 'mean ms', 'p99 ms', 'mean / oracle'] +
+                          [t for _, t, _, _ in NETWORK_COLUMNS[2:]], rows)
+
+
+def capacity_table(rows):
+    """One row per load and variant; goodput as a share of the servers' capacity."""
+    groups = collections.OrderedDict()
+    for row in sorted(rows, key=lambda r: (r['load'], CAPACITY_VARIANTS.index(r['variant'])
+                                           if r['variant'] in CAPACITY_VARIANTS else 99)):
+        row = dict(row, goodput_share=row['goodput'] / row['capacity'])
+        groups.setdefault((row['load'], row['variant']), []).append(row)
+    columns = [c for c in CAPACITY_COLUMNS
+               if any(r.get(c[0]) is not None for g in groups.values() for r in g)]
+    rows = [['%gx' % load, variant, len(group)] +
+            [_cell([r.get(k) for r in group], spec, scale) for k, _, spec, scale in columns]
+            for (load, variant), group in groups.items()]
+    return markdown_table(['load', 'variant', 'runs'] + [t for _, t, _, _ in columns], rows)
+
+
+def report(results, plot_path=None):
+    text = ['# League', '', 'Each cell: median (min-max) over the runs. Failed tasks count '
+            'at the task timeout in every mean and p99; switches and reactions from where '
+            'tasks went.', '']
+    for name, per_run in results.get('network', {}).items():
+        if per_run:
+            text += ['## %s (network)' % name, '', network_table(per_run), '']
+    for case, rows in results.get('capacity', {}).items():
+        if rows:
+            text += ['## %s (capacity)' % case, '', capacity_table(rows), '']
+    if plot_path:
+        plot(results, plot_path)
+        text += ['![league](%s)' % os.path.basename(plot_path), '']
+    return '\n'.join(text)
+
+
+def plot(results, path):
+    """Mean round trip per network scenario (to the oracle) and goodput per capacity case
+    at the highest load, one bar per variant (medians)."""
+    import statistics
+    from server_select.testbed.plots import pyplot
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
+    panels = ((axes[0], 'mean / oracle (network)', [
+        (name, v, [r[v]['mean'] / r['oracle_fleet']['mean'] for r in per_run
+                   if v in r and r[v]['mean'] and r.get('oracle_fleet')])
+        for name, per_run in results.get('network', {}).items() for v in NETWORK_VARIANTS
+        if v != 'oracle_fleet']),
+        (axes[1], 'goodput / capacity at the highest load', [
+            (case, v, [r['goodput'] / r['capacity'] for r in rows if r['variant'] == v and
+                       r['load'] == max(x['load'] for x in rows)])
+            for case, rows in results.get('capacity', {}).items()
+            for v in CAPACITY_VARIANTS]))
+    for ax, title, bars in panels:
+        cases = list(collections.OrderedDict.fromkeys(b[0] for b in bars))
+        variants = list(collections.OrderedDict.fromkeys(b[1] for b in bars))
+        width = 0.8 / max(1, len(variants))
+        for i, variant in enumerate(variants):
+            values = [next((statistics.median(b[2]) for b in bars if b[0] == c and
+                            b[1] == variant and b[2]), 0.0) for c in cases]
+            ax.bar([x + i * width for x in range(len(cases))], values, width, label=variant)
+        ax.set_xticks([x + 0.4 - width / 2 for x in range(len(cases))])
+        ax.set_xticklabels(cases, rotation=20, fontsize=8)
+        ax.set_title(title, fontsize=10)
+    axes[0].axhline(1.0, color='k', lw=0.5)
+    handles, labels = max((ax.get_legend_handles_labels() for ax in axes),
+                          key=lambda hl: len(hl[1]))     # a part may be empty
+    if labels:
+        fig.legend(handles, labels, loc='lower center', ncol=len(labels), fontsize=8,
+                   frameon=False)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
