@@ -1,8 +1,8 @@
 import pytest
 
-from server_select.testbed.bag_analysis import (Flag, Report, compare, legend, mode_summary,
-                                                oracle_changes, reaction_times, switches, table,
-                                                verdict)
+from server_select.testbed.bag_analysis import (Flag, Report, mode_summary, oracle_changes,
+                                                reaction_times, switches)
+from server_select.testbed.bag_tables import compare, legend, table, verdict
 from server_select.testbed.scenario import Scenario
 
 

@@ -15,7 +15,7 @@ import sys
 
 from rosbag import ROSBagException
 
-from server_select.testbed import bag_analysis
+from server_select.testbed import bag_analysis, bag_tables
 from server_select.testbed.scenario import Scenario, ScenarioError
 
 
@@ -48,7 +48,7 @@ def main(argv=None):
         bag_analysis.write_report(runs, summaries, args.out, 'Analysis of %d bag(s)' % len(runs),
                                   'Bags: %s.' % ', '.join('`%s`' % b for b in args.bags))
     first = 'mode' if all(run.meta.get('mode') for run in runs.values()) else 'run'
-    print('%s\n\n%s' % (bag_analysis.table(summaries, first), bag_analysis.legend(summaries)))
+    print('%s\n\n%s' % (bag_tables.table(summaries, first), bag_tables.legend(summaries)))
     if args.out:
         print('report: %s (plots beside it)' % os.path.join(args.out, 'report.md'))
     return 0

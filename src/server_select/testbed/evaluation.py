@@ -119,12 +119,12 @@ def main(argv=None):
         args.scenario, modes, out, options, side_by_side=args.side_by_side))
     if status:
         return status
-    from server_select.testbed import bag_analysis
+    from server_select.testbed import bag_analysis, bag_tables
     bag_analysis.analyze(out, modes)
     with open(os.path.join(out, 'summary.json')) as stream:
         summaries = json.load(stream)
-    print('\n%s\n\n%s\n' % (bag_analysis.table(summaries), bag_analysis.legend(summaries)))
+    print('\n%s\n\n%s\n' % (bag_tables.table(summaries), bag_tables.legend(summaries)))
     print('report: %s (plots beside it: task_rtt.png, latency_<mode>.png)'
           % os.path.join(out, 'report.md'))
-    print('verdict: %s' % bag_analysis.verdict(summaries))
+    print('verdict: %s' % bag_tables.verdict(summaries))
     return 0
