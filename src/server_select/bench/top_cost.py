@@ -33,7 +33,8 @@ def start_top(servers):
     pid, fd = pty.fork()
     if pid == 0:          # the child: top, as a user starts it
         os.environ['TERM'] = 'xterm'
-        os.execv(sys.executable, [sys.executable, '-m', 'server_select.nodes.top',
+        os.execv(sys.executable, [sys.executable, '-c', 'import sys; from server_select.nodes.'
+                                  'top import main; sys.exit(main())',
                                   '--servers', ','.join(str(s) for s in servers)])
     fcntl.ioctl(fd, termios.TIOCSWINSZ, struct.pack('HHHH', ROWS, COLUMNS, 0, 0))
 
@@ -45,6 +46,18 @@ def start_top(servers):
             pass
     threading.Thread(target=drain, daemon=True).start()
     return pid, fd
+
+
+def end_top(pid, fd):
+    """Quit ``top`` its own way (``q``), killed if it does not end within 10 s."""
+    try:
+        os.write(fd, b'q')
+        if not wait_until(lambda: os.waitpid(pid, os.WNOHANG)[0] != 0, 10.0):
+            os.kill(pid, 9)
+            os.waitpid(pid, 0)
+    except OSError:       # it had ended (and was reaped) already
+        pass
+    os.close(fd)
 
 
 def one_run(options, work, repeat):
@@ -64,11 +77,11 @@ def one_run(options, work, repeat):
             time.sleep(options.warmup)        # it hears every server and robot
             robot_pids = _pids(robots)
             usage = measure([pid] + robot_pids, options.seconds)
+            if os.waitpid(pid, os.WNOHANG)[0] != 0:
+                raise RuntimeError('top ended before the measurement did')
         finally:
             if pid is not None:
-                os.write(fd, b'q')            # top's own way out
-                if not wait_until(lambda: os.waitpid(pid, os.WNOHANG)[0] != 0, 10.0):
-                    os.kill(pid, 9)
+                end_top(pid, fd)
             stop_group(fleet, timeout=30.0)
             log.close()
     robot_cpu = [usage[p]['cpu_percent'] for p in robot_pids if p in usage]
