@@ -19,10 +19,8 @@ second are printed. Nothing is asserted.
 """
 
 import itertools
-import json
 import os
 import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -30,8 +28,9 @@ import time
 import psutil
 
 from server_select.bench import cli
-from server_select.bench.harness import PY, Roscore, node_pid
-from server_select.bench.scale_sim import group_table
+from server_select.bench.harness import Roscore, node_pid
+from server_select.bench.scale_fleet import (sim_progress, sim_received, start_managers,
+                                             start_sims)
 from server_select.core.util.procs import measure, stop_groups, wait_until
 from server_select.core.trust.keys import make_key
 from server_select.core.settings import default
@@ -42,87 +41,11 @@ SIZES = '2x3,10x10,50x50,100x50,200x100,500x100'
 GROUPED = '200x100:4,500x500:10,1000x1000:20'
 
 
-def _node(module, args, log):
-    cmd = [sys.executable, '-c', 'from server_select.nodes.%s import main; main()' % module]
-    with open(log, 'a') as stream:
-        return subprocess.Popen(cmd + args, stdout=stream, stderr=subprocess.STDOUT,
-                                start_new_session=True)
-
-
-def _managers(layout, robots, servers, groups, log, profile='paper', key=None,
-              flag_stream='shared'):
-    """The nodes under test: {node name: process}."""
-    ids = ','.join(map(str, range(1, servers + 1)))
-    common = ["_robot_node:='*'", '_discover:=false', '_profile:=%s' % profile,
-              '_flag_stream:=%s' % flag_stream] + (['_fleet_key:=%s' % key] if key else [])
-    if layout != 'grouped':
-        return {'/manager': _node('manager', common + [
-            '_robots:=%s' % ','.join(map(str, range(1, robots + 1))), '_servers:=%s' % ids,
-            '_sample_stream:=%s' % layout, '__name:=manager'], log)}
-    table = group_table(servers, groups)
-    nodes = {'/top_manager': _node('top_manager', common + [
-        '_groups:=%s' % json.dumps(dict((str(g), s) for g, s in table.items())),
-        '__name:=top_manager'], log)}
-    for group in table:
-        nodes['/manager_g%d' % group] = _node('manager', common + [
-            '_robots:=[]', '_servers:=[]', '_sample_stream:=robot', '_group:=%d' % group,
-            '__name:=manager_g%d' % group], log)
-    return nodes
-
-
-def _sims(tmp, robots, servers, sims, layout, until, log, groups=1, rate=1.0, key=None,
-          flag_stream='shared'):
-    """The simulated robots' processes: {node name: (process, its result file)}."""
-    per = -(-robots // sims)
-    started = {}
-    for first in range(1, robots + 1, per):
-        out = os.path.join(tmp, 'sim%d.json' % first)
-        cmd = PY + ['server_select.bench.scale_sim', '--first', str(first), '--count',
-                    str(min(per, robots - first + 1)), '--servers', str(servers),
-                    '--layout', layout, '--until', repr(until), '--out', out,
-                    '--groups', str(groups), '--rate', repr(rate),
-                    '--flag-stream', flag_stream] + \
-            (['--fleet-key', key] if key else [])
-        with open(log, 'a') as stream:
-            started['/scale_sim_%d' % first] = (subprocess.Popen(
-                cmd, stdout=stream, stderr=subprocess.STDOUT, start_new_session=True), out)
-    return started
-
-
 def _usage(pid):
     proc = psutil.Process(pid)
     with proc.oneshot():
         return {'threads': proc.num_threads(), 'fds': proc.num_fds(),
                 'rss_mb': proc.memory_info().rss / 2.0 ** 20}
-
-
-def _results(outs):
-    """The simulated robots' result files so far (None while one is not written yet)."""
-    results = []
-    for out in outs:
-        try:
-            with open(out) as stream:
-                results.append(json.load(stream))
-        except FileNotFoundError:
-            return None
-    return results
-
-
-def _progress(outs):
-    """(latest first-full-ranking time over every robot, or None while one has none yet;
-    the sample-to-flag delays) from the simulated robots' result files so far."""
-    results = _results(outs)
-    if results is None:
-        return None, []
-    ranked = [t for data in results for t in data['ranked'].values()]
-    robots = sum(data['robots'] for data in results)
-    delays = [d for data in results for d in data['delays']]
-    return (max(ranked) if len(ranked) == robots and ranked else None), delays
-
-
-def _received(outs):
-    """(flags, bytes) that reached the simulated robots so far."""
-    return [sum(d[k] for d in _results(outs) or []) for k in ('received', 'received_bytes')]
 
 
 def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, profile='paper',
@@ -133,8 +56,8 @@ def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, prof
     log = os.path.join(tmp, 'scale.log')
     # the latest the simulated robots run, should this process die without stopping them
     until = time.time() + 120.0 + 2 * limit + measure_s
-    started_sims = _sims(tmp, robots, servers, sims, layout, until, log, groups, rate, key,
-                         flag_stream)
+    started_sims = start_sims(tmp, robots, servers, sims, layout, until, log, groups, rate, key,
+                              flag_stream)
     outs = [out for _, out in started_sims.values()]
     row = {'robots': robots, 'servers': servers, 'layout': layout, 'groups': groups,
            'profile': profile, 'rate': rate, 'signed': bool(key), 'flag_stream': flag_stream}
@@ -142,16 +65,16 @@ def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, prof
     try:
         _registered(started_sims, log, 'a simulated robot')
         started = time.time()
-        managers = _managers(layout, robots, servers, groups, log, profile, key, flag_stream)
+        managers = start_managers(layout, robots, servers, groups, log, profile, key, flag_stream)
         _registered(managers, log, 'a manager')
         pids = [_pid(n) for n in managers]
         master = _master_pid()
-        wait_until(lambda: _progress(outs)[0] is not None,
+        wait_until(lambda: sim_progress(outs)[0] is not None,
                    max(0.0, started + limit - time.time()), period=0.2)
-        before, began = _received(outs), time.time()
+        before, began = sim_received(outs), time.time()
         usage = measure(pids + [master], measure_s)
         time.sleep(0.6)       # the result files are rewritten every 0.5 s
-        after, span = _received(outs), time.time() - began
+        after, span = sim_received(outs), time.time() - began
         row['flags_per_robot_s'] = (after[0] - before[0]) / span / robots
         row['flag_bytes_per_robot_s'] = (after[1] - before[1]) / span / robots
         totals = [_usage(p) for p in pids]
@@ -160,12 +83,12 @@ def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, prof
         cpu = [usage.get(p, {}).get('cpu_percent', 0.0) for p in pids]
         row['manager_cpu'], row['manager_cpu_max'] = sum(cpu), max(cpu)
         row['master_cpu'] = usage.get(master, {}).get('cpu_percent')
-        if _progress(outs)[0] is not None:
-            wait_until(lambda: _progress(outs)[1], limit, period=0.2)
+        if sim_progress(outs)[0] is not None:
+            wait_until(lambda: sim_progress(outs)[1], limit, period=0.2)
     finally:
         stop_groups([proc for proc, _ in started_sims.values()], signal.SIGTERM)
         stop_groups(managers.values())
-    last, delays = _progress(outs)
+    last, delays = sim_progress(outs)
     row['ranked_s'] = None if last is None else last - started
     summary = summarize(delays)
     row['delay_p50_ms'] = summary['median'] * 1e3 if delays else None
