@@ -8,7 +8,7 @@ import subprocess
 import sys
 
 from server_select.bench.harness import PY
-from server_select.bench.scale_sim import group_table
+from server_select.bench.scale_layout import group_table
 
 
 def start_node(module, args, log):

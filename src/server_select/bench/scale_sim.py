@@ -35,6 +35,7 @@ import time
 import rospy
 
 from server_select.core.config import names
+from server_select.bench.scale_layout import base_rtt, group_table
 from server_select.core.fleet.groups import probe_set
 from server_select.core.trust.seal import Sealer, load_keys
 from server_select.msg import (GroupAssignments, LatencySample, LatencySamples, RobotRanking,
@@ -46,22 +47,6 @@ QUIET = 7.0       # s between two triggers of one robot: its slow sample leaves 
 #                   after 5 s (the paper; the fleet's 1.5 s) and moves the flag back
 SETTLED = 4.0     # s since a robot's flag last changed before it is triggered: a policy with
 #                   a dwell (the fleet's 3 s) holds a move that soon after the last, by design
-
-
-def base_rtt(robot, server, servers, groups=1):
-    """Robot ``robot``'s nearest server is the one with (robot + server) % servers == 0;
-    with groups, its nearest group is the one with (robot + group) % groups == 0 (5 ms a
-    step), and within a group steps are 0.1 ms."""
-    if groups == 1:
-        return 1e-3 * (1 + (robot + server) % servers)
-    size = servers // groups
-    group = (server - 1) // size + 1
-    return 1e-3 * (1 + 5 * ((robot + group) % groups) + 0.1 * ((robot + server) % size))
-
-
-def group_table(servers, groups):
-    size = servers // groups
-    return dict((g, list(range((g - 1) * size + 1, g * size + 1))) for g in range(1, groups + 1))
 
 
 class SimulatedRobots(object):
