@@ -24,29 +24,18 @@ oldest answer, extra sends per task, and for frames how many detections the serv
 and how many of those a robot still wanted.
 """
 
-import io
 import math
 import os
 import sys
 import tempfile
 import threading
-import time
-
-import cv2
-import numpy as np
-
-from rospy.numpy_msg import numpy_msg
 
 from server_select.bench import capacity_report, cli
 from server_select.bench.capacity_report import static_assignment
-from server_select.core.flow.sort_kernel import sort_values
-from server_select.msg import SortResult, SortTask
+from server_select.bench.capacity_work import SORT_SIZE, cpu_per_task, write_frame
 from server_select.bench.harness import scenario_run
 from server_select.testbed.suite import PREVIOUS_FLEET, RULES, peer_params
 from server_select.testbed import bag_analysis
-from server_select.vision import image_codec
-from server_select.vision.detection import Detector, search_frame
-from server_select.vision.search import sample_image
 
 VARIANTS = ('paper', 'fleet', 'static', 'fleet_hysteresis') + RULES
 # The cases of the capacity work, as defaults of the options (an option given wins):
@@ -61,43 +50,6 @@ SCENARIOS = {
 TIMEOUT = 5.0        # the task timeout: an answer later than this is not wanted
 WARMUP = 15.0        # s of scenario time before the measured part (nodes up, first tasks)
 SETTLE = 10.0        # s after the late server came up that "settled switches" start
-SORT_SIZE = 20000    # 80 kB a task: on this testbed bytes, not CPU, limit larger ones
-
-
-def frame():
-    """The camera frame: a photograph with one face, 640x480."""
-    return cv2.resize(sample_image('astronaut.png'), (640, 480))
-
-
-def write_frame(folder):
-    """The camera frame as the robots' image source in ``folder`` (made if missing)."""
-    os.makedirs(folder, exist_ok=True)
-    cv2.imwrite(os.path.join(folder, 'face.png'), frame())
-
-
-def cpu_per_task(kind, repeats=10):
-    """CPU seconds one task takes a server on one core (measured here)."""
-    if kind == 'image':
-        fmt, data = image_codec.encode(frame(), 80)
-        detector = Detector()
-        work = lambda: search_frame(detector, ('', 0, 0, 0, b''), (fmt, data))  # noqa: E731
-    else:       # what a server does with a sort task: the message in, sorted, out
-        values = np.random.default_rng(1).integers(-2 ** 31, 2 ** 31 - 1, SORT_SIZE,
-                                                   dtype=np.int32)
-        buff = io.BytesIO()
-        numpy_msg(SortTask)(data=values).serialize(buff)
-        work = lambda: sort_message(buff.getvalue())     # noqa: E731
-    work()
-    start = time.process_time()
-    for _ in range(repeats):
-        work()
-    return (time.process_time() - start) / repeats
-
-
-def sort_message(raw):
-    task = numpy_msg(SortTask)()
-    task.deserialize(raw)
-    numpy_msg(SortResult)(data=sort_values(task.data, len(task.data))).serialize(io.BytesIO())
 
 
 def scenario(shares, robots, seconds, delays, late=None):

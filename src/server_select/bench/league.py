@@ -45,7 +45,7 @@ def network(args, log):
 def capacity_runs(args, log):
     """``{case: [row]}``: the capacity benchmark's figures of each run (variant, load and
     repeat in each row)."""
-    from server_select.bench import capacity      # OpenCV and the messages: only here
+    from server_select.bench import capacity, capacity_work   # OpenCV, messages: only here
     results = collections.OrderedDict()
     for case in args.cases:
         options = capacity.parse(CAPACITY[case] + ['--seconds', str(args.seconds)] +
@@ -55,8 +55,8 @@ def capacity_runs(args, log):
         rows = results[case] = []
         work = os.path.join(args.out, 'capacity', case)
         options.frames = os.path.join(work, 'frames')
-        capacity.write_frame(options.frames)
-        options.cpu = capacity.cpu_per_task('image')
+        capacity_work.write_frame(options.frames)
+        options.cpu = capacity_work.cpu_per_task('image')
         rate = options.capacity.get('image', sum(options.shares) / options.cpu)
         for repeat in args.runs:
             for load in options.loads:

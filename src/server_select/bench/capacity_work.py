@@ -1,0 +1,55 @@
+"""The capacity benchmark's work (:mod:`server_select.bench.capacity`): the camera frame
+robots send, and the CPU seconds one task of a kind takes a server on one core of this
+machine (what the servers' capacity is computed from)."""
+
+import io
+import os
+import time
+
+import cv2
+import numpy as np
+from rospy.numpy_msg import numpy_msg
+
+from server_select.core.flow.sort_kernel import sort_values
+from server_select.msg import SortResult, SortTask
+from server_select.vision import image_codec
+from server_select.vision.detection import Detector, search_frame
+from server_select.vision.search import sample_image
+
+SORT_SIZE = 20000    # 80 kB a task: on this testbed bytes, not CPU, limit larger ones
+
+
+def frame():
+    """The camera frame: a photograph with one face, 640x480."""
+    return cv2.resize(sample_image('astronaut.png'), (640, 480))
+
+
+def write_frame(folder):
+    """The camera frame as the robots' image source in ``folder`` (made if missing)."""
+    os.makedirs(folder, exist_ok=True)
+    cv2.imwrite(os.path.join(folder, 'face.png'), frame())
+
+
+def cpu_per_task(kind, repeats=10):
+    """CPU seconds one task takes a server on one core (measured here)."""
+    if kind == 'image':
+        fmt, data = image_codec.encode(frame(), 80)
+        detector = Detector()
+        work = lambda: search_frame(detector, ('', 0, 0, 0, b''), (fmt, data))  # noqa: E731
+    else:       # what a server does with a sort task: the message in, sorted, out
+        values = np.random.default_rng(1).integers(-2 ** 31, 2 ** 31 - 1, SORT_SIZE,
+                                                   dtype=np.int32)
+        buff = io.BytesIO()
+        numpy_msg(SortTask)(data=values).serialize(buff)
+        work = lambda: sort_message(buff.getvalue())     # noqa: E731
+    work()
+    start = time.process_time()
+    for _ in range(repeats):
+        work()
+    return (time.process_time() - start) / repeats
+
+
+def sort_message(raw):
+    task = numpy_msg(SortTask)()
+    task.deserialize(raw)
+    numpy_msg(SortResult)(data=sort_values(task.data, len(task.data))).serialize(io.BytesIO())
