@@ -246,3 +246,13 @@ def test_the_manager_ranks_a_rarely_probed_server_until_its_horizon():
     assert r.rank(1, 5.9).ranking == [1, 2]
     assert r.departures(5.9) == []
     assert r.departures(8.1) == [1] and r.rank(1, 8.1).ranking == [1]
+
+
+def test_a_probe_round_completes_with_its_last_server_and_keeps_every_sample():
+    from server_select.core.selection.probing import ProbeRound
+    batch = ProbeRound(7, 1.5, [1, 2, 3])
+    assert not batch.record(2, True, 0.002, None)
+    assert not batch.record(1, False, 0.5, 0.1)       # a failed probe: no round trip
+    assert batch.record(3, True, 0.004, 0.001)
+    assert batch.samples == [(2, True, 0.002, 0.0), (1, False, 0.0, 0.1),
+                             (3, True, 0.004, 0.001)]

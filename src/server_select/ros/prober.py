@@ -9,6 +9,7 @@ import time
 import rospy
 
 from server_select.core.config import names
+from server_select.core.selection.probing import ProbeRound
 from server_select.core.trust.senders import Throttle
 from server_select.msg import LatencySample, LatencySamples
 from server_select.ros import seal
@@ -20,23 +21,6 @@ from server_select.srv import LatencyProbe, LatencyProbeRequest
 
 # the error of a probe not sent because the previous one to that server is still out
 STILL_OUT = 'previous probe still in progress'
-
-
-class _Round(object):
-    """The samples of one probe round, published as one batch when the last one is in."""
-
-    def __init__(self, number, stamp, servers):
-        self.number, self.stamp = number, stamp
-        self.waiting = set(servers)
-        self.samples = []
-        self.lock = threading.Lock()
-
-    def record(self, server, ok, rtt, wait):
-        """Add a sample; True when it completes the round."""
-        with self.lock:
-            self.samples.append((server, ok, rtt if ok else 0.0, wait or 0.0))
-            self.waiting.discard(server)
-            return not self.waiting
 
 
 class Prober(object):
@@ -161,7 +145,7 @@ class Prober(object):
         if not servers:
             return
         stamp = rospy.Time.now()
-        batch = _Round(next(self._rounds), stamp, servers) if self._batch_pub else None
+        batch = ProbeRound(next(self._rounds), stamp, servers) if self._batch_pub else None
         for server in servers:
             previous = self._inflight.get(server)
             if previous is not None and not previous.done():

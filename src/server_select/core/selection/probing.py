@@ -27,6 +27,7 @@ as one round; the manager sees the same uneven rounds in the robot's sample batc
 """
 
 import math
+import threading
 
 from server_select.core.selection.rank import NO_SERVER, latency
 
@@ -187,3 +188,21 @@ def from_params(get, policy):
     plan = ProbePlan(get('probe_rate'), get('contender_rate'), get('background_rate'),
                      get('contender_budget'), hold=get('window'))
     return plan, ContenderRule(policy.margin, policy.z or 3.0) if plan.adaptive else None
+
+
+class ProbeRound(object):
+    """The samples of one probe round of a robot (thread-safe: its probes end on many
+    threads), published as one batch when the last one is in."""
+
+    def __init__(self, number, stamp, servers):
+        self.number, self.stamp = number, stamp
+        self.waiting = set(servers)
+        self.samples = []
+        self.lock = threading.Lock()
+
+    def record(self, server, ok, rtt, wait):
+        """Add a sample; True when it completes the round."""
+        with self.lock:
+            self.samples.append((server, ok, rtt if ok else 0.0, wait or 0.0))
+            self.waiting.discard(server)
+            return not self.waiting
