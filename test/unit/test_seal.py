@@ -176,7 +176,7 @@ def test_each_role_signs_only_what_the_table_gives_it():
         else:
             assert why == 'signed with the %s key: only the manager role may publish it' % role
     assert seal.publisher_role('server_select/SelectionFlag') == 'manager'
-    assert seal.publisher_role('server_select/RobotRanking') == 'manager'
+    assert seal.publisher_role('server_select/RobotRanking') == 'robot'   # its own ranking
     assert seal.publisher_role('server_select/LatencyProbeResponse') == 'server'
     assert seal.publisher_role('server_select/LatencySamples') == 'robot'
     assert seal.publisher_role('wordcount/WordCountResult') == 'server'    # a kind's result

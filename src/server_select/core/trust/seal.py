@@ -51,9 +51,10 @@ START_SKEW = 2.0          # s: a message signed this much before its receiver st
 # which role may sign which message type; any other sealed type is a task kind's result
 # (kinds are plug-ins): servers'
 PUBLISHERS = dict(('server_select/' + name, role) for role, names in (
-    ('manager', ('SelectionFlag', 'RobotRanking', 'FleetServers', 'GroupAssignments')),
+    ('manager', ('SelectionFlag', 'FleetServers', 'GroupAssignments')),
     ('server', ('ServerAnnouncement', 'LatencyProbeResponse', 'Detections')),
-    ('robot', ('LatencySample', 'LatencySamples', 'TaskReport', 'FoundTarget')))
+    ('robot', ('LatencySample', 'LatencySamples', 'RobotRanking', 'TaskReport',
+               'FoundTarget')))
     for name in names)
 RESULTS = 'server'
 
