@@ -220,3 +220,14 @@ def test_a_file_that_is_no_key_is_refused_by_name(tmp_path):
         key_files.load_keys(str(path), 'robot')
     with pytest.raises(SystemExit, match='1'):
         key_files.make_key_cli(['--role', 'robot', '--fleet', str(path), str(tmp_path / 'o')])
+
+
+def test_role_keys_come_from_hkdf_sha256_as_rfc_5869_gives_it():
+    # RFC 5869, A.1 (with salt) and A.3 (no salt, no info)
+    ikm = bytes.fromhex('0b' * 22)
+    assert key_files.hkdf_sha256(ikm, bytes.fromhex('f0f1f2f3f4f5f6f7f8f9'), 42, bytes(
+        range(13))).hex() == ('3cb25f25faacd57a90434f64d0362f2a2d2d0a90cf1a5a4c5db02d56ecc4c5bf'
+                              '34007208d5b887185865')
+    assert key_files.hkdf_sha256(ikm, b'', 42).hex() == (
+        '8da4e775a563c18f715f802a063c5a31b8a11f5c5ee1879ec3454e5f3c738d2d9d201395faa4b61a96c8')
+    assert key_files.role_seed(b'k' * 32, 'robot') != key_files.role_seed(b'k' * 32, 'server')

@@ -10,6 +10,8 @@ role (``observer``: checks only, for viewers).
 """
 
 import argparse
+import hashlib
+import hmac
 import os
 import stat
 
@@ -23,10 +25,11 @@ class KeyFileError(ValueError):
     """A key file that cannot be used (named, with what to do)."""
 
 
-def _ed25519():
-    """The Ed25519 classes (imported when a key is used: nodes without one need none)."""
-    from cryptography.hazmat.primitives.asymmetric import ed25519
-    return ed25519
+def _signing():
+    """libsodium's Ed25519 (PyNaCl; imported when a key is used: nodes without one need
+    none). Twice as fast as OpenSSL's here: sign 25 us, verify 66 us (55 / 131)."""
+    from nacl import signing
+    return signing
 
 
 def _write_private(path, text):
@@ -75,10 +78,17 @@ def load_key(path):
 
 def role_seed(fleet_key, role):
     """The 32-byte private key of ``role``, derived from the fleet key (HKDF-SHA256)."""
-    from cryptography.hazmat.primitives import hashes
-    from cryptography.hazmat.primitives.kdf.hkdf import HKDF
-    return HKDF(algorithm=hashes.SHA256(), length=32, salt=None,
-                info=b'server_select role ' + role.encode('ascii')).derive(fleet_key)
+    return hkdf_sha256(fleet_key, b'server_select role ' + role.encode('ascii'))
+
+
+def hkdf_sha256(key, info, length=32, salt=b''):
+    """HKDF-SHA256 (RFC 5869) of ``key``: ``length`` bytes for ``info``."""
+    prk = hmac.new(salt or bytes(hashlib.sha256().digest_size), key, hashlib.sha256).digest()
+    out, block = b'', b''
+    for counter in range(1, -(-length // hashlib.sha256().digest_size) + 1):
+        block = hmac.new(prk, block + info + bytes([counter]), hashlib.sha256).digest()
+        out += block
+    return out[:length]
 
 
 class Keys(object):
@@ -91,24 +101,20 @@ class Keys(object):
     @classmethod
     def from_fleet(cls, fleet_key, role=None):
         """Derived from the fleet key; signing as ``role`` (None: check only)."""
-        ed = _ed25519().Ed25519PrivateKey
-        private = dict((r, ed.from_private_bytes(role_seed(fleet_key, r))) for r in ROLES)
-        return cls(dict((r, k.public_key()) for r, k in private.items()), role,
+        private = dict((r, _signing().SigningKey(role_seed(fleet_key, r))) for r in ROLES)
+        return cls(dict((r, k.verify_key) for r, k in private.items()), role,
                    private.get(role))
 
 
 def role_file_text(keys):
     """The text of the key file of ``keys``' role (no role: an observer's, public keys
     only)."""
-    from cryptography.hazmat.primitives import serialization as ser
     role = keys.role or OBSERVER
     lines = ['# server_select role key: signs as %s, checks every role (make_key --role)'
              % role, 'role %s' % role]
     if keys.private is not None:
-        lines.append('sign %s' % keys.private.private_bytes(
-            ser.Encoding.Raw, ser.PrivateFormat.Raw, ser.NoEncryption()).hex())
-    lines += ['%s %s' % (r, keys.public[r].public_bytes(
-        ser.Encoding.Raw, ser.PublicFormat.Raw).hex()) for r in ROLES]
+        lines.append('sign %s' % bytes(keys.private).hex())
+    lines += ['%s %s' % (r, bytes(keys.public[r]).hex()) for r in ROLES]
     return '\n'.join(lines) + '\n'
 
 
@@ -124,7 +130,7 @@ def make_role_key(fleet_path, role, path):
 
 def _role_file(text, path):
     """Keys of a role key file's ``text``."""
-    ed, fields = _ed25519(), {}
+    signing, fields = _signing(), {}
     for line in text.splitlines():
         if line.strip() and not line.startswith('#'):
             name, _, value = line.partition(' ')
@@ -134,9 +140,9 @@ def _role_file(text, path):
         raise KeyFileError('key file %s is neither a fleet key nor a role key (no %s)'
                            % (path, ', '.join(missing) or 'known role'))
     try:
-        public = dict((r, ed.Ed25519PublicKey.from_public_bytes(_hex(fields[r], path)))
+        public = dict((r, signing.VerifyKey(_hex(fields[r], path)))
                       for r in ROLES)
-        private = ed.Ed25519PrivateKey.from_private_bytes(_hex(fields['sign'], path)) \
+        private = signing.SigningKey(_hex(fields['sign'], path)) \
             if 'sign' in fields else None
     except ValueError as error:
         raise KeyFileError('role key %s: %s' % (path, error))

@@ -94,15 +94,15 @@ class Sealer(object):
             return self._last
 
     def mac(self, seq, payload, where=b''):
-        return self.keys.private.sign(signed_bytes(self.sender, seq, payload, where))
+        return self.keys.private.sign(signed_bytes(self.sender, seq, payload, where)).signature
 
 
 def _verifies(public, signature, data):
-    from cryptography.exceptions import InvalidSignature
+    from nacl.exceptions import BadSignatureError
     try:
-        public.verify(signature, data)
+        public.verify(data, signature)
         return True
-    except InvalidSignature:
+    except BadSignatureError:
         return False
 
 
