@@ -68,7 +68,7 @@ class ManagerNode(object):
           ``robot_<r>/server_select_flag``
         - ``fleet_servers`` (server_select/FleetServers, latched; with ``~discover``)
     """
-    SEAL_ROLE = 'manager'  # what it signs as with a fleet key (core.seal)
+    SEAL_ROLE = 'manager'  # what it signs as with a fleet key (core/trust/seal.py)
 
     MASTER_WATCHER = True     # checks for a restarted roscore and tells the fleet
 

@@ -27,7 +27,7 @@ class OracleNode(object):
         - ``server_select_flag`` (server_select/SelectionFlag); with ``~profile`` fleet
           each robot's ``robot_<r>/server_select_flag`` (``~flag_stream``)
     """
-    SEAL_ROLE = 'manager'  # what it signs as with a fleet key (core.seal)
+    SEAL_ROLE = 'manager'  # what it signs as with a fleet key (core/trust/seal.py)
 
     def __init__(self):
         path = param('scenario')

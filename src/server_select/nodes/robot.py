@@ -58,7 +58,7 @@ class RobotNode(object):
           ``found_targets``; ``fleet_servers`` (``~discover``) or ``group_assignments``
     :ROS Services: ``~known_targets`` (server_select/KnownTargets); calls ``latency_S<s>``
     """
-    SEAL_ROLE = 'robot'  # what it signs as with a fleet key (core.seal)
+    SEAL_ROLE = 'robot'  # what it signs as with a fleet key (core/trust/seal.py)
 
     def __init__(self):
         self.robot_id = param('robot_id')

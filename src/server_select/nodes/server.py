@@ -77,7 +77,7 @@ class ServerNode(object):
         - ``detections`` (server_select/Detections): what was found in each frame, under
           the frame's header (its stamp and frame_id).
     """
-    SEAL_ROLE = 'server'  # what it signs as with a fleet key (core.seal)
+    SEAL_ROLE = 'server'  # what it signs as with a fleet key (core/trust/seal.py)
 
     def __init__(self):
         self.server_id = param('server_id')

@@ -40,7 +40,7 @@ class TopManagerNode(object):
     :ROS Publishers:
         - ``group_assignments`` (server_select/GroupAssignments, latched)
     """
-    SEAL_ROLE = 'manager'  # what it signs as with a fleet key (core.seal)
+    SEAL_ROLE = 'manager'  # what it signs as with a fleet key (core/trust/seal.py)
 
     def __init__(self):
         self.groups = param('groups')
