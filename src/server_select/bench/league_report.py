@@ -105,6 +105,9 @@ def plot(results, path):
                        r['load'] == max(x['load'] for x in rows)])
             for case, rows in results.get('capacity', {}).items()
             for v in CAPACITY_VARIANTS]))
+    # one colour per variant in both panels (the legend is shared)
+    colors = dict((v, 'C%d' % i) for i, v in enumerate(collections.OrderedDict.fromkeys(
+        CAPACITY_VARIANTS + NETWORK_VARIANTS)))
     for ax, title, bars in panels:
         cases = list(collections.OrderedDict.fromkeys(b[0] for b in bars))
         variants = list(collections.OrderedDict.fromkeys(b[1] for b in bars))
@@ -112,13 +115,17 @@ def plot(results, path):
         for i, variant in enumerate(variants):
             values = [next((statistics.median(b[2]) for b in bars if b[0] == c and
                             b[1] == variant and b[2]), 0.0) for c in cases]
-            ax.bar([x + i * width for x in range(len(cases))], values, width, label=variant)
+            ax.bar([x + i * width for x in range(len(cases))], values, width, label=variant,
+                   color=colors[variant])
         ax.set_xticks([x + 0.4 - width / 2 for x in range(len(cases))])
         ax.set_xticklabels(cases, rotation=20, fontsize=8)
         ax.set_title(title, fontsize=10)
     axes[0].axhline(1.0, color='k', lw=0.5)
-    handles, labels = max((ax.get_legend_handles_labels() for ax in axes),
-                          key=lambda hl: len(hl[1]))     # a part may be empty
+    shown = collections.OrderedDict()        # every variant of either panel, once
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            shown.setdefault(label, handle)
+    handles, labels = list(shown.values()), list(shown)
     if labels:
         fig.legend(handles, labels, loc='lower center', ncol=len(labels), fontsize=8,
                    frameon=False)
