@@ -38,6 +38,7 @@ A receiver with the keys admits a message only when
 What it does not do: hide anything (ROS 1 topics are plain TCP).
 """
 
+import hashlib
 import struct
 import threading
 import time
@@ -71,9 +72,14 @@ def context(channel, msg_type):
 
 
 def signed_bytes(sender, seq, payload, where=b''):
-    """What the signature covers: ``payload`` published by ``sender`` with ``seq`` on
-    ``where`` (:func:`context`)."""
-    return where + b'\0' + sender.encode('utf-8') + b'\0' + struct.pack('<Q', seq) + payload
+    """What the signature covers: the SHA-256 digest of ``payload`` published by ``sender``
+    with ``seq`` on ``where`` (:func:`context`). Signing the digest, not the message, costs
+    one pass over a large message instead of Ed25519's two SHA-512 passes and a copy (a raw
+    640x480 frame: 5.6 ms to seal and 4.9 ms to check, signed whole)."""
+    digest = hashlib.sha256(where)
+    for part in (b'\0', sender.encode('utf-8'), b'\0', struct.pack('<Q', seq), payload):
+        digest.update(part)
+    return digest.digest()
 
 
 class Sealer(object):
