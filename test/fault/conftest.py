@@ -10,6 +10,7 @@ sys.path.append(os.path.join(os.path.dirname(__file__), '..', '..', 'src'))
 import rospy  # noqa: E402
 
 from server_select.bench.harness import Roscore  # noqa: E402
+from server_select.core.trust.keys import make_key  # noqa: E402
 from server_select.ros.master_watch import MasterWatch  # noqa: E402
 
 from fleet import Recorder  # noqa: E402
@@ -27,3 +28,11 @@ def ros(tmp_path_factory):
     yield state
     rospy.signal_shutdown('fault tests done')
     state['core'].__exit__()
+
+
+@pytest.fixture
+def fleet_key(tmp_path):
+    """A new fleet key file (mode 0600), for a fleet whose every node gets it."""
+    path = str(tmp_path / 'fleet.key')
+    make_key(path)
+    return path

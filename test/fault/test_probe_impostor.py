@@ -21,7 +21,6 @@ import rosgraph
 import rospy
 
 from server_select.core.config import names
-from server_select.core.trust.keys import make_key
 from server_select.core.util.procs import wait_until
 from server_select.msg import LatencySample
 
@@ -101,10 +100,8 @@ def impostor_run(ros, **args):
     return counts
 
 
-def test_with_a_fleet_key_no_impostor_answer_counts(ros, tmp_path):
-    key = str(tmp_path / 'fleet.key')
-    make_key(key)
-    counts = impostor_run(ros, fleet_key=key)
+def test_with_a_fleet_key_no_impostor_answer_counts(ros, fleet_key):
+    counts = impostor_run(ros, fleet_key=fleet_key)
     assert counts["of them the impostor's"] == 0, counts
     assert counts['robot 1 good samples of servers 1, 2'] >= 10, counts
     assert (counts['failed'], counts['never answered']) == (0, 0), counts

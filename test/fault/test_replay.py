@@ -18,7 +18,6 @@ import rospy
 from server_select.core.config import names
 
 from server_select.core.trust import seal
-from server_select.core.trust.keys import make_key
 from server_select.core.util.procs import wait_until
 from server_select.msg import SelectionFlag
 
@@ -30,9 +29,8 @@ STEADY = dict(STABLE, policy='hysteresis')
 SECONDS = 6.0      # of the replays: twice the robots' manager timeout
 
 
-def test_flags_replayed_to_a_restarted_robot_count_for_nothing(ros, tmp_path):
-    key = str(tmp_path / 'fleet.key')
-    make_key(key)
+def test_flags_replayed_to_a_restarted_robot_count_for_nothing(ros, fleet_key, tmp_path):
+    key = fleet_key
     rec, recorded, lock = ros['rec'], [], threading.Lock()
     rec.clear()
 

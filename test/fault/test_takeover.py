@@ -14,7 +14,7 @@ import subprocess
 import sys
 import time
 
-from server_select.core.trust.keys import make_key, make_role_key
+from server_select.core.trust.keys import make_role_key
 from server_select.core.util.procs import wait_until
 
 from fleet import Fleet
@@ -75,10 +75,8 @@ def takeover(ros, robot_key=None, **args):
     return counts
 
 
-def test_with_a_fleet_key_the_impostor_steers_nothing(ros, tmp_path):
-    key = str(tmp_path / 'fleet.key')
-    make_key(key)
-    counts = takeover(ros, fleet_key=key)
+def test_with_a_fleet_key_the_impostor_steers_nothing(ros, fleet_key):
+    counts = takeover(ros, fleet_key=fleet_key)
     assert counts['answered by the server the impostor named'] == 0, counts
     assert (counts['failed'], counts['never answered']) == (0, 0), counts
     assert counts["robot 1's warnings naming /manager"] >= 1, counts
@@ -86,11 +84,10 @@ def test_with_a_fleet_key_the_impostor_steers_nothing(ros, tmp_path):
     assert counts['real manager followed again after s'] != '-', counts
 
 
-def test_a_robots_key_under_the_managers_name_steers_nothing(ros, tmp_path):
-    key, robot_key = str(tmp_path / 'fleet.key'), str(tmp_path / 'robot.key')
-    make_key(key)
-    make_role_key(key, 'robot', robot_key)
-    counts = takeover(ros, robot_key, fleet_key=key)
+def test_a_robots_key_under_the_managers_name_steers_nothing(ros, fleet_key, tmp_path):
+    robot_key = str(tmp_path / 'robot.key')
+    make_role_key(fleet_key, 'robot', robot_key)
+    counts = takeover(ros, robot_key, fleet_key=fleet_key)
     assert counts['answered by the server the impostor named'] == 0, counts
     assert (counts['failed'], counts['never answered']) == (0, 0), counts
     assert counts["... saying a robot's key signed it"] >= 1, counts
