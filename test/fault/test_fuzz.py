@@ -80,12 +80,19 @@ def nodes(ros):
 
 
 @FUZZ
-@given(robot=uint32, task=uint32, server=int32, data=st.lists(int32, max_size=2500),
-       sender=senders)
+@given(robot=uint32, task=uint32, server=st.one_of(st.sampled_from([1, 2]), int32),
+       data=st.lists(int32, max_size=2500), sender=senders)
 def test_server_sort_tasks(nodes, robot, task, server, data, sender):
-    nodes['server'].handler('sort').on_task(sent_by(SortTask(
+    """Through the server's routing: a task for server 1 is worked on (done or rejected)
+    exactly once, any other is left alone."""
+    handler = nodes['server'].handler('sort')
+    before = handler.done + handler.rejected
+    handler.endpoint.on_task(sent_by(SortTask(
         robot_id=robot, task_id=task, server_id=server, data=np.asarray(data, np.int32)),
-        sender))
+        sender), False)
+    expected = before + (1 if server == 1 else 0)
+    assert wait_until(lambda: handler.done + handler.rejected >= expected, 10.0, period=0.001)
+    assert handler.done + handler.rejected == expected
 
 
 @FUZZ
@@ -212,6 +219,9 @@ def test_robot_results(nodes, robot, task, server, ok, error, data, width, sende
                              error=error, image=Image(width=width))
     stream = next(s for s in robot_node.streams if s.flow.kind == kind)
     stream.on_result(sent_by(result, sender))
+    flow = stream.flow      # each task sent ends once, answered or failed: none twice
+    assert wait_until(lambda: flow.ok + flow.failed + len(flow) == flow.sent, 2.0,
+                      period=0.001), (flow.sent, flow.ok, flow.failed, len(flow))
 
 
 @FUZZ
