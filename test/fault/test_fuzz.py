@@ -101,9 +101,17 @@ def test_server_sort_tasks(nodes, robot, task, server, data, sender):
     height=st.integers(0, 64), width=st.integers(0, 64), step=st.integers(0, 300),
     data=st.binary(max_size=4000))
 def test_server_image_tasks(nodes, robot, server, encoding, height, width, step, data):
-    nodes['server'].handler('image').on_task(ImageTask(
+    """Through the server's routing: a frame for server 1 is worked on (detected or
+    rejected) exactly once, one for server 2 left alone."""
+    handler = nodes['server'].handler('image')
+    before = handler.done + handler.rejected
+    handler.endpoint.on_task(sent_by(ImageTask(
         robot_id=robot, task_id=1, server_id=server, image=Image(
-            height=height, width=width, encoding=encoding, step=step, data=data)))
+            height=height, width=width, encoding=encoding, step=step, data=data)),
+        '/robot1'), False)
+    expected = before + (1 if server == 1 else 0)
+    assert wait_until(lambda: handler.done + handler.rejected >= expected, 10.0, period=0.001)
+    assert handler.done + handler.rejected == expected
 
 
 @FUZZ
