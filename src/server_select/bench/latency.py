@@ -58,11 +58,11 @@ def receiver(port, count, nodelay=True, warmup=20, timeout=120.0):
                 sock_lat.append(time.monotonic() - STAMP.unpack_from(frame)[0])
         except ConnectionError:
             pass
-    sub.unregister()
-    listener.close()
     if len(ros) >= total and len(sock_lat) >= total:
         done.set()
-    done.wait(timeout)
+    done.wait(timeout)       # the topic's last messages may still be on their way
+    sub.unregister()
+    listener.close()
     return {'ros': ros[warmup:total], 'socket': sock_lat[warmup:total]}
 
 
@@ -70,6 +70,7 @@ def sender(port, count, size, interval, warmup=20):
     """Send ``warmup + count`` messages of ``size`` payload bytes on each path, alternating."""
     import rospy
     from server_select.msg import BenchPayload
+    from server_select.ros.node import flush
     rospy.init_node('latency_bench_sender', anonymous=True, disable_signals=True)
     pub = rospy.Publisher(TOPIC, BenchPayload, queue_size=count + warmup + 10)
     if not wait_until(lambda: pub.get_num_connections() > 0, 30.0, period=0.01):
@@ -82,7 +83,7 @@ def sender(port, count, size, interval, warmup=20):
             time.sleep(interval / 2)
             send_frame(sock, STAMP.pack(time.monotonic()) + payload)
             time.sleep(interval / 2)
-    time.sleep(0.5)
+    flush(pub, timeout=10.0)     # what rospy still queues would be lost with the process
 
 
 def main(argv=None):
