@@ -16,29 +16,26 @@ import subprocess
 import sys
 import tempfile
 import time
-import xmlrpc.client
+
+import rosgraph.masterapi
 
 from server_select.bench import cli
 from server_select.bench.harness import Roscore
 from server_select.core.trust.keys import make_key
 from server_select.core.util.procs import measure, stop_group, wait_until
 from server_select.core.util.tables import markdown_table
+from server_select.ros.graph import node_pid
 
 ROLES = ('robot', 'manager', 'server')
 
 
 def node_pids(master, nodes):
     """``{pid: node}`` of the nodes registered at ``master`` (a URI); None if any is not."""
-    pids = {}
+    graph = rosgraph.Master('/bench', master_uri=master)
     try:
-        for node in nodes:
-            code, _, api = xmlrpc.client.ServerProxy(master).lookupNode('/bench', node)
-            if code != 1:
-                return None
-            pids[xmlrpc.client.ServerProxy(api).getPid('/bench')[2]] = node
-    except OSError:
+        return dict((node_pid(node, master=graph), node) for node in nodes)
+    except (rosgraph.masterapi.MasterException, OSError):   # not registered (yet), or gone
         return None
-    return pids
 
 
 def launch(master, args, log):

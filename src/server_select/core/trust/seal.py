@@ -71,7 +71,7 @@ def context(channel, msg_type):
     return ('%s\0%s' % (channel, msg_type)).encode('utf-8')
 
 
-def signed_bytes(sender, seq, payload, where=b''):
+def signed_digest(sender, seq, payload, where=b''):
     """What the signature covers: the SHA-256 digest of ``payload`` published by ``sender``
     with ``seq`` on ``where`` (:func:`context`). Signing the digest, not the message, costs
     one pass over a large message instead of Ed25519's two SHA-512 passes and a copy (a raw
@@ -100,7 +100,7 @@ class Sealer(object):
             return self._last
 
     def mac(self, seq, payload, where=b''):
-        return self.keys.private.sign(signed_bytes(self.sender, seq, payload, where)).signature
+        return self.keys.private.sign(signed_digest(self.sender, seq, payload, where)).signature
 
 
 def _verifies(public, signature, data):
@@ -145,7 +145,7 @@ class Verifier(object):
         ``role``: who may sign it (:func:`publisher_role` of its type)."""
         if not mac_:
             return 'not signed'
-        signer = self._signer(mac_, signed_bytes(sender, seq, payload, where), role)
+        signer = self._signer(mac_, signed_digest(sender, seq, payload, where), role)
         if signer is None:
             return 'wrong signature (another key, node, topic or type)'
         if signer != role:
