@@ -51,6 +51,61 @@ def test_a_host_with_a_cpu_share_gets_that_share_of_a_core(tmp_path):
     assert netns.leftovers("sscpu") == [] and not os.path.exists(limit.path)
 
 
+# spins for argv[1] s; prints the 99th percentile of its stalls (ms): gaps of over 1 ms
+# between two turns of its loop
+STALLS = [sys.executable, '-c', 'import sys, time\nend = time.monotonic() + float(sys.argv[1])\n'
+          'last = time.monotonic(); gaps = [0.0]\nwhile last < end:\n'
+          '    now = time.monotonic()\n    if now - last > 1e-3: gaps.append(now - last)\n'
+          '    last = now\ngaps.sort()\nprint("%.1f" % (gaps[int(0.99 * (len(gaps) - 1))] * 1e3))']
+
+
+def _scenario_file(tmp_path, hosts):
+    data = {'name': 'cpu', 'duration': 10, 'hosts': dict(hosts, manager={'role': 'manager'})}
+    path = str(tmp_path / 'cpu.yaml')
+    with open(path, 'w') as stream:
+        stream.write(repr(data).replace("'", '"').replace('True', 'true'))   # JSON is YAML
+    return Scenario(data), path
+
+
+def test_a_short_period_slows_a_host_evenly_and_own_work_takes_its_share(tmp_path):
+    """Side by side: a host with 0.2 of a core per 5 ms, one with 0.2 per 100 ms (the
+    default), and a Raspberry Pi 3 host (``like: pi3``: 0.1 per 10 ms) 50 % busy with its
+    own work, each running a process that spins flat out; and a Pi 3 host 50 % busy with
+    nothing else to run (its own work alone: half its share)."""
+    scenario, path = _scenario_file(tmp_path, {
+        'short': {'role': 'server', 'id': 1, 'cpu': 0.2, 'cpu_period': 5},
+        'long': {'role': 'server', 'id': 2, 'cpu': 0.2},
+        'pi': {'role': 'robot', 'id': 1, 'like': 'pi3', 'busy': 0.5},
+        'idle': {'role': 'robot', 'id': 2, 'like': 'pi3', 'busy': 0.5}})
+    with netns.Testbed(scenario, path, str(tmp_path / 'run'), prefix='ssper') as tb:
+        logs = dict((h, str(tmp_path / ('%s.out' % h))) for h in ('short', 'long', 'pi'))
+        spin = dict((h, tb.popen(h, STALLS + ['6'], log=logs[h])) for h in logs)
+        limits = tb.limits
+        own = [p for s, p in tb.processes if p not in spin.values()]
+        own = dict((h, next(p for p in own if p.pid in limits[h].pids())) for h in ('pi', 'idle'))
+        assert wait_until(lambda: all(spin[h].pid in limits[h].pids() for h in spin), 5.0)
+        usage = measure([p.pid for p in spin.values()] + [p.pid for p in own.values()], 4.0)
+        for proc in spin.values():
+            proc.wait(timeout=30)
+    stalls = dict((h, float(open(logs[h]).read())) for h in logs)
+    share = dict((h, usage[p.pid]['cpu_percent'] / 100.0) for h, p in spin.items())
+    own_share = dict((h, usage[p.pid]['cpu_percent'] / 100.0) for h, p in own.items())
+    print('\nCPU share of one core and 99th percentile stall: 0.2 per 5 ms -> %.3f, %.1f ms; '
+          '0.2 per 100 ms -> %.3f, %.1f ms; pi3 host 50 %% busy: its own work %.3f, a spinner '
+          'beside it %.3f (of 0.1), %.1f ms; its own work alone %.3f' % (
+              share['short'], stalls['short'], share['long'], stalls['long'], own_share['pi'],
+              share['pi'], stalls['pi'], own_share['idle']))
+    assert share['short'] == pytest.approx(0.2, rel=0.10)
+    assert share['long'] == pytest.approx(0.2, rel=0.10)
+    # the kernel charges a quota at its tick (4 ms at HZ=250): a 0.2 share per 5 ms runs a
+    # tick and waits about four (16-21 ms), against 80 ms per 100 ms period
+    assert stalls['short'] < 30.0 and stalls['long'] > 60.0
+    assert share['pi'] + own_share['pi'] == pytest.approx(0.1, rel=0.10)
+    assert own_share['idle'] == pytest.approx(0.05, rel=0.10)
+    assert own_share['pi'] > 0.005      # beside a process that never sleeps: it still runs
+    assert limits['pi'].memory_mb == 1024 and netns.leftovers('ssper') == []
+
+
 def test_a_cpu_share_is_checked_where_the_scenario_is_read():
     from server_select.testbed.scenario import ScenarioError
     for bad in (0.0, -1, 'fast', 100):
@@ -59,6 +114,11 @@ def test_a_cpu_share_is_checked_where_the_scenario_is_read():
                                 's': {'role': 'server', 'id': 1, 'cpu': bad}}})
     with pytest.raises(ScenarioError, match='manager host has no CPU limit'):
         Scenario({'hosts': {'manager': {'role': 'manager', 'cpu': 0.5}}})
+    for bad, match in (({'like': 'pi4'}, 'like'), ({'cpu': 0.1, 'cpu_period': 0.5}, 'period'),
+                       ({'memory': 512}, 'no cpu share'), ({'busy': 1.5}, 'busy')):
+        with pytest.raises(ScenarioError, match=match):
+            Scenario({'hosts': {'manager': {'role': 'manager'},
+                                'r': dict(bad, role='robot', id=1)}})
 
 
 def test_a_process_in_a_cpu_limited_group_sees_the_cores_it_may_use():

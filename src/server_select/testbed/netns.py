@@ -18,7 +18,7 @@ import sys
 import time
 
 from server_select.core.util.procs import alive, kill_all, stop_group, stop_groups
-from server_select.testbed import cpu
+from server_select.testbed import busy, cpu
 from server_select.testbed.linkemu import EmulatorError
 
 STATE_DIR = '/run/server_select-testbed'
@@ -173,9 +173,16 @@ class Testbed(object):
             if len(line) != 2 or line[0] != 'ready':
                 raise EmulatorError('link emulator did not start (exit %s)' % self.emulator.wait())
             self.t0 = float(line[1])
+            self._start_own_work()
         except BaseException:
             self.down()
             raise
+
+    def _start_own_work(self):
+        """Each ``busy`` host's own work: a process using that share of its CPU."""
+        for host in (h for h in self.scenario.hosts.values() if h.busy):
+            self.popen(host.name, busy.command(host), log=os.path.join(
+                self.run_dir, '%s_busy.log' % host.name))
 
     def _write_state(self, emulator_pid):
         """What a later run needs to clean up after this one if its process dies."""

@@ -20,8 +20,12 @@ A scenario is a YAML mapping::
     # SIGCONT) and get slower (each task takes this many ms more, at run time):
     #   server2: {role: server, id: 2, hang: [[40, 55]], work: [{at: 40, delay: 25}]}
     # and a server or robot host may have a CPU share of one core (a cgroup quota on
-    # every process of the host: real, finite capacity):
+    # every process of the host: real, finite capacity), given per cpu_period ms (100 by
+    # default; a few ms slow it evenly), a memory limit (MiB), and work of its own (busy:
+    # a process using that share of the host's CPU, as a robot's SLAM would); "like: pi3"
+    # is a Raspberry Pi 3 (testbed/cpu.py PI3: its calibration):
     #   server3: {role: server, id: 3, cpu: 0.25}
+    #   robot1:  {role: robot, id: 1, like: pi3, busy: 0.5}
 
 Each event may set ``delay`` (ms, a step), ``ramp`` + ``over`` (ms, s: linear change),
 ``jitter`` (ms: a packet's delay is uniform in delay +- jitter), ``loss`` (0..1),
@@ -36,16 +40,19 @@ import collections
 import yaml
 
 from server_select.core.selection.rank import NO_SERVER
-from server_select.testbed.fields import (ScenarioError, hang_times,  # noqa: F401 (re-exported)
-                                          number as _number, work_times)
+from server_select.testbed.fields import (DEFAULT_CPU_PERIOD_MS, ScenarioError,  # noqa: F401
+                                          hang_times, number as _number, resources,
+                                          work_times)
 
 ROLES = ('manager', 'server', 'robot')
 
 LinkState = collections.namedtuple('LinkState', 'delay jitter loss down rate')
 LinkState.__new__.__defaults__ = (0.0,)   # rate: MB/s each way, 0 = unlimited
-Host = collections.namedtuple('Host', 'name role id start stop hang work cpu')
-# hang: [(from, to)] s; work: [(at s, delay s)]; cpu: share of one core, None: no limit
-Host.__new__.__defaults__ = ((), (), None)
+Host = collections.namedtuple('Host', 'name role id start stop hang work cpu cpu_period '
+                              'memory busy')
+# hang: [(from, to)] s; work: [(at s, delay s)]; cpu: share of one core, None: no limit;
+# cpu_period: ms; memory: MiB, None: no limit; busy: share of the host's CPU its own work uses
+Host.__new__.__defaults__ = ((), (), None, DEFAULT_CPU_PERIOD_MS, None, 0.0)
 
 
 def pair_key(a, b):
@@ -187,12 +194,8 @@ class Scenario(object):
             hang, work = hang_times(spec.get('hang'), name), work_times(spec.get('work'), name)
             if role != 'server' and (hang or work):
                 raise ScenarioError('hosts: only a server may hang or get work (%s)' % name)
-            cpu = spec.get('cpu')
-            if cpu is not None:
-                cpu = _number(cpu, 'hosts: %s cpu (share of one core)' % name, 0.01, 64.0)
-                if role == 'manager':
-                    raise ScenarioError('hosts: the manager host has no CPU limit')
-            result[name] = Host(name, role, ident, start, stop, hang, work, cpu)
+            result[name] = Host(name, role, ident, start, stop, hang, work,
+                                *resources(name, role, spec))
         if sum(1 for h in result.values() if h.role == 'manager') != 1:
             raise ScenarioError('hosts: exactly one host must have role manager')
         return result
