@@ -16,7 +16,7 @@ DEMO_MD := $(BUILD)/demo_summary.md
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
-  bench-scale bench-routing bench-hedging bench-capacity league bench-master bench-fleet bench-seal bench-probes bench-top \
+  bench-scale bench-routing bench-hedging bench-capacity league bench-master bench-fleet bench-seal bench-probes bench-top bench-robot \
   test check unit-test testbed-test fault-test catkin-test rostest lint docs help clean
 all: build
 
@@ -32,7 +32,7 @@ help:
 	@echo 'make league          the fleet profile beside the peer balancers, every scenario'
 	@echo 'make bench           the papers tables and throughput (bench-scale, bench-routing,'
 	@echo '                     bench-hedging, bench-capacity, bench-master, bench-memory, bench-emulator,'
-	@echo '                     bench-seal, bench-probes, bench-fleet, bench-top)'
+	@echo '                     bench-seal, bench-probes, bench-fleet, bench-top, bench-robot)'
 	@echo 'make unit-test, testbed-test, fault-test, catkin-test, rostest T=x.test, lint: parts of make test'
 	@echo 'make docs            docs/parameters.md from the parameter table and the launch files'
 	@echo 'make clean           remove build/ and .venv'
@@ -168,6 +168,12 @@ bench-seal: build
 # (~6 min).
 bench-top: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.top_cost --out results/bench
+
+# A robot node's CPU and RSS by profile, servers (4, 10, 30) and workload (sort tasks,
+# a compressed camera), here and on an emulated Raspberry Pi 3 (root), 3 runs, and where
+# its time goes (py-spy; ~25 min).
+bench-robot: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.robot_cost --profile 30 --out results/bench
 
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build

@@ -273,3 +273,19 @@ def test_a_robot_that_stops_reports_each_task_still_out_failed_once():
                for o in ended)
     assert sorted(r.task_id for r in w.reports) == [1, 2, 3] and w.flow.failed == 2
     assert w.answer(1, 4).status == 'late' and w.flow.abandon('again') == []
+
+
+def test_next_wake_is_the_earliest_deadline_timeout_or_hedge():
+    w = World(timeout=2.0, hedge=0.95)
+    assert w.flow.next_wake() is None
+    w.flow.send_next(0)
+    pending = list(w.flow._pending.values())[0]
+    assert w.flow.next_wake() == min(pending.deadline, pending.started + 2.0)
+    _learn(w, 3, [0.010] * 20)
+    w.flow.send_next(0)
+    newest = list(w.flow._pending.values())[-1]
+    hedge_at = newest.hedge_at(lambda s: w.flow.deadlines.hedge_seconds(s, 0.95))
+    assert hedge_at is not None and w.flow.next_wake() <= hedge_at
+    w.clock.now += 3.0
+    w.flow.tick()
+    assert w.flow.next_wake() is None and len(w.flow) == 0

@@ -6,16 +6,23 @@ persistent connection of ``ServiceProxy(persistent=True)`` -- so a probe is one 
 round trip, not a master lookup plus a TCP handshake -- and bounds every call:
 
 - connecting (master lookup aside) uses the connect timeout rospy's transport offers;
-- a call in progress at the deadline is aborted by closing its transport from a timer
-  thread (``socket.shutdown`` wakes the blocked ``recv``), and the next call reconnects.
+- a call in progress at the deadline is aborted by closing its transport from the
+  node's one watchdog thread (``socket.shutdown`` wakes the blocked ``recv``), and the
+  next call reconnects. (A ``threading.Timer`` per call started a thread per probe: 160 us
+  of CPU each on this host, six times the 27 us of the call itself.)
 """
 
 import threading
 import time
 
+import genpy
 import rospy
 from rospy.exceptions import ROSException, TransportInitError
 from rospy.impl.tcpros_base import TCPROSTransport
+
+from server_select.core.util.pacer import Watchdog
+
+DEADLINES = Watchdog(name='probe deadlines')      # every proxy's calls, one thread
 
 
 class ProbeTimeout(rospy.ServiceException):
@@ -42,16 +49,14 @@ class TimedServiceProxy(rospy.ServiceProxy):
         """
         with self._abort_lock:
             self._aborted = False
-        watchdog = threading.Timer(timeout, self._abort)
-        watchdog.daemon = True
-        watchdog.start()
+        watchdog = DEADLINES.arm(timeout, self._abort)
         try:
             if self.transport is None:
                 self._connect(request, timeout)
             start = time.perf_counter()
             response = self.call(request)
             elapsed = time.perf_counter() - start
-            watchdog.cancel()
+            DEADLINES.cancel(watchdog)
             with self._abort_lock:
                 if self._aborted:  # the answer raced the deadline: the transport is closed
                     raise ProbeTimeout('answer arrived at the deadline of %.3g s' % timeout)
@@ -63,7 +68,45 @@ class TimedServiceProxy(rospy.ServiceProxy):
                 raise ProbeTimeout('no answer within %.3g s' % timeout)
             raise rospy.ServiceException(str(error) or type(error).__name__)
         finally:
-            watchdog.cancel()
+            DEADLINES.cancel(watchdog)
+
+    # -- a call in two halves, for one thread that waits on many sockets (ProbeLoop) ---------
+
+    def connected(self):
+        """Whether a connection is up (a call then needs no master lookup nor handshake)."""
+        transport = self.transport
+        return transport is not None and transport.socket is not None and not transport.done
+
+    def send(self, request):
+        """Send ``request`` on the open connection; returns its socket, to be polled for
+        the answer (:meth:`read_answer`). ServiceException (the connection dropped) if it
+        cannot be sent."""
+        transport = self.transport
+        try:
+            self.seq += 1
+            transport.send_message(request, self.seq)
+            return transport.socket
+        except (ROSException, OSError, AttributeError) as error:
+            self._drop()
+            raise rospy.ServiceException(str(error) or type(error).__name__)
+
+    def read_answer(self):
+        """After the socket polled readable: the response once it is whole, else None.
+        ServiceException (the connection then dropped) on an error answer or a closed
+        connection."""
+        transport = self.transport
+        try:
+            data = transport.socket.recv(transport.protocol.buff_size)
+            if not data:
+                raise rospy.ServiceException('the server closed the connection')
+            transport.read_buff.write(data)
+            answers = []
+            transport.protocol.read_messages(transport.read_buff, answers, transport.socket)
+            return answers[0] if answers else None
+        except (rospy.ServiceException, ROSException, OSError, AttributeError,
+                genpy.DeserializationError) as error:
+            self._drop()
+            raise rospy.ServiceException(str(error) or type(error).__name__)
 
     def _connect(self, request, timeout):
         pinned = self.pinned() if self.pinned is not None else None

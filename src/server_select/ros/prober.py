@@ -10,11 +10,11 @@ import rospy
 
 from server_select.core.config import names
 from server_select.core.selection.probing import ProbeRound
-from server_select.core.trust.senders import Throttle
 from server_select.msg import LatencySample, LatencySamples
-from server_select.ros import seal
 from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
+from server_select.ros.probe_loop import ProbeLoop
+from server_select.ros.probe_seal import ProbeSeal
 from server_select.ros.seal import SealedPublisher
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
@@ -25,7 +25,8 @@ STILL_OUT = 'previous probe still in progress'
 
 class Prober(object):
     """Probes the servers when ``plan`` (a :class:`~server_select.core.selection.probing.ProbePlan`)
-    says, one round per tick of the plan, and publishes each sample, failed ones too.
+    says, a round when its next time comes (one thread sleeps until then), and publishes
+    each sample, failed ones too.
     ``contenders``, for adaptive plans, is ``(rule, view)``: a
     :class:`~server_select.core.selection.probing.ContenderRule` and the robot's
     :class:`~server_select.core.selection.candidates.Selection`, whose ``contenders(rule)`` the plan
@@ -65,9 +66,7 @@ class Prober(object):
         self.on_sample = on_sample or (lambda server, ok, rtt, error, wait: None)
         self.load_of = load_of
         self.announce = announce
-        self.addresses = addresses
-        self.node_of = node_of or (lambda server, refresh=False: None)
-        self._forged = Throttle(5.0)
+        self.seal = ProbeSeal(robot_id, node_of, addresses)
         self._nonce = random.SystemRandom()
         self._seq = itertools.count(1)
         self._rounds = itertools.count(1)
@@ -78,7 +77,7 @@ class Prober(object):
                                           queue_size=10) if stream != 'pair' else None
         self._pool = concurrent.futures.ThreadPoolExecutor(
             max_workers=max(16, len(servers)), thread_name_prefix='probe')
-        self._timer = None
+        self._loop = ProbeLoop(self.on_round, self._next_time, self._on_error)
         for server in servers:
             self.add(server)
 
@@ -96,28 +95,9 @@ class Prober(object):
                     fleet(names.sample_topic(self.robot_id, server)), LatencySample,
                     queue_size=10)
             self._proxies[server] = TimedServiceProxy(
-                fleet(names.probe_service(server)), LatencyProbe,
-                *((self._pinned(server), self._moved(server)) if self.addresses else ()))
+                fleet(names.probe_service(server)), LatencyProbe, *self.seal.proxy_args(server))
             self.plan.add(server, time.monotonic())
-
-    def _pinned(self, server):
-        return lambda: (self.addresses.of(server) or (None, None))[0]
-
-    def _moved(self, server):
-        def warn(master, pinned):
-            due, held = self._forged.due()
-            if due:
-                rospy.logwarn('robot %d: the master lists %s for the probe service of server '
-                              '%d, but the server\'s sealed announcement says %s: probing '
-                              'that (another node registered the service)%s' % (
-                                  self.robot_id, master, server, pinned,
-                                  '; %d more before' % held if held else ''))
-        return warn
-
-    def _node(self, server, refresh=False):
-        """The node whose seal a probe answer of ``server`` must carry."""
-        announced = self.addresses.of(server) if self.addresses is not None else None
-        return announced[1] if announced else self.node_of(server, refresh)
+        self._loop.poke()
 
     def remove(self, server):
         with self._lock:
@@ -131,9 +111,18 @@ class Prober(object):
             pub.unregister()
 
     def start(self):
-        self._timer = rospy.Timer(rospy.Duration(self.plan.tick), self.on_timer)
+        self._loop.start()
 
-    def on_timer(self, _event):
+    def _next_time(self):
+        with self._lock:
+            return self.plan.next_time()
+
+    def _on_error(self, error):
+        rospy.logerr_throttle(5.0, 'robot %d: probing: %s: %s' % (
+            self.robot_id, type(error).__name__, error))
+
+    def on_round(self):
+        """Probe the servers the plan says are due (one round)."""
         if rospy.is_shutdown():
             return
         contenders = self.contenders[1].contenders(self.contenders[0]) \
@@ -151,18 +140,33 @@ class Prober(object):
             if previous is not None and not previous.done():
                 self._publish(server, next(self._seq), stamp, None, STILL_OUT, batch)
                 continue
-            try:
-                self._inflight[server] = self._pool.submit(self._probe, server,
-                                                           next(self._seq), batch)
+            seq, proxy = next(self._seq), self._proxies.get(server)
+            if proxy is not None and proxy.connected():     # on the loop: one wake-up
+                stamp, request = self._request(server, seq)
+                self._inflight[server] = self._loop.start_probe(
+                    proxy, request, self.timeout, self._then(server, seq, stamp, request,
+                                                             proxy, batch))
+                continue
+            try:        # a connection first: on a worker thread, not holding the loop up
+                self._inflight[server] = self._pool.submit(self._probe, server, seq, batch)
             except RuntimeError:  # pool shut down: the node is stopping
                 return
 
-    def _probe(self, server, seq, batch):
+    def _request(self, server, seq):
         stamp = rospy.Time.now()
         request = LatencyProbeRequest(robot_id=self.robot_id, seq=seq, stamp=stamp,
                                       nonce=self._nonce.getrandbits(64))
         if self.announce is not None:
             request.task_kinds, request.task_rates = self.announce(server)
+        return stamp, request
+
+    def _then(self, server, seq, stamp, request, proxy, batch):
+        return lambda response, rtt, error: self._answered(server, seq, stamp, request, proxy,
+                                                           batch, response, rtt, error)
+
+    def _probe(self, server, seq, batch):
+        """A probe that connects first (a worker thread's)."""
+        stamp, request = self._request(server, seq)
         proxy = self._proxies.get(server)
         if proxy is None:       # removed meanwhile
             self._publish(server, seq, stamp, None, 'server left the fleet', batch)
@@ -172,24 +176,19 @@ class Prober(object):
         except rospy.ServiceException as error:
             self._publish(server, seq, stamp, None, str(error), batch)
             return
+        self._answered(server, seq, stamp, request, proxy, batch, response, rtt, None)
+
+    def _answered(self, server, seq, stamp, request, proxy, batch, response, rtt, error):
+        """A probe's end: a failed sample, or the answer checked and its sample."""
+        if error is not None:
+            self._publish(server, seq, stamp, None, str(error), batch)
+            return
         if response.server_id != server or response.seq != seq:
             self._publish(server, seq, stamp, None, 'answer from server %d seq %d'
                           % (response.server_id, response.seq), batch)
             return
-        node = self._node(server)
-        forged = seal.answer_refusal(response, proxy.resolved_name, proxy.uri, request,
-                                     node or '?')
-        if forged is not None and not forged.endswith('(replayed)'):
-            node = self._node(server, True)         # the server may have been restarted
-            forged = seal.answer_refusal(response, proxy.resolved_name, proxy.uri, request,
-                                         node or '?')
+        forged = self.seal.forgery(server, response, proxy, request)
         if forged is not None:
-            due, held = self._forged.due()
-            if due:
-                rospy.logwarn('robot %d: ignored a probe answer of %s from node %s at %s '
-                              '(%s, by the fleet key): not server %d%s' % (
-                                  self.robot_id, proxy.resolved_name, node, proxy.uri, forged,
-                                  server, '; %d more before' % held if held else ''))
             proxy.reconnect()       # to where the server's announcement says, once known
             self._publish(server, seq, stamp, None, 'answer not sealed by the fleet key: %s'
                           % forged, batch)
@@ -222,6 +221,7 @@ class Prober(object):
         if view.near(rule, value):
             with self._lock:
                 self.plan.promote(server, time.monotonic())
+            self._loop.poke()
 
     def _publish_round(self, batch):
         servers, oks, rtts, waits = zip(*sorted(batch.samples)) if batch.samples \
@@ -232,8 +232,7 @@ class Prober(object):
         self._batch_pub.publish(msg)
 
     def shutdown(self):
-        if self._timer is not None:
-            self._timer.shutdown()
+        self._loop.stop()
         self._pool.shutdown(wait=False)
         with self._lock:
             proxies = list(self._proxies.values())

@@ -95,6 +95,15 @@ class Pending(object):
         self.hedged = True
         return len(self.attempts) == 1
 
+    def hedge_at(self, delay):
+        """When :meth:`hedge_due` will say yes (None: not by itself: hedged already,
+        re-sent, or ``delay`` not known yet)."""
+        if self.hedged or len(self.attempts) != 1:
+            return None
+        first, sent = self.attempts[0]
+        wait = delay(first)
+        return None if wait is None else sent + wait
+
     def sent_at(self, server):
         return next((t for s, t in reversed(self.attempts) if s == server), None)
 

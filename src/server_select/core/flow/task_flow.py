@@ -28,12 +28,13 @@ import threading
 import time
 
 from server_select.core.flow.attempts import AttemptClock
+from server_select.core.flow.timing import Timing
 from server_select.core.flow.outcome import (DUPLICATE, ENDED, FOREIGN, LATE,  # noqa: F401
                                              LOCAL, NO_SERVER, RETRIED, UNKNOWN, EndedTasks,
                                              Outcome, Pending, Resolution)
 
 
-class TaskFlow(object):
+class TaskFlow(Timing):
     """One stream of tasks of one robot, from creation to its one report.
 
     :param candidates: ``() -> [server ids]`` in order of preference, ``[LOCAL]`` to work
@@ -166,26 +167,6 @@ class TaskFlow(object):
         self._pending.pop(pending.task_id, None)
         pending.end(None, observer=self._attempts)
 
-    def _next(self, pending, hedge=False):
-        """Send ``pending`` to the next candidate it has not tried (a re-send, or a
-        ``hedge``); False if there is none. A task with a freshness deadline goes only
-        where the load says it can still be done in time."""
-        tried = set(s for s, _ in pending.attempts)
-        elapsed = self._clock() - pending.started
-        untried = [s for s in self._candidates() if s not in tried and s != LOCAL
-                   and not self.deadlines.too_busy(s, elapsed)]
-        if not untried:
-            return False
-        if self.budget is not None and not self.budget.spend(reserve=not hedge):
-            self.unfunded += 1
-            return False
-        if hedge:
-            self.hedged += 1
-        else:
-            self.resent += 1
-        self._attempt(pending, untried[0])
-        return True
-
     def resolve(self, task_id, answered_by, ok, error='', result=None, busy=False):
         """An answer for ``task_id`` from ``answered_by``: a :class:`Resolution`, ENDED with
         the task's Outcome, RETRIED (an error or ``busy`` answer, the task went to the next
@@ -230,32 +211,6 @@ class TaskFlow(object):
         return Resolution(ENDED, self._end(pending.outcome(self.kind, answered_by, ok, error,
                                                            now - pending.started)))
 
-    def tick(self):
-        """Act on passed deadlines: re-send, or report tasks out of time. Returns the
-        Outcomes reported."""
-        now = self._clock()
-        ended = []
-        with self._lock:
-            for pending in list(self._pending.values()):
-                if now - pending.started >= self.timeout:
-                    self._drop(pending)
-                    ended.append((pending, 'no result within task_timeout %.3g s'
-                                  % self.timeout))
-                elif now >= pending.deadline:
-                    server, sent = pending.attempts[-1]
-                    pending.end(server, now - sent, self._attempts)
-                    self._on_failure(server, 'no answer within %.3g s' % (now - sent))
-                    if self._gives_way():     # not worth sending again
-                        self._drop(pending)
-                        ended.append((pending, 'no result within its attempt deadline and '
-                                      'a newer task waits'))
-                    elif not self._next(pending):   # nobody left: wait for any late answer
-                        pending.deadline = pending.started + self.timeout
-                elif self.hedge is not None and pending.hedge_due(   # the first not blamed
-                        now, lambda server: self.deadlines.hedge_seconds(server, self.hedge)):
-                    self._next(pending, hedge=True)
-        return [self._end(p.unanswered(self.kind, why)) for p, why in ended]
-
     def abandon(self, why):
         """Report every task still waiting for an answer failed, with ``why`` (the robot is
         stopping: each task is reported once, none is left unsaid). Returns their Outcomes."""
@@ -264,11 +219,6 @@ class TaskFlow(object):
             for each in pending:
                 self._drop(each)
         return [self._end(p.unanswered(self.kind, why)) for p in pending]
-
-    def _gives_way(self):
-        """Whether a newer task, held back, takes a late one's place (counted)."""
-        self.superseded += self.newest_wins and self._held
-        return self.newest_wins and self._held
 
     def _end(self, outcome):
         with self._lock:

@@ -22,8 +22,9 @@ server 40 ms away needs a probe every few seconds only to notice that it came ne
   Without a ``contender_rate`` the plan is uniform: every server every ``1/rate`` s, in
   rounds (the paper: 1 Hz).
 
-The robot asks :meth:`ProbePlan.due` once per tick (``tick`` s) and probes what it returns
-as one round; the manager sees the same uneven rounds in the robot's sample batches.
+The robot asks :meth:`ProbePlan.due` when :meth:`ProbePlan.next_time` comes and probes
+what it returns as one round (servers due within half a ``tick`` go together); the
+manager sees the same uneven rounds in the robot's sample batches.
 """
 
 import math
@@ -161,6 +162,12 @@ class ProbePlan(object):
             self._next[server] = now
         elif not was:
             self._next[server] = min(self._next[server], now + self.interval(server))
+
+    def next_time(self):
+        """When :meth:`due` next has a server to return (None: no server)."""
+        if not self._next:
+            return None
+        return min(self._next.values()) - (self.tick / 2.0 if self.adaptive else 0.0)
 
     def due(self, now):
         """The servers to probe at this tick (``now``), sorted; each one's next probe is

@@ -1,0 +1,124 @@
+"""Where a robot node's time goes (bench-robot's ``--profile``), and the bench's camera.
+
+:func:`sample` runs py-spy (a sampling profiler, from PyPI) on a running node and sorts
+its samples into parts of the robot by the innermost frame of this package on each
+stack: probes, windows and ranking, ranking messages, flags, the task path, membership,
+the seal, the node itself; stacks without a frame of ours by rospy's part (timers,
+transport), and every stack that passes through logging to logging. Samples of a thread
+waiting (in ``recv``, ``select``, a queue or a sleep) are left out.
+"""
+
+import collections
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+from server_select.core.util.tables import markdown_table
+
+PARTS = (   # (part, what the file of the innermost frame of ours contains)
+    ('probes', ('ros/prober.py', 'ros/probe_client.py', 'selection/probing.py')),
+    ('windows and ranking', ('core/selection/', 'core/load/', 'ros/load.py', 'ros/passive.py',
+                             'core/fleet/health')),
+    ('ranking messages', ('ros/view.py',)),
+    ('flags', ('ros/flags.py',)),
+    ('task path', ('core/flow/', 'ros/task_stream.py', 'ros/routing.py', 'server_select/tasks/',
+                   'ros/camera.py', 'vision/', 'ros/task_kinds.py')),
+    ('membership', ('ros/membership.py', 'ros/graph.py', 'ros/senders.py',
+                    'ros/master_watch.py')),
+    ('seal', ('ros/seal.py', 'core/trust/')),
+    ('robot node', ('nodes/robot.py', 'ros/robot_parts.py', 'ros/runner.py', 'ros/node.py')),
+)
+WAITING = ('recv_buff (', 'thread.py:81)', 'wait (', 'select (', 'sleep (', 'accept (',
+           'poll (', '_wait_for_tstate_lock', 'readinto (')
+
+
+def part_of(frames):
+    """The part of one stack (a list of ``func (file:line)``, outermost first); None for
+    a thread that waits."""
+    if not frames or any(w in frames[-1] for w in WAITING):
+        return None
+    if any('logging/__init__' in f or 'rospy/impl/rosout' in f for f in frames):
+        return 'logging'
+    for frame in reversed(frames):
+        if 'server_select/' not in frame or 'server_select/msg/' in frame or \
+                'server_select/srv/' in frame:
+            continue
+        for part, files in PARTS:
+            if any(f in frame for f in files):
+                return part
+        return 'robot node'
+    if any('rospy/timer.py' in f for f in frames):
+        return 'rospy timers'
+    if any('rospy/' in f or 'genpy/' in f for f in frames):
+        return 'ROS transport and messages'
+    return 'other'
+
+
+def parts(raw_lines):
+    """``{part: samples}`` of py-spy's raw output (``stack count`` per line)."""
+    counts = collections.Counter()
+    for line in raw_lines:
+        stack, _, count = line.rstrip('\n').rpartition(' ')
+        if not stack or not count.isdigit():
+            continue
+        part = part_of(stack.split(';'))
+        if part is not None:
+            counts[part] += int(count)
+    return dict(counts)
+
+
+def _py_spy():
+    here = os.path.join(os.path.dirname(sys.executable), 'py-spy')
+    return here if os.path.exists(here) else shutil.which('py-spy')
+
+
+def sample(pid, seconds, work, name, rate=250):
+    """``{part: samples}`` of node ``pid`` over ``seconds`` s; ``{}`` without py-spy."""
+    tool = _py_spy()
+    if tool is None:
+        print('py-spy is not installed: no profile (pip install py-spy)', file=sys.stderr)
+        return {}
+    out = os.path.join(work, 'py-spy_%s.txt' % name)
+    subprocess.run([tool, 'record', '-p', str(pid), '-d', '%d' % seconds, '-r', str(rate),
+                    '-f', 'raw', '-o', out], stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, check=False)
+    try:
+        with open(out) as stream:
+            return parts(stream)
+    except OSError:
+        return {}
+
+
+def table(by_profile):
+    """Each part's share of a profile's samples on a CPU (%), most first."""
+    profiles = sorted(by_profile)
+    totals = dict((p, float(sum(by_profile[p].values())) or 1.0) for p in profiles)
+    names = sorted(set(k for p in profiles for k in by_profile[p]),
+                   key=lambda k: -sum(by_profile[p].get(k, 0) / totals[p] for p in profiles))
+    rows = [[name] + ['%.1f' % (100.0 * by_profile[p].get(name, 0) / totals[p])
+                      for p in profiles] for name in names]
+    rows.append(['samples on a CPU'] + ['%d' % totals[p] for p in profiles])
+    return markdown_table(['part'] + ['%s %%' % p for p in profiles], rows)
+
+
+def camera(topic, rate):
+    """Publish a 640 x 480 JPEG photograph on ``topic`` (sensor_msgs/CompressedImage) at
+    ``rate`` Hz, stamped, frame_id ``camera``, until shut down: the bench's camera driver."""
+    import cv2
+    import rospy
+    from sensor_msgs.msg import CompressedImage
+    from skimage import data as samples
+    rospy.init_node('camera')
+    frame = cv2.resize(cv2.cvtColor(samples.astronaut(), cv2.COLOR_RGB2BGR), (640, 480))
+    jpeg = cv2.imencode('.jpg', frame, [cv2.IMWRITE_JPEG_QUALITY, 80])[1].tobytes()
+    pub = rospy.Publisher(topic, CompressedImage, queue_size=1)
+    period, due = 1.0 / rate, time.monotonic()
+    while not rospy.is_shutdown():
+        msg = CompressedImage(format='bgr8; jpeg compressed bgr8', data=jpeg)
+        msg.header.stamp, msg.header.frame_id = rospy.Time.now(), 'camera'
+        pub.publish(msg)
+        due += period
+        time.sleep(max(0.0, due - time.monotonic()))
+    return 0
