@@ -59,3 +59,15 @@ def test_the_legend_says_what_every_column_of_the_table_means():
 def test_one_count_of_switches_from_where_tasks_went():
     assert switch_count([1, 1, 2, -1, 2, -2, 3, 1]) == 3     # no server, local: left out
     assert switch_count([]) == 0
+
+
+def test_percentiles_match_numpys_linear_interpolation():
+    import numpy as np
+    import random
+    rng = random.Random(4)
+    for n in (1, 2, 7, 100, 1001):
+        values = [rng.uniform(0, 1) for _ in range(n)]
+        s = summarize(values)
+        for key, q in (('median', 50), ('p95', 95), ('p99', 99)):
+            assert s[key] == pytest.approx(float(np.percentile(values, q)), abs=1e-12)
+        assert s['sd'] == pytest.approx(float(np.std(values, ddof=1)) if n > 1 else 0.0)

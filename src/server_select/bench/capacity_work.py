@@ -4,13 +4,12 @@ machine (what the servers' capacity is computed from)."""
 
 import io
 import os
+import random
 import time
 
 import cv2
-import numpy as np
-from rospy.numpy_msg import numpy_msg
 
-from server_select.core.flow.sort_kernel import sort_values
+from server_select.core.flow.sort_kernel import make_values, sort_values
 from server_select.msg import SortResult, SortTask
 from server_select.vision import image_codec
 from server_select.vision.detection import Detector, search_frame
@@ -37,10 +36,9 @@ def cpu_per_task(kind, repeats=10):
         detector = Detector()
         work = lambda: search_frame(detector, ('', 0, 0, 0, b''), (fmt, data))  # noqa: E731
     else:       # what a server does with a sort task: the message in, sorted, out
-        values = np.random.default_rng(1).integers(-2 ** 31, 2 ** 31 - 1, SORT_SIZE,
-                                                   dtype=np.int32)
+        values = make_values(random.Random(1), SORT_SIZE)
         buff = io.BytesIO()
-        numpy_msg(SortTask)(data=values).serialize(buff)
+        SortTask(data=values).serialize(buff)
         work = lambda: sort_message(buff.getvalue())     # noqa: E731
     work()
     start = time.process_time()
@@ -50,6 +48,6 @@ def cpu_per_task(kind, repeats=10):
 
 
 def sort_message(raw):
-    task = numpy_msg(SortTask)()
+    task = SortTask()
     task.deserialize(raw)
-    numpy_msg(SortResult)(data=sort_values(task.data, len(task.data))).serialize(io.BytesIO())
+    SortResult(data=sort_values(task.data, len(task.data))).serialize(io.BytesIO())

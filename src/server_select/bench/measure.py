@@ -6,7 +6,6 @@ import statistics
 import subprocess
 import time
 
-import numpy as np
 
 from server_select.bench.harness import PY, fleet, free_port, node_pid, us
 from server_select.core.util.procs import measure
@@ -142,10 +141,10 @@ def bench_image_throughput(tiny, log, listener, area):
 
 def bench_sort_breakdown(tiny, log, listener):
     """Where a sort task's round trip goes: (de)serialization, sort, transport."""
-    from rospy.numpy_msg import numpy_msg
+    import random
     from server_select.msg import SortResult, SortTask
     from server_select.core.flow.sort_kernel import make_values, sort_values
-    rng = np.random.default_rng(0)
+    rng = random.Random(0)
     rows = []
     for size in ([1000] if tiny else [1000, 1000000]):
         values = make_values(rng, size)
@@ -158,21 +157,21 @@ def bench_sort_breakdown(tiny, log, listener):
                 fn()
                 times.append(time.perf_counter() - start)
             return statistics.median(times)
-        task = numpy_msg(SortTask)(robot_id=1, task_id=1, server_id=1, data=values)
+        task = SortTask(robot_id=1, task_id=1, server_id=1, data=values)
         buf = io.BytesIO()
         task.serialize(buf)
         wire = buf.getvalue()
-        result = numpy_msg(SortResult)(robot_id=1, task_id=1, server_id=1, ok=True,
-                                       data=np.sort(values))
+        result = SortResult(robot_id=1, task_id=1, server_id=1, ok=True,
+                            data=sorted(values))
         rbuf = io.BytesIO()
         result.serialize(rbuf)
         rwire = rbuf.getvalue()
         parts = {
             'serialize_task': timed(lambda: task.serialize(io.BytesIO())),
-            'deserialize_task': timed(lambda: numpy_msg(SortTask)().deserialize(wire)),
+            'deserialize_task': timed(lambda: SortTask().deserialize(wire)),
             'sort': timed(lambda: sort_values(values, size)),
             'serialize_result': timed(lambda: result.serialize(io.BytesIO())),
-            'deserialize_result': timed(lambda: numpy_msg(SortResult)().deserialize(rwire)),
+            'deserialize_result': timed(lambda: SortResult().deserialize(rwire)),
         }
         rate = 20 if size <= 1000 else 1
         with fleet(log, task_rate=str(rate), task_size=str(size), task_timeout='10'):

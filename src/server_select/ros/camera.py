@@ -6,7 +6,7 @@ import genpy
 import rospy
 from sensor_msgs.msg import CompressedImage, Image
 
-from server_select.vision import image_codec
+from server_select.vision import image_codec   # numpy, cv2: with the first frame decoded
 from server_select.vision.image_source import SourceError
 
 
@@ -40,6 +40,26 @@ class TopicSource(object):
     def ready(self):
         with self._lock:
             return self._newest is not None
+
+    def compressed(self):
+        """The newest frame not used yet as the camera sent it (a CompressedImage in JPEG
+        or PNG, then used), for a task that travels compressed: no decoding and encoding
+        again on the robot. None when there is no such frame (a raw camera: :meth:`frame`)."""
+        with self._lock:
+            msg = self._newest
+            kind = (getattr(msg, '_connection_header', None) or {}).get('type')
+            if kind != 'sensor_msgs/CompressedImage':
+                return None
+            self._newest = None
+        self.used += 1
+        try:
+            image = CompressedImage().deserialize(msg._buff)
+        except genpy.DeserializationError as error:
+            raise SourceError('%s: a frame that does not deserialize: %s' % (self.topic, error))
+        if not any(k in image.format.lower() for k in ('jpeg', 'jpg', 'png')):
+            raise SourceError('%s: frames in %r, not JPEG or PNG' % (self.topic, image.format))
+        self.last_header = image.header
+        return image
 
     def frame(self, _t):
         """The newest frame not used yet, as an array (SourceError when there is none, or

@@ -78,6 +78,7 @@ class Prober(object):
         self._pool = concurrent.futures.ThreadPoolExecutor(
             max_workers=max(16, len(servers)), thread_name_prefix='probe')
         self._loop = ProbeLoop(self.on_round, self._next_time, self._on_error)
+        self._first = 0.0
         for server in servers:
             self.add(server)
 
@@ -111,11 +112,15 @@ class Prober(object):
             pub.unregister()
 
     def start(self):
+        # the first round one period after the start, as the paper's timer had it (servers
+        # started with the robot register their services meanwhile)
+        self._first = time.monotonic() + self.plan.tick
         self._loop.start()
 
     def _next_time(self):
         with self._lock:
-            return self.plan.next_time()
+            due = self.plan.next_time()
+        return None if due is None else max(due, self._first)
 
     def _on_error(self, error):
         rospy.logerr_throttle(5.0, 'robot %d: probing: %s: %s' % (

@@ -67,6 +67,10 @@ class Frames(TaskPlugin):
         return image_codec.convert(frame, self.encoding)
 
     def make(self, task_id, stamp):
+        if self.transport == 'compressed' and self.encoding == 'bgr8':
+            passed = self._pass_through(task_id, stamp)
+            if passed is not None:
+                return passed, None
         frame = self.capture(task_id)
         # the frame's own header: a camera's stamp and frame_id, which the server's result
         # and detections keep; a synthetic source's frame is taken now, by the robot
@@ -82,6 +86,20 @@ class Frames(TaskPlugin):
             task.image = Image(header=header, height=height, width=width, encoding=encoding,
                                step=step, data=data)
         return task, None
+
+    def _pass_through(self, task_id, stamp):
+        """A task of a compressed camera frame as it came (None: the source has none): a
+        Pi 3 robot would spend most of a core decoding and encoding 5 frames a second
+        (bench-robot); the server decodes it, and checks its size, as any frame."""
+        image = getattr(self.source, 'compressed', lambda: None)()
+        if image is None:
+            return None
+        if self.search is not None:
+            self.search.remember(task_id, None)     # a camera's frames carry no position
+        task = ImageTask(header=Header(stamp=stamp), robot_id=self.robot_id, task_id=task_id)
+        task.compressed = CompressedImage(header=image.header, format=image.format,
+                                          data=image.data)
+        return task
 
     def check(self, result, _context):
         if result.image.width == 0 and not result.compressed.data:

@@ -5,9 +5,7 @@ Robot side: ``size`` random values per task (``~task_size``), from a generator s
 side: arrays longer than ``max_len`` (``~max_task_len``) are refused.
 """
 
-from rospy.numpy_msg import numpy_msg
-
-import numpy as np
+import random
 
 from server_select.core.config import names
 from server_select.core.flow.sort_kernel import check_sorted, fingerprint, make_values, sort_values
@@ -19,14 +17,14 @@ class Sort(TaskPlugin):
     """An array of int32 values to sort."""
 
     kind = 'sort'
-    task_topic, task_type = names.SORT_TASK_TOPIC, numpy_msg(SortTask)
-    result_topic, result_type = names.SORT_RESULT_TOPIC, numpy_msg(SortResult)
+    task_topic, task_type = names.SORT_TASK_TOPIC, SortTask
+    result_topic, result_type = names.SORT_RESULT_TOPIC, SortResult
 
     def __init__(self, robot_id, settings):
         super(Sort, self).__init__(robot_id, settings)
         self.size = int(settings.get('size', 1000))
         self.max_len = int(settings.get('max_len', 1000000))
-        self.rng = np.random.default_rng(settings.get('seed', robot_id))
+        self.rng = random.Random(settings.get('seed', robot_id))
 
     def make(self, task_id, stamp):
         values = make_values(self.rng, self.size)

@@ -4,10 +4,11 @@ import collections
 import os
 import threading
 
-import numpy as np
-
 from server_select.core.settings import default
+from server_select.core.util.lazy import deferred
 from server_select.vision.image_codec import task_frame, to_gray
+
+np = deferred('numpy')
 
 Box = collections.namedtuple('Box', 'x y width height label score')
 

@@ -1,8 +1,9 @@
 """ORB keypoints and descriptors of a frame (no rospy): a SLAM front end's first step."""
 
-import numpy as np
-
+from server_select.core.util.lazy import deferred
 from server_select.vision.image_codec import to_gray
+
+np = deferred('numpy')
 
 
 def orb_features(frame, max_features=500):

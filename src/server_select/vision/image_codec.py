@@ -6,7 +6,10 @@ JPEG and PNG (``format`` as image_transport's compressed plugin writes it, e.g.
 add up, raise :class:`ImageError` with the reason.
 """
 
-import numpy as np
+from server_select.core.util.lazy import deferred
+
+np = deferred('numpy')
+
 
 CHANNELS = {'bgr8': 3, 'rgb8': 3, 'mono8': 1}
 

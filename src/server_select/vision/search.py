@@ -7,8 +7,11 @@ import math
 import os
 import threading
 
-import numpy as np
 import yaml
+
+from server_select.core.util.lazy import deferred
+
+np = deferred('numpy')
 
 Target = collections.namedtuple('Target', 'name x y width height')
 Found = collections.namedtuple('Found', 'robot_id task_id label x y stamp')

@@ -1,25 +1,33 @@
 """Summary statistics used by reports and benchmarks."""
 
 import math
+import statistics
 
-import numpy as np
+
+def percentile(ordered, q):
+    """The ``q`` percentile (0-100) of the sorted ``ordered``, interpolated linearly
+    between the two nearest ranks (numpy's default)."""
+    position = (len(ordered) - 1) * q / 100.0
+    low = int(math.floor(position))
+    high = min(low + 1, len(ordered) - 1)
+    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
 
 
 def summarize(values):
-    """n, mean, sd, min, median, p95, p99, max of the finite ``values`` (None when empty)."""
-    array = np.asarray([v for v in values if v is not None and math.isfinite(v)], dtype=float)
-    if array.size == 0:
+    """n, mean, sd, min, median, p95, p99, max of the finite ``values`` (``{'n': 0}``
+    when there are none)."""
+    ordered = sorted(float(v) for v in values if v is not None and math.isfinite(v))
+    if not ordered:
         return {'n': 0}
-    p50, p95, p99 = np.percentile(array, [50, 95, 99])
     return {
-        'n': int(array.size),
-        'mean': float(array.mean()),
-        'sd': float(array.std(ddof=1)) if array.size > 1 else 0.0,
-        'min': float(array.min()),
-        'median': float(p50),
-        'p95': float(p95),
-        'p99': float(p99),
-        'max': float(array.max()),
+        'n': len(ordered),
+        'mean': math.fsum(ordered) / len(ordered),
+        'sd': statistics.stdev(ordered) if len(ordered) > 1 else 0.0,
+        'min': ordered[0],
+        'median': percentile(ordered, 50),
+        'p95': percentile(ordered, 95),
+        'p99': percentile(ordered, 99),
+        'max': ordered[-1],
     }
 
 
