@@ -28,6 +28,17 @@ def test_every_variant_gets_a_copy_of_each_robot_with_its_links():
         replica_id(1, 10)
 
 
+def test_a_variant_may_put_its_robots_on_hosts_like_a_busy_pi():
+    from server_select.testbed.suite import VARIANTS
+    variants = ['fleet', 'fleet_pi3_busy']
+    data, owners = expand(DATA, variants, dict((v, VARIANTS[v].host) for v in variants))
+    s = Scenario(data)
+    plain, pi = s.host_for('robot', 11), s.host_for('robot', 21)
+    assert (plain.cpu, plain.busy) == (None, 0.0)
+    assert (pi.cpu, pi.cpu_period, pi.memory, pi.busy) == (0.10, 10.0, 1024, 0.5)
+    assert owners[21] == ('fleet_pi3_busy', 1) and s.nearest_server(21, 30) == 2
+
+
 def test_launch_args_and_scenario_files_are_the_packages():
     assert {'policy', 'passive', 'fail_fast'} <= launch_args('manager.launch')
     assert {'hedge', 'policy', 'passive'} <= launch_args('robot.launch')

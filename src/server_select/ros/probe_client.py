@@ -12,6 +12,8 @@ round trip, not a master lookup plus a TCP handshake -- and bounds every call:
   of CPU each on this host, six times the 27 us of the call itself.)
 """
 
+import socket
+import struct
 import threading
 import time
 
@@ -23,6 +25,27 @@ from rospy.impl.tcpros_base import TCPROSTransport
 from server_select.core.util.pacer import Watchdog
 
 DEADLINES = Watchdog(name='probe deadlines')      # every proxy's calls, one thread
+SO_TIMESTAMPNS = 35     # Linux <asm-generic/socket.h>; Python's socket module lacks it
+
+
+def stamp_arrivals(sock):
+    """Ask the kernel to stamp each packet ``sock`` receives (SO_TIMESTAMPNS): a probe's
+    round trip then ends when its answer arrived, not when a busy robot got round to
+    reading it. False where the option is refused."""
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
+        return True
+    except OSError:
+        return False
+
+
+def arrival(ancillary):
+    """The kernel's receive time (epoch s) in recvmsg's ``ancillary`` data, or None."""
+    for level, kind, data in ancillary:
+        if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS and len(data) >= 16:
+            seconds, nanoseconds = struct.unpack('qq', data[:16])
+            return seconds + nanoseconds * 1e-9
+    return None
 
 
 class ProbeTimeout(rospy.ServiceException):
@@ -39,6 +62,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
         self.pinned, self.on_moved = pinned, on_moved
         self._abort_lock = threading.Lock()
         self._connecting = None
+        self._stamped = None        # the socket told to stamp arrivals (False: it cannot)
         self._aborted = False
 
     def call_within(self, request, timeout):
@@ -91,18 +115,23 @@ class TimedServiceProxy(rospy.ServiceProxy):
             raise rospy.ServiceException(str(error) or type(error).__name__)
 
     def read_answer(self):
-        """After the socket polled readable: the response once it is whole, else None.
-        ServiceException (the connection then dropped) on an error answer or a closed
-        connection."""
+        """After the socket polled readable: ``(response, arrived)`` once the response is
+        whole (``arrived``: when the kernel received its last bytes, epoch s, or None where
+        it does not say), else None. ServiceException (the connection then dropped) on an
+        error answer or a closed connection."""
         transport = self.transport
         try:
-            data = transport.socket.recv(transport.protocol.buff_size)
+            sock = transport.socket
+            if sock is not self._stamped:
+                self._stamped = sock if stamp_arrivals(sock) else False
+            data, ancillary, _flags, _address = sock.recvmsg(
+                transport.protocol.buff_size, socket.CMSG_SPACE(16) if self._stamped else 0)
             if not data:
                 raise rospy.ServiceException('the server closed the connection')
             transport.read_buff.write(data)
             answers = []
             transport.protocol.read_messages(transport.read_buff, answers, transport.socket)
-            return answers[0] if answers else None
+            return (answers[0], arrival(ancillary)) if answers else None
         except (rospy.ServiceException, ROSException, OSError, AttributeError,
                 genpy.DeserializationError) as error:
             self._drop()

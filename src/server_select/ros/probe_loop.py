@@ -5,10 +5,13 @@ it. :class:`ProbeLoop` waits on every socket with a probe out (``selectors``), o
 next round's time and on the earliest probe deadline at once, so a probe costs the robot
 one wake-up for its answer instead of a worker thread's hand-off, a watchdog and a
 blocked ``recv`` (bench-robot: on this host each wake-up of a thread costs about 0.1 ms).
-The round trip is taken when ``select`` returns, before the answer is parsed: as close to
-the socket as Python allows. A probe that needs a connection first (a master lookup, a
-TCP handshake, maybe to a host behind a dead link) is not made here, where it would hold
-every other probe up: the prober hands those to its worker threads.
+A round trip ends when the kernel received the answer (``SO_TIMESTAMPNS``: a robot busy
+with its own work, or a CPU share that stalls it for a few scheduler ticks, does not add
+the time it took to get round to reading it) and starts just before the request is
+written; where the kernel gives no stamp, it ends when ``select`` returned. A probe that
+needs a connection first (a master lookup, a TCP handshake, maybe to a host behind a dead
+link) is not made here, where it would hold every other probe up: the prober hands those
+to its worker threads.
 """
 
 import selectors
@@ -24,10 +27,12 @@ from server_select.ros.probe_client import ProbeTimeout
 class Flight(object):
     """A probe out on the loop: ``then(response, rtt, error)`` is called once; ``done()``
     says whether it has been (as a Future's)."""
-    __slots__ = ('proxy', 'sock', 'started', 'timeout', 'deadline', 'then', 'finished')
+    __slots__ = ('proxy', 'sock', 'started', 'sent', 'timeout', 'deadline', 'then',
+                 'finished')
 
-    def __init__(self, proxy, sock, started, timeout, then):
+    def __init__(self, proxy, sock, started, timeout, then, sent=None):
         self.proxy, self.sock, self.started, self.timeout = proxy, sock, started, timeout
+        self.sent = sent            # epoch s, to compare with the kernel's arrival stamp
         self.deadline = time.monotonic() + timeout
         self.then, self.finished = then, False
 
@@ -71,14 +76,14 @@ class ProbeLoop(object):
     def start_probe(self, proxy, request, timeout, then):
         """Send ``request`` on ``proxy``'s open connection; ``then(response, rtt, error)``
         follows on this thread. Returns the Flight."""
-        started = time.perf_counter()
+        started, sent = time.perf_counter(), time.time()
         try:
             sock = proxy.send(request)
         except rospy.ServiceException as error:
             flight = Flight(proxy, None, started, timeout, then)
             self._finish(flight, None, None, error)
             return flight
-        flight = Flight(proxy, sock, started, timeout, then)
+        flight = Flight(proxy, sock, started, timeout, then, sent)
         self._flights[sock] = flight
         self._selector.register(sock, selectors.EVENT_READ, flight)
         return flight
@@ -132,9 +137,13 @@ class ProbeLoop(object):
         if flight.finished:
             return
         try:
-            response = flight.proxy.read_answer()
+            answer = flight.proxy.read_answer()
         except rospy.ServiceException as error:
             self._finish(flight, None, None, error)
             return
-        if response is not None:
-            self._finish(flight, response, received - flight.started, None)
+        if answer is not None:
+            response, arrived = answer
+            rtt = arrived - flight.sent if arrived is not None else None
+            if rtt is None or not 0.0 <= rtt <= received - flight.started + 1e-3:
+                rtt = received - flight.started     # no stamp, or the wall clock stepped
+            self._finish(flight, response, rtt, None)

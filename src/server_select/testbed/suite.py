@@ -29,7 +29,9 @@ from server_select.testbed.scenario import Scenario, ScenarioError
 from server_select.testbed.suite_scenario import (expand, launch_args, scenario_path,
                                                   scenario_robot_args, short_name)
 
-Variant = collections.namedtuple('Variant', 'mode profile params')
+Variant = collections.namedtuple('Variant', 'mode profile params host')
+Variant.__new__.__defaults__ = ({},)     # host: what its robots' hosts are like (scenario keys)
+PI3_BUSY = {'like': 'pi3', 'busy': 0.5}  # a Raspberry Pi 3 robot half busy with its own work
 # the per-task rules: the fleet's own (hot_cold) and the league's peers
 RULES = ('hot_cold',) + PEERS
 # the fleet profile's selection before it chose per task with hot_cold (for the league)
@@ -76,9 +78,12 @@ VARIANTS = collections.OrderedDict([
     ('fleet_hysteresis', Variant('select', 'fleet', PREVIOUS_FLEET)),
     # every probe sample to the manager, which ranks (the robots' own rankings: fleet)
     ('fleet_samples', Variant('select', 'fleet', {'sample_stream': 'robot'})),
+    # robots on emulated Raspberry Pi 3 hosts, 50 % busy with their own work
+    ('paper_pi3_busy', Variant('select', 'paper', {}, PI3_BUSY)),
+    ('fleet_pi3_busy', Variant('select', 'fleet', {}, PI3_BUSY)),
 ] + [(name, Variant('select', 'fleet', peer_params(name))) for name in RULES])
 ON_REQUEST = ('fleet_2hz', 'fleet_window1', 'fleet_20hz', 'fleet_samples',
-              'fleet_hysteresis') + RULES
+              'fleet_hysteresis', 'paper_pi3_busy', 'fleet_pi3_busy') + RULES
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ON_REQUEST)
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server', 'search_sweep')
@@ -193,7 +198,7 @@ def run_scenario(name, out_dir, repeat, variants, options, log=print):
             data = yaml.safe_load(stream)
         suite = data.pop('suite', None) or {}
         variants = [v for v in variants if v in suite.get('variants', variants)]
-        data, owners = expand(data, variants)
+        data, owners = expand(data, variants, dict((v, VARIANTS[v].host) for v in variants))
     except (OSError, yaml.YAMLError, AttributeError, KeyError, TypeError) as error:
         raise ScenarioError('%s: not a scenario the suite can use (%s)' % (path, error))
     run_dir = os.path.abspath(os.path.join(out_dir, name, 'run%d' % repeat))

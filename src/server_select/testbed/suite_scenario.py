@@ -33,12 +33,13 @@ def replica_id(variant_index, robot_id):
     return REPLICA * variant_index + robot_id
 
 
-def expand(data, variants):
+def expand(data, variants, hosts=None):
     """The scenario ``data`` (a mapping) with a copy of every robot host and its links per
-    variant (index from 1, in ``variants`` order); returns (data, {robot id: (variant,
+    variant (index from 1, in ``variants`` order), each made as ``hosts[variant]`` (host
+    keys: ``like``, ``cpu``, ``busy``, ...) says; returns (data, {robot id: (variant,
     scenario robot id)})."""
     data = json.loads(json.dumps(data))      # a deep copy
-    hosts = data['hosts']
+    hosts, hosts_of = data['hosts'], hosts or {}
     robots = [(name, spec) for name, spec in hosts.items() if spec.get('role') == 'robot']
     owners = {}
     for name, _ in robots:
@@ -48,7 +49,7 @@ def expand(data, variants):
         for name, spec in robots:
             copy = 'r%dv%d' % (spec['id'], index)
             rid = replica_id(index, spec['id'])
-            hosts[copy] = dict(spec, id=rid)
+            hosts[copy] = dict(spec, id=rid, **(hosts_of.get(variant) or {}))
             owners[rid] = (variant, spec['id'])
             for key, events in list(links.items()):
                 pair = str(key).replace(',', ' ').replace('-', ' ').split()
