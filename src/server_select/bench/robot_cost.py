@@ -87,6 +87,20 @@ def answered(master):
     return 'True' in out
 
 
+def context_switches(pid):
+    """Context switches of every thread of ``pid`` so far: about its threads' wake-ups,
+    which a sampling profiler does not see and which cost a quiet node most of its CPU."""
+    total = 0
+    for task in os.listdir('/proc/%d/task' % pid):
+        try:
+            with open('/proc/%d/task/%s/status' % (pid, task)) as stream:
+                total += sum(int(line.split()[1]) for line in stream
+                             if line.split(':')[0].endswith('ctxt_switches'))
+        except OSError:      # the thread ended
+            pass
+    return total
+
+
 def robot_pid(master):
     import rosgraph
     try:
@@ -135,7 +149,10 @@ def one_cell(cell, options, work, tag):
                     raise RuntimeError('no task of the %s robot was answered (%s)'
                                        % (profile, work))
             time.sleep(options.warmup)          # windows fill, probing settles
+            switches = dict((p, context_switches(pid)) for p, pid in pids.items())
             usage = measure(list(pids.values()), options.seconds)
+            switches = dict((p, (context_switches(pid) - switches[p]) / options.seconds)
+                            for p, pid in pids.items())
             sampled = dict((p, robot_profile.sample(pid, options.profile, work, p))
                            for p, pid in pids.items()) if tag == 'profiled' else {}
         finally:
@@ -149,7 +166,7 @@ def one_cell(cell, options, work, tag):
     for profile, pid in pids.items():
         used = usage.get(pid, {})
         result[profile] = {'cpu': used.get('cpu_percent'), 'rss': used.get('rss_mb'),
-                           'parts': sampled.get(profile)}
+                           'wakeups': switches[profile], 'parts': sampled.get(profile)}
         if cell.host == 'pi' and used:
             result[profile]['pi_cpu'] = used['cpu_percent'] / options.pi_share
     return result
@@ -164,13 +181,15 @@ def table(runs):
         cpu = [r['cpu'] for r in each if r['cpu'] is not None]
         pi = [r['pi_cpu'] for r in each if r.get('pi_cpu') is not None]
         rss = [r['rss'] for r in each if r['rss'] is not None]
+        wakeups = [r['wakeups'] for r in each if r.get('wakeups') is not None]
         rows.append(['this host' if host == 'here' else 'Pi 3 (emulated)', workload, servers,
                      key[1], median_range(cpu, '%.2f') if cpu else '-',
                      median_range(pi, '%.1f') if pi else '-',
-                     median_range(rss, '%.0f') if rss else '-'])
+                     median_range(rss, '%.0f') if rss else '-',
+                     median_range(wakeups, '%.0f') if wakeups else '-'])
     return markdown_table(['robot host', 'workload', 'servers', 'profile',
-                           'CPU % of this host\'s core', 'CPU % of the Pi core', 'RSS MiB'],
-                          rows)
+                           'CPU % of this host\'s core', 'CPU % of the Pi core', 'RSS MiB',
+                           'thread wake-ups/s'], rows)
 
 
 def main(argv=None):

@@ -3,7 +3,8 @@
 :func:`sample` runs py-spy (a sampling profiler, from PyPI) on a running node and sorts
 its samples into parts of the robot by the innermost frame of this package on each
 stack: probes, windows and ranking, ranking messages, flags, the task path, membership,
-the seal, the node itself; stacks without a frame of ours by rospy's part (timers,
+the seal (signing and checking), the node itself (a publisher that only passes a message
+on counts for its caller); stacks without a frame of ours by rospy's part (timers,
 transport), and every stack that passes through logging to logging. Samples of a thread
 waiting (in ``recv``, ``select``, a queue or a sleep) are left out.
 """
@@ -27,9 +28,11 @@ PARTS = (   # (part, what the file of the innermost frame of ours contains)
                    'ros/camera.py', 'vision/', 'ros/task_kinds.py')),
     ('membership', ('ros/membership.py', 'ros/graph.py', 'ros/senders.py',
                     'ros/master_watch.py')),
-    ('seal', ('ros/seal.py', 'core/trust/')),
+    ('seal', ('core/trust/',)),
     ('robot node', ('nodes/robot.py', 'ros/robot_parts.py', 'ros/runner.py', 'ros/node.py')),
 )
+# frames that only pass a call on (a SealedPublisher without a key): the caller decides
+WRAPPERS = ('ros/seal.py',)
 WAITING = ('recv_buff (', 'thread.py:81)', 'wait (', 'select (', 'sleep (', 'accept (',
            'poll (', '_wait_for_tstate_lock', 'readinto (')
 
@@ -43,7 +46,7 @@ def part_of(frames):
         return 'logging'
     for frame in reversed(frames):
         if 'server_select/' not in frame or 'server_select/msg/' in frame or \
-                'server_select/srv/' in frame:
+                'server_select/srv/' in frame or any(w in frame for w in WRAPPERS):
             continue
         for part, files in PARTS:
             if any(f in frame for f in files):
