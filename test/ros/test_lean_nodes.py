@@ -18,3 +18,20 @@ def test_a_node_that_sends_or_sorts_sort_tasks_loads_neither_numpy_nor_opencv():
     out = subprocess.run([sys.executable, '-c', code], stdout=subprocess.PIPE, env=env,
                          universal_newlines=True, check=True).stdout.strip()
     assert out == '[]'
+
+
+def test_a_server_of_both_task_types_loads_opencv_with_its_first_frame_only():
+    import os
+    import subprocess
+    import sys
+    code = ('import sys\nimport server_select.nodes.server\n'
+            'from server_select.core.settings import default\n'
+            'from server_select.ros.task_kinds import server_kinds\n'
+            'kinds = server_kinds(lambda name, default_=None: default(name), 2)\n'
+            'print(sorted(k.kind for k in kinds), "cv2" in sys.modules)')
+    src = os.path.join(os.path.dirname(__file__), '..', '..', 'src')
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        p for p in (os.environ.get('PYTHONPATH'), src) if p))
+    out = subprocess.run([sys.executable, '-c', code], stdout=subprocess.PIPE, env=env,
+                         universal_newlines=True, check=True).stdout.strip()
+    assert out == "['image', 'sort'] False"

@@ -124,3 +124,12 @@ def test_frames_searched_at_once_keep_their_own_boxes(astronaut, kind):
     for thread in threads:
         thread.join()
     assert not wrong, wrong[:3]
+
+
+def test_a_detector_built_not_loaded_finds_the_same_and_checks_its_cascade_at_once(astronaut):
+    loaded, deferred = Detector(), Detector(load=False)
+    assert deferred.classifier is None                    # no OpenCV classifier yet
+    assert deferred.detect(astronaut) == loaded.detect(astronaut) != []
+    assert deferred.classifier is not None
+    with pytest.raises(DetectorError, match='no cascade'):
+        Detector(cascade='haarcascade_nothing.xml', load=False)

@@ -19,9 +19,9 @@ from server_select.vision.image_source import SourceError, open_source
 from server_select.vision.search import SearchError
 
 
-def _detectors(param, count):
+def _detectors(param, count, load=True):
     try:
-        return [make_detector(param) for _ in range(count)]
+        return [make_detector(param, load) for _ in range(count)]
     except DetectorError as error:
         raise ParamError('~detector/~cascade: %s' % error)
 
@@ -68,9 +68,10 @@ def stream_kinds(robot_id, mode, param):
 
 def server_kinds(param, workers):
     """Every task type a server's parameters ask for: sort, image (with a detector for
-    each of ``workers``) and the plug-ins; ParamError when they are wrong."""
+    each of ``workers``, checked now, OpenCV loaded with the first frame) and the
+    plug-ins; ParamError when they are wrong."""
     return [Sort(None, {'max_len': param('max_task_len')}),
             Frames(None, {'quality': param('jpeg_quality'),
                           'max_pixels': param('max_image_pixels')},
-                   detectors=_detectors(param, workers))] + \
+                   detectors=_detectors(param, workers, load=False))] + \
         [load_plugin(spec, None) for spec in param('task_plugins')]

@@ -1,6 +1,7 @@
 """Target detection in camera frames with OpenCV (no rospy): Haar cascades or HOG people."""
 
 import collections
+import importlib.util
 import os
 import threading
 
@@ -21,24 +22,27 @@ class DetectorError(ValueError):
 
 
 def cascade_dir():
-    """The folder of OpenCV's Haar cascades: ``cv2.data.haarcascades`` (pip wheels) or
-    Debian's opencv-data folder; DetectorError when neither exists."""
-    import cv2    # lazy: no OpenCV in a node that needs none
-    data = getattr(cv2, 'data', None)
-    for folder in (getattr(data, 'haarcascades', None), DEBIAN_CASCADES):
-        if folder and os.path.isdir(folder):
+    """The folder of OpenCV's Haar cascades: ``cv2/data`` (pip wheels: ``cv2.data.
+    haarcascades``, found without loading OpenCV) or Debian's opencv-data folder;
+    DetectorError when neither exists."""
+    spec = importlib.util.find_spec('cv2')
+    wheel = os.path.join(os.path.dirname(spec.origin), 'data') \
+        if spec is not None and spec.origin else None
+    for folder in (wheel, DEBIAN_CASCADES):
+        if folder and os.path.isfile(os.path.join(folder, 'haarcascade_frontalface_default.xml')):
             return folder
     raise DetectorError('no Haar cascades found: neither cv2.data.haarcascades nor %s '
                         '(Debian package opencv-data)' % DEBIAN_CASCADES)
 
 
-def make_detector(param):
+def make_detector(param, load=True):
     """The detector the ``detector``, ``cascade``, ``scale_factor``, ``min_neighbors`` and
     ``min_size`` parameters describe; ``param(name)`` reads one (the server and a robot in
-    local mode build theirs here, so both do the same work)."""
+    local mode build theirs here, so both do the same work). ``load`` False: OpenCV with
+    the first frame."""
     return Detector(kind=param('detector'), cascade=param('cascade'),
                     scale_factor=param('scale_factor'), min_neighbors=param('min_neighbors'),
-                    min_size=param('min_size'))
+                    min_size=param('min_size'), load=load)
 
 
 class Detector(object):
@@ -54,36 +58,49 @@ class Detector(object):
 
     def __init__(self, kind=default('detector'), cascade=default('cascade'),
                  scale_factor=default('scale_factor'), min_neighbors=default('min_neighbors'),
-                 min_size=default('min_size'), label=None):
-        import cv2    # lazy: no OpenCV in a node that needs none
+                 min_size=default('min_size'), label=None, load=True):
+        """``load`` False: the parameters are checked now and OpenCV is loaded with the
+        first frame (a server that never gets one needs no OpenCV: 17 MiB)."""
         self.kind = kind
         self.scale_factor = float(scale_factor)
         self.min_neighbors = int(min_neighbors)
         self.min_size = int(min_size)
         self._lock = threading.Lock()
+        self.classifier = self.hog = None
         if kind == 'haar':
             folder = None if os.path.isabs(cascade) else cascade_dir()
-            path = os.path.join(folder, cascade) if folder else cascade
+            self.path = path = os.path.join(folder, cascade) if folder else cascade
             if not os.path.isfile(path):
                 available = sorted(f for f in os.listdir(folder or os.path.dirname(path))
                                    if f.endswith('.xml')) if folder else []
                 raise DetectorError('no cascade %r (%s has: %s)'
                                     % (cascade, folder or 'path', ', '.join(available)))
-            self.classifier = cv2.CascadeClassifier(path)
-            if self.classifier.empty():
-                raise DetectorError('cannot load cascade %s' % path)
             name = os.path.basename(path)[len('haarcascade_'):-len('.xml')] \
                 if os.path.basename(path).startswith('haarcascade_') else 'target'
             self.label = label or ('face' if 'face' in name else name)
         elif kind == 'hog':
-            self.hog = cv2.HOGDescriptor()
-            self.hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
             self.label = label or 'person'
         else:
             raise DetectorError('unknown detector %r (expected haar or hog)' % kind)
+        if load:
+            self._load()
+
+    def _load(self):
+        """OpenCV's classifier (DetectorError when the cascade does not load)."""
+        import cv2    # lazy: no OpenCV in a node that needs none
+        if self.kind == 'haar' and self.classifier is None:
+            classifier = cv2.CascadeClassifier(self.path)
+            if classifier.empty():
+                raise DetectorError('cannot load cascade %s' % self.path)
+            self.classifier = classifier
+        elif self.kind == 'hog' and self.hog is None:
+            hog = cv2.HOGDescriptor()
+            hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+            self.hog = hog
 
     def detect(self, frame):
         with self._lock:
+            self._load()
             return self._detect(frame)
 
     def _detect(self, frame):
