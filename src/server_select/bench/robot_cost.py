@@ -101,10 +101,10 @@ def context_switches(pid):
     return total
 
 
-def robot_pid(master):
+def robot_pid(master, node='/robot1'):
     import rosgraph
     try:
-        return node_pid('/robot1', master=rosgraph.Master('/bench', master_uri=master))
+        return node_pid(node, master=rosgraph.Master('/bench', master_uri=master))
     except Exception:   # not registered yet
         return None
 
@@ -150,7 +150,9 @@ def one_cell(cell, options, work, tag):
                                        % (profile, work))
             time.sleep(options.warmup)          # windows fill, probing settles
             switches = dict((p, context_switches(pid)) for p, pid in pids.items())
-            usage = measure(list(pids.values()), options.seconds)
+            servers = dict((p, robot_pid(m, '/server1')) for p, m in masters.items())
+            usage = measure(list(pids.values()) + [s for s in servers.values() if s],
+                            options.seconds)
             switches = dict((p, (context_switches(pid) - switches[p]) / options.seconds)
                             for p, pid in pids.items())
             sampled = dict((p, robot_profile.sample(pid, options.profile, work, p))
@@ -166,6 +168,7 @@ def one_cell(cell, options, work, tag):
     for profile, pid in pids.items():
         used = usage.get(pid, {})
         result[profile] = {'cpu': used.get('cpu_percent'), 'rss': used.get('rss_mb'),
+                           'server_rss': usage.get(servers[profile], {}).get('rss_mb'),
                            'wakeups': switches[profile], 'parts': sampled.get(profile)}
         if cell.host == 'pi' and used:
             result[profile]['pi_cpu'] = used['cpu_percent'] / options.pi_share
@@ -182,14 +185,16 @@ def table(runs):
         pi = [r['pi_cpu'] for r in each if r.get('pi_cpu') is not None]
         rss = [r['rss'] for r in each if r['rss'] is not None]
         wakeups = [r['wakeups'] for r in each if r.get('wakeups') is not None]
+        server = [r['server_rss'] for r in each if r.get('server_rss') is not None]
         rows.append(['this host' if host == 'here' else 'Pi 3 (emulated)', workload, servers,
                      key[1], median_range(cpu, '%.2f') if cpu else '-',
                      median_range(pi, '%.1f') if pi else '-',
                      median_range(rss, '%.0f') if rss else '-',
-                     median_range(wakeups, '%.0f') if wakeups else '-'])
+                     median_range(wakeups, '%.0f') if wakeups else '-',
+                     median_range(server, '%.0f') if server else '-'])
     return markdown_table(['robot host', 'workload', 'servers', 'profile',
                            'CPU % of this host\'s core', 'CPU % of the Pi core', 'RSS MiB',
-                           'thread wake-ups/s'], rows)
+                           'thread wake-ups/s', 'a server\'s RSS MiB'], rows)
 
 
 def main(argv=None):
