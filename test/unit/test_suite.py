@@ -99,3 +99,15 @@ def test_the_search_scenario_follows_the_robots_sweep():
     args = scenario_robot_args(shipped['suite']['robot_args'], 1234.5)
     assert args['sweep_start'] == '1234.500000' and args['image_source'].startswith('search:/')
     assert args['image_source'].endswith('config/search_area.yaml')
+
+
+def test_a_variant_is_compared_with_the_oracle_of_its_routing_and_its_hosts():
+    from server_select.testbed.suite_report import reference
+    every = ['oracle', 'oracle_fleet', 'oracle_pi3_busy', 'oracle_fleet_pi3_busy', 'paper',
+             'fleet', 'paper_pi3_busy', 'fleet_pi3_busy']
+    assert [reference(v, every) for v in every[4:]] == [
+        'oracle', 'oracle_fleet', 'oracle_pi3_busy', 'oracle_fleet_pi3_busy']
+    # without an oracle on Pi hosts in the run: the plain one of the same routing
+    assert reference('fleet_pi3_busy', ['oracle', 'oracle_fleet', 'fleet_pi3_busy']) == \
+        'oracle_fleet'
+    assert reference('fleet', ['oracle', 'fleet']) == 'oracle'

@@ -78,12 +78,16 @@ VARIANTS = collections.OrderedDict([
     ('fleet_hysteresis', Variant('select', 'fleet', PREVIOUS_FLEET)),
     # every probe sample to the manager, which ranks (the robots' own rankings: fleet)
     ('fleet_samples', Variant('select', 'fleet', {'sample_stream': 'robot'})),
-    # robots on emulated Raspberry Pi 3 hosts, 50 % busy with their own work
+    # robots on emulated Raspberry Pi 3 hosts, 50 % busy with their own work (each
+    # compared with the oracle on the same hosts)
+    ('oracle_pi3_busy', Variant('oracle', 'paper', {}, PI3_BUSY)),
+    ('oracle_fleet_pi3_busy', Variant('oracle', 'fleet', {}, PI3_BUSY)),
     ('paper_pi3_busy', Variant('select', 'paper', {}, PI3_BUSY)),
     ('fleet_pi3_busy', Variant('select', 'fleet', {}, PI3_BUSY)),
 ] + [(name, Variant('select', 'fleet', peer_params(name))) for name in RULES])
 ON_REQUEST = ('fleet_2hz', 'fleet_window1', 'fleet_20hz', 'fleet_samples',
-              'fleet_hysteresis', 'paper_pi3_busy', 'fleet_pi3_busy') + RULES
+              'fleet_hysteresis', 'oracle_pi3_busy', 'oracle_fleet_pi3_busy', 'paper_pi3_busy',
+              'fleet_pi3_busy') + RULES
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ON_REQUEST)
 SCENARIOS = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
              'hung_server', 'search_sweep')

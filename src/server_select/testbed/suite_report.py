@@ -110,10 +110,15 @@ def run_figures(meta, run, by_tasks=False):
 
 def reference(variant, variants):
     """The oracle ``variant`` is compared with: the one with the same task routing (the
-    fleet profile's direct routing, or the paper's broadcast)."""
+    fleet profile's direct routing, or the paper's broadcast) and, where the run has one,
+    on the same kind of robot hosts (a Pi robot's round trips include its own slowness)."""
     spec = VARIANTS.get(variant)
-    if spec is not None and spec.profile == 'fleet' and 'oracle_fleet' in variants:
-        return 'oracle_fleet'
+    profile, host = (spec.profile, spec.host) if spec is not None else ('paper', {})
+    oracles = [v for v in variants if v in VARIANTS and VARIANTS[v].mode == 'oracle']
+    for want in (host, {}):
+        for oracle in oracles:
+            if VARIANTS[oracle].profile == profile and VARIANTS[oracle].host == want:
+                return oracle
     return 'oracle'
 
 
