@@ -55,6 +55,7 @@ class ProbeLoop(object):
         self._selector.register(self._wake_r, selectors.EVENT_READ, None)
         self._flights = {}       # socket -> Flight
         self._stopped = False
+        self._last_round = float('-inf')
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def start(self):
@@ -101,8 +102,14 @@ class ProbeLoop(object):
         except Exception as failure:    # the prober's bug must not stop the loop
             self.on_error(failure)
 
-    def _timeout(self):
+    def _due(self):
+        """The next round's time: ``next_time()``, and at least 1 ms after the last round
+        (a plan that does not move on cannot make the loop spin)."""
         due = self.next_time()
+        return None if due is None else max(due, self._last_round + 0.001)
+
+    def _timeout(self):
+        due = self._due()
         deadlines = [f.deadline for f in self._flights.values()]
         soonest = min([t for t in [due] + deadlines if t is not None], default=None)
         return None if soonest is None else max(0.0, soonest - time.monotonic())
@@ -123,8 +130,9 @@ class ProbeLoop(object):
             for flight in [f for f in self._flights.values() if f.deadline <= now]:
                 self._finish(flight, None, None, ProbeTimeout(
                     'no answer within %.3g s' % flight.timeout), drop=True)
-            due = self.next_time()
+            due = self._due()
             if due is not None and time.monotonic() >= due and not self._stopped:
+                self._last_round = time.monotonic()
                 try:
                     self.on_round()
                 except Exception as error:

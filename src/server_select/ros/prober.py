@@ -129,6 +129,7 @@ class Prober(object):
     def on_round(self):
         """Probe the servers the plan says are due (one round)."""
         if rospy.is_shutdown():
+            self._loop.stop()
             return
         contenders = self.contenders[1].contenders(self.contenders[0]) \
             if self.contenders is not None else ()

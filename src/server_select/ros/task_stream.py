@@ -78,6 +78,7 @@ class TaskStream(object):
 
     def _act(self):
         if rospy.is_shutdown():
+            self.pacer.stop()
             return
         now = time.monotonic()
         if now >= self._next_send:      # steady: one period on; fallen behind: from now
