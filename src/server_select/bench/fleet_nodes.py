@@ -25,7 +25,7 @@ import time
 import rospy
 
 from server_select.bench import cli
-from server_select.bench.harness import Roscore, node_pid
+from server_select.bench.harness import Roscore, pid_or_none
 from server_select.core.config import names
 from server_select.core.util.procs import measure, stop_group, wait_until
 from server_select.core.util.tables import fmt, markdown_table
@@ -71,13 +71,6 @@ def _robot_of_flag(buff):
     return struct.unpack_from('<I', buff, 16 + frame_len)[0]
 
 
-def _pid(node):
-    try:
-        return node_pid(node)
-    except Exception:  # not registered (the fleet did not come up whole)
-        return None
-
-
 def run_one(robots, servers, layout, seconds, task_rate, work):
     """One size and layout under the running roscore: the row of figures."""
     log = open(os.path.join(work, 'fleet_%s_%dx%d.log' % (layout, robots, servers)), 'w')
@@ -92,7 +85,7 @@ def run_one(robots, servers, layout, seconds, task_rate, work):
     try:
         up = wait_until(lambda: len(counter.flagged) >= robots, 60.0 + 2.0 * robots,
                         period=0.5)
-        pids = dict((_pid(n), role) for n, role in nodes.items())
+        pids = dict((pid_or_none(n), role) for n, role in nodes.items())
         pids.pop(None, None)
         time.sleep(5.0)                 # a few flags each, then counted
         counter.take()
@@ -107,10 +100,10 @@ def run_one(robots, servers, layout, seconds, task_rate, work):
         # starts each node in a process group of its own; a loaded host may outlast its
         # shutdown timeout)
         for node in nodes:
-            pid = _pid(node)
+            pid = pid_or_none(node)
             if pid is not None:
                 os.kill(pid, signal.SIGKILL)
-        wait_until(lambda: not any(_pid(n) for n in nodes), 30.0, period=0.5)
+        wait_until(lambda: not any(pid_or_none(n) for n in nodes), 30.0, period=0.5)
     row = {'robots': robots, 'servers': servers, 'layout': layout, 'all_flagged': up,
            'seconds': span}
     for role in ('manager', 'robot', 'server'):

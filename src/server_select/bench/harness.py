@@ -61,6 +61,17 @@ def node_pid(name):
     return graph_node_pid(name, '/bench')
 
 
+def pid_or_none(name, master_uri=None):
+    """The pid of node ``name`` at the master (``master_uri``: another than this process's),
+    or None while it is not registered or does not answer."""
+    import rosgraph
+    try:
+        return graph_node_pid(name, '/bench', master=rosgraph.Master(
+            '/bench', master_uri=master_uri) if master_uri else None)
+    except Exception:   # not registered (yet), gone, or the master is busy
+        return None
+
+
 def _registered(*names):
     try:
         for name in names:

@@ -29,7 +29,7 @@ import time
 import rospy
 
 from server_select.bench import cli
-from server_select.bench.harness import Roscore, node_pid
+from server_select.bench.harness import Roscore, pid_or_none
 from server_select.core.config import names
 from server_select.core.util.procs import measure, stop_groups, wait_until
 from server_select.core.util.tables import markdown_table, median_range
@@ -100,11 +100,11 @@ def one_run(servers, variant, warmup, seconds, tmp):
                                 '__name:=robot1', '_robot_id:=1', '_servers:=%s' % ids,
                                 '_profile:=fleet', '_discover:=false', '_mode:=local',
                                 '_task_rate:=0.2'] + VARIANTS[variant], log))
-            if not wait_until(lambda: _pid('/robot1') is not None, 60.0, period=0.2):
+            if not wait_until(lambda: pid_or_none('/robot1') is not None, 60.0, period=0.2):
                 raise RuntimeError('the robot did not start (%s)' % log)
             time.sleep(warmup)
             before = _read(counts)
-            usage = measure([_pid('/robot1')], seconds)
+            usage = measure([pid_or_none('/robot1')], seconds)
             after = _read(counts)
         finally:
             stop_groups(procs, signal.SIGINT)
@@ -112,13 +112,6 @@ def one_run(servers, variant, warmup, seconds, tmp):
     cpu = next(iter(usage.values()))['cpu_percent'] if usage else None
     return {'probes': sum(calls.values()) / seconds,
             'near': (calls.get(1, 0) + calls.get(2, 0)) / seconds, 'cpu': cpu}
-
-
-def _pid(name):
-    try:
-        return node_pid(name)
-    except Exception:   # not registered yet
-        return None
 
 
 def table(results):

@@ -25,10 +25,9 @@ import tempfile
 import time
 
 from server_select.bench import cli, robot_profile
-from server_select.bench.harness import Roscore
+from server_select.bench.harness import Roscore, pid_or_none
 from server_select.core.util.procs import measure, stop_group, wait_until
 from server_select.core.util.tables import markdown_table, median_range
-from server_select.ros.graph import node_pid
 from server_select.testbed.cpu import CpuLimit
 from server_select.testbed.fields import PI3
 
@@ -101,14 +100,6 @@ def context_switches(pid):
     return total
 
 
-def robot_pid(master, node='/robot1'):
-    import rosgraph
-    try:
-        return node_pid(node, master=rosgraph.Master('/bench', master_uri=master))
-    except Exception:   # not registered yet
-        return None
-
-
 def start(cell, profile, master, work, tag, procs, logs):
     """The fleet of ``profile`` under ``master`` (and the bench's camera), into ``procs``."""
     path = os.path.join(work, '%s_%s.launch' % (tag, profile))
@@ -135,10 +126,10 @@ def one_cell(cell, options, work, tag):
                 start(cell, profile, master, work, tag, procs, logs)
             pids = {}
             for profile, master in masters.items():
-                if not wait_until(lambda: robot_pid(master) is not None, 60.0 + cell.servers,
-                                  0.5):
+                if not wait_until(lambda: pid_or_none('/robot1', master) is not None,
+                                  60.0 + cell.servers, 0.5):
                     raise RuntimeError('the %s fleet did not come up (%s)' % (profile, work))
-                pids[profile] = robot_pid(master)
+                pids[profile] = pid_or_none('/robot1', master)
                 if cell.host == 'pi':
                     limits[profile] = CpuLimit('ssbr%d-%s' % (os.getpid(), profile),
                                                options.pi_share, PI3['cpu_period'] * 1000,
@@ -150,7 +141,7 @@ def one_cell(cell, options, work, tag):
                                        % (profile, work))
             time.sleep(options.warmup)          # windows fill, probing settles
             switches = dict((p, context_switches(pid)) for p, pid in pids.items())
-            servers = dict((p, robot_pid(m, '/server1')) for p, m in masters.items())
+            servers = dict((p, pid_or_none('/server1', m)) for p, m in masters.items())
             usage = measure(list(pids.values()) + [s for s in servers.values() if s],
                             options.seconds)
             switches = dict((p, (context_switches(pid) - switches[p]) / options.seconds)

@@ -28,7 +28,7 @@ import time
 import psutil
 
 from server_select.bench import cli
-from server_select.bench.harness import Roscore, node_pid
+from server_select.bench.harness import Roscore, pid_or_none
 from server_select.bench.scale_fleet import (sim_progress, sim_received, start_managers,
                                              start_sims)
 from server_select.core.util.procs import measure, stop_groups, wait_until
@@ -67,7 +67,7 @@ def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, prof
         started = time.time()
         managers = start_managers(layout, robots, servers, groups, log, profile, key, flag_stream)
         _registered(managers, log, 'a manager')
-        pids = [_pid(n) for n in managers]
+        pids = [pid_or_none(n) for n in managers]
         master = _master_pid()
         wait_until(lambda: sim_progress(outs)[0] is not None,
                    max(0.0, started + limit - time.time()), period=0.2)
@@ -99,16 +99,9 @@ def run_one(robots, servers, layout, sims, limit, measure_s, tmp, groups=1, prof
 
 def _registered(nodes, log, what):
     """Wait until every node of ``nodes`` (names) is registered with the master."""
-    if not wait_until(lambda: all(_pid(n) for n in nodes), 60.0, period=0.2):
+    if not wait_until(lambda: all(pid_or_none(n) for n in nodes), 60.0, period=0.2):
         with open(log) as stream:
             raise RuntimeError('%s did not register:\n%s' % (what, stream.read()[-3000:]))
-
-
-def _pid(node):
-    try:
-        return node_pid(node)
-    except Exception:  # not registered (yet)
-        return None
 
 
 def _master_pid():

@@ -21,7 +21,7 @@ import threading
 import time
 
 from server_select.bench import cli
-from server_select.bench.harness import Roscore, node_pid
+from server_select.bench.harness import Roscore, pid_or_none
 from server_select.core.util.procs import measure, stop_group, wait_until
 from server_select.core.util.tables import markdown_table
 
@@ -90,10 +90,8 @@ def one_run(options, work, repeat):
 
 
 def _pids(nodes):
-    try:
-        return [node_pid(n) for n in nodes]
-    except Exception:  # not registered yet
-        return None
+    pids = [pid_or_none(n) for n in nodes]
+    return None if None in pids else pids
 
 
 def main(argv=None):
