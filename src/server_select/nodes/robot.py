@@ -86,6 +86,8 @@ class RobotNode(object):
         self.addresses, self.prober = robot_prober(self, servers)
         self.view = RankingSender(self.robot_id, self.selection, self.policy, param('view_rate')) \
             if param('sample_stream') == 'view' and mode == 'select' else None
+        if self.view is not None:       # one check of its ranking per batch of probe answers
+            self.view.coalesce, self.prober.after_answers = True, self.view.flush
         self.start_delay = param('start_delay')
         self.summary_period = param('summary_period')
         manager = param('manager_node')   # None: flags from any node

@@ -44,10 +44,12 @@ class ProbeLoop(object):
     """Calls ``on_round()`` when ``next_time()`` comes (a ``time.monotonic`` time, None:
     no round due) and after :meth:`poke`; :meth:`start_probe` (from ``on_round``, on this
     thread) sends a request and ends it by its answer, an error or its deadline.
-    ``on_error(exception)`` hears what ``on_round`` or a probe's ``then`` raised."""
+    ``on_error(exception)`` hears what ``on_round`` or a probe's ``then`` raised;
+    ``after()`` is called once after each batch of probes that ended together."""
 
-    def __init__(self, on_round, next_time, on_error, name='probe loop'):
+    def __init__(self, on_round, next_time, on_error, name='probe loop', after=None):
         self.on_round, self.next_time, self.on_error = on_round, next_time, on_error
+        self.after = after or (lambda: None)
         self._selector = selectors.DefaultSelector()
         self._wake_r, self._wake_w = socket.socketpair()
         self._wake_r.setblocking(False)
@@ -118,6 +120,7 @@ class ProbeLoop(object):
         while not self._stopped:
             events = self._selector.select(self._timeout())
             received = time.perf_counter()       # the answers' round trips end here
+            ended = len(self._flights)
             for key, _ in events:
                 if key.data is None:
                     try:
@@ -130,16 +133,21 @@ class ProbeLoop(object):
             for flight in [f for f in self._flights.values() if f.deadline <= now]:
                 self._finish(flight, None, None, ProbeTimeout(
                     'no answer within %.3g s' % flight.timeout), drop=True)
+            if len(self._flights) < ended:
+                self._call(self.after)
             due = self._due()
             if due is not None and time.monotonic() >= due and not self._stopped:
                 self._last_round = time.monotonic()
-                try:
-                    self.on_round()
-                except Exception as error:
-                    self.on_error(error)
+                self._call(self.on_round)
         self._selector.close()
         self._wake_r.close()
         self._wake_w.close()
+
+    def _call(self, function):
+        try:
+            function()
+        except Exception as error:    # the prober's bug must not stop the loop
+            self.on_error(error)
 
     def _answer(self, flight, received):
         if flight.finished:

@@ -77,7 +77,9 @@ class Prober(object):
                                           queue_size=10) if stream != 'pair' else None
         self._pool = concurrent.futures.ThreadPoolExecutor(
             max_workers=max(16, len(servers)), thread_name_prefix='probe')
-        self._loop = ProbeLoop(self.on_round, self._next_time, self._on_error)
+        self.after_answers = None    # called once after each batch of samples
+        self._loop = ProbeLoop(self.on_round, self._next_time, self._on_error,
+                               after=self._after)
         self._first = 0.0
         for server in servers:
             self.add(server)
@@ -170,8 +172,18 @@ class Prober(object):
         return lambda response, rtt, error: self._answered(server, seq, stamp, request, proxy,
                                                            batch, response, rtt, error)
 
+    def _after(self):
+        if self.after_answers is not None:
+            self.after_answers()
+
     def _probe(self, server, seq, batch):
         """A probe that connects first (a worker thread's)."""
+        try:
+            self._probe_connecting(server, seq, batch)
+        finally:
+            self._after()
+
+    def _probe_connecting(self, server, seq, batch):
         stamp, request = self._request(server, seq)
         proxy = self._proxies.get(server)
         if proxy is None:       # removed meanwhile

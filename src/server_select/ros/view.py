@@ -16,13 +16,17 @@ class RankingSender(object):
     it changes (:func:`~server_select.core.selection.rank.view_key`: the servers ranked, those
     left out, the policy's pick from the flagged server), checked whenever a sample may
     have changed it, and every ``1/rate`` s regardless (a restarted manager, fresh means,
-    the order below the pick)."""
+    the order below the pick). With ``coalesce`` (the robot's prober calls :meth:`flush`
+    once per batch of probe answers), a sample only marks it to be checked: a round's
+    answers cost one ranking, not one each (30 servers: 34 samples a second)."""
 
     def __init__(self, robot_id, selection, policy, rate):
         self.robot_id, self.selection, self.policy = robot_id, selection, policy
         self.period = 1.0 / rate
         self._lock = threading.Lock()
         self._key = None
+        self._dirty = False
+        self.coalesce = False
         self.sent = 0
         self.pub = self.timer = None
 
@@ -34,7 +38,16 @@ class RankingSender(object):
 
     def changed(self):
         """A sample may have changed the robot's ranking."""
-        self.send(False)
+        if self.coalesce:
+            self._dirty = True
+        else:
+            self.send(False)
+
+    def flush(self):
+        """Check the ranking once for the samples since the last check."""
+        if self._dirty:
+            self._dirty = False
+            self.send(False)
 
     def send(self, always):
         if self.pub is None:
