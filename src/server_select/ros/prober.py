@@ -150,9 +150,9 @@ class Prober(object):
                 continue
             seq, proxy = next(self._seq), self._proxies.get(server)
             if proxy is not None and proxy.connected():     # on the loop: one wake-up
-                stamp, request = self._request(server, seq)
+                sent, request = self._request(server, seq)
                 self._inflight[server] = self._loop.start_probe(
-                    proxy, request, self.timeout, self._then(server, seq, stamp, request,
+                    proxy, request, self.timeout, self._then(server, seq, sent, request,
                                                              proxy, batch))
                 continue
             try:        # a connection first: on a worker thread, not holding the loop up
