@@ -21,6 +21,11 @@ def test_sort_values_sorts_tuples_and_lists():
     assert sort_values(values, 1000) == sorted(values)
 
 
+def test_numpy_integers_in_a_task_handed_over_in_process_are_sorted_too():
+    import numpy as np
+    assert sort_values(np.asarray([3, 1, 2], np.int32), 10) == [1, 2, 3]
+
+
 def test_sort_extremes():
     assert sort_values([INT32_MAX, INT32_MIN, 0], 3) == [INT32_MIN, 0, INT32_MAX]
 

@@ -6,6 +6,7 @@ field into a tuple and writes any sequence of ints, so ``sorted`` does the work 
 """
 
 import itertools
+import numbers
 import operator
 import struct
 
@@ -28,7 +29,7 @@ def sort_values(values, max_len):
         raise TaskError('empty task: nothing to sort')
     if len(values) > max_len:
         raise TaskError('task of %d values exceeds max_task_len %d' % (len(values), max_len))
-    if not all(isinstance(v, int) for v in values):
+    if not all(isinstance(v, numbers.Integral) for v in values):    # numpy's too
         raise TaskError('task data must be a flat array of integers')
     return sorted(values)
 
