@@ -17,25 +17,19 @@ import sys
 import tempfile
 import time
 
-import rosgraph.masterapi
-
 from server_select.bench import cli
-from server_select.bench.harness import Roscore
+from server_select.bench.harness import Roscore, pid_or_none
 from server_select.core.trust.keys import make_key
 from server_select.core.util.procs import measure, stop_group, wait_until
 from server_select.core.util.tables import markdown_table
-from server_select.ros.graph import node_pid
 
 ROLES = ('robot', 'manager', 'server')
 
 
 def node_pids(master, nodes):
     """``{pid: node}`` of the nodes registered at ``master`` (a URI); None if any is not."""
-    graph = rosgraph.Master('/bench', master_uri=master)
-    try:
-        return dict((node_pid(node, master=graph), node) for node in nodes)
-    except (rosgraph.masterapi.MasterException, OSError):   # not registered (yet), or gone
-        return None
+    pids = dict((pid_or_none(node, master), node) for node in nodes)
+    return None if None in pids else pids
 
 
 def launch(master, args, log):

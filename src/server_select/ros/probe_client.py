@@ -62,7 +62,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
         self.pinned, self.on_moved = pinned, on_moved
         self._abort_lock = threading.Lock()
         self._connecting = None
-        self._stamped = None        # the socket told to stamp arrivals (False: it cannot)
+        self._stamps = False        # the connection's answers carry the kernel's stamp
         self._aborted = False
 
     def call_within(self, request, timeout):
@@ -121,11 +121,8 @@ class TimedServiceProxy(rospy.ServiceProxy):
         error answer or a closed connection."""
         transport = self.transport
         try:
-            sock = transport.socket
-            if sock is not self._stamped:
-                self._stamped = sock if stamp_arrivals(sock) else False
-            data, ancillary, _flags, _address = sock.recvmsg(
-                transport.protocol.buff_size, socket.CMSG_SPACE(16) if self._stamped else 0)
+            data, ancillary, _flags, _address = transport.socket.recvmsg(
+                transport.protocol.buff_size, socket.CMSG_SPACE(16) if self._stamps else 0)
             if not data:
                 raise rospy.ServiceException('the server closed the connection')
             transport.read_buff.write(data)
@@ -163,6 +160,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
         finally:
             with self._abort_lock:
                 self._connecting = None
+        self._stamps = stamp_arrivals(transport.socket)     # once per connection
         self.transport = transport
 
     def _abort(self):
