@@ -166,3 +166,38 @@ def test_a_bad_file_is_one_error_naming_the_file(tmp_path):
         Scenario.load(str(tmp_path / 'missing.yaml'))
     assert str(error.value).startswith('%s: ' % (tmp_path / 'missing.yaml'))
     assert '\n' not in str(error.value)
+
+
+class _Cpu(object):
+    """A process's CPU time and the wall clock, advanced by hand: ``stall`` is wall time
+    during which the process got no CPU (a quota spent by others)."""
+
+    def __init__(self):
+        self.wall = self.cpu = 0.0
+
+    def spin(self):             # each look at the CPU clock costs 0.1 ms of CPU
+        self.cpu += 1e-4
+        self.wall += 1e-4
+        return self.cpu
+
+    def sleep(self, seconds):
+        self.wall += seconds
+
+
+def test_own_work_keeps_its_pace_and_forgets_what_it_could_not_run():
+    from server_select.testbed.busy import burn
+    t = _Cpu()
+    state = {'stalled': False}
+
+    def until():                    # 1 s at its pace, then a 2 s stall, then 1 s more
+        if not state['stalled'] and t.wall >= 1.0:
+            state['stalled'], t.wall = True, t.wall + 2.0
+            state['mark'] = t.cpu
+        return t.wall >= 4.0
+
+    used = burn(0.2, until, clock=lambda: t.wall, cpu=t.spin, sleep=t.sleep)
+    # the second second runs at 0.2 plus at most 0.05 s of wall time caught up (0.01 s of CPU)
+    assert state['mark'] == pytest.approx(0.2, abs=0.002)
+    assert used - state['mark'] == pytest.approx(0.2, abs=0.015)
+    with pytest.raises(ValueError):
+        burn(1.5, lambda: True)

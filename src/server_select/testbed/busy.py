@@ -5,7 +5,9 @@ camera driver would (no rospy).
 core: it computes in slices of ``--slice`` s of its own CPU time and sleeps between them
 so that its CPU time keeps pace with ``share`` x the wall-clock time. In a host with a
 CPU limit it competes with the host's nodes for the host's quota, as a real robot's work
-does; where the quota leaves it less than ``share`` it takes what it gets.
+does; where the quota leaves it less than ``share`` it takes what it gets and lets the
+rest go: it never runs more than ``catch_up`` s of wall time behind its pace (work a
+robot missed is not done later at double speed).
 
 A scenario host's ``busy: 0.5`` starts one with half of the host's CPU (``0.5 x cpu``, or
 of one core where the host has no limit).
@@ -17,8 +19,8 @@ import sys
 import time
 
 
-def burn(share, until, slice_s=0.001, clock=time.monotonic, cpu=time.process_time,
-         sleep=time.sleep):
+def burn(share, until, slice_s=0.001, catch_up=0.05, clock=time.monotonic,
+         cpu=time.process_time, sleep=time.sleep):
     """Use ``share`` of a core until ``until()`` is true; returns the CPU time used."""
     if not 0.0 < share <= 1.0:
         raise ValueError('a busy share must be in (0, 1], got %r' % (share,))
@@ -32,6 +34,8 @@ def burn(share, until, slice_s=0.001, clock=time.monotonic, cpu=time.process_tim
         ahead = start_wall + used / share - clock()    # wall time this much CPU is worth
         if ahead > 0:
             sleep(ahead)
+        elif ahead < -catch_up:                         # behind: forgive all but catch_up
+            start_wall += -ahead - catch_up
     return used
 
 
