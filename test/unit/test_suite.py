@@ -111,3 +111,17 @@ def test_a_variant_is_compared_with_the_oracle_of_its_routing_and_its_hosts():
     assert reference('fleet_pi3_busy', ['oracle', 'oracle_fleet', 'fleet_pi3_busy']) == \
         'oracle_fleet'
     assert reference('fleet', ['oracle', 'fleet']) == 'oracle'
+
+
+def test_every_oracle_variant_follows_the_oracles_flags():
+    """An oracle variant's robots must take the oracle's flags: a robot whose rule
+    chooses per task (the fleet profile's hot_cold) treats flags as a record only, and
+    would be one more copy of the fleet's own rule, not the bound."""
+    from server_select.core.selection.policy import Policy
+    from server_select.core.settings import default
+    from server_select.testbed.suite import VARIANTS
+    oracles = [(n, v) for n, v in VARIANTS.items() if v.mode == 'oracle']
+    assert len(oracles) == 4
+    for name, variant in oracles:
+        kind = variant.params.get('policy', default('policy', variant.profile))
+        assert not Policy(kind).per_task, (name, kind)

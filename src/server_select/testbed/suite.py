@@ -36,6 +36,9 @@ PI3_BUSY = {'like': 'pi3', 'busy': 0.5}  # a Raspberry Pi 3 robot half busy with
 RULES = ('hot_cold',) + PEERS
 # the fleet profile's selection before it chose per task with hot_cold (for the league)
 # (less its draws for moves, ~spread, which went with it)
+# the fleet profile's robots following the oracle's flags: a rule that chooses per task
+# (the profile's hot_cold) keeps flags for the record only
+FOLLOW_FLAGS = {'policy': 'mean'}
 PREVIOUS_FLEET = {'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
                   'passive': True, 'task_memory': 5.0}
 
@@ -58,7 +61,7 @@ def peer_params(name):
 VARIANTS = collections.OrderedDict([
     ('fixed', Variant('fixed', 'paper', {})),
     ('oracle', Variant('oracle', 'paper', {})),
-    ('oracle_fleet', Variant('oracle', 'fleet', {})),
+    ('oracle_fleet', Variant('oracle', 'fleet', FOLLOW_FLAGS)),
     ('paper', Variant('select', 'paper', {})),
     ('fleet', Variant('select', 'fleet', {})),
     ('hysteresis', Variant('select', 'paper', dict(policy='hysteresis', hysteresis=0.0005,
@@ -81,7 +84,7 @@ VARIANTS = collections.OrderedDict([
     # robots on emulated Raspberry Pi 3 hosts, 50 % busy with their own work (each
     # compared with the oracle on the same hosts)
     ('oracle_pi3_busy', Variant('oracle', 'paper', {}, PI3_BUSY)),
-    ('oracle_fleet_pi3_busy', Variant('oracle', 'fleet', {}, PI3_BUSY)),
+    ('oracle_fleet_pi3_busy', Variant('oracle', 'fleet', FOLLOW_FLAGS, PI3_BUSY)),
     ('paper_pi3_busy', Variant('select', 'paper', {}, PI3_BUSY)),
     ('fleet_pi3_busy', Variant('select', 'fleet', {}, PI3_BUSY)),
 ] + [(name, Variant('select', 'fleet', peer_params(name))) for name in RULES])
