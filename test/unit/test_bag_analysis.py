@@ -1,7 +1,7 @@
 import pytest
 
-from server_select.testbed.bag_analysis import (Flag, Report, mode_summary, oracle_changes,
-                                                reaction_times, switches)
+from server_select.testbed.bag_analysis import (Flag, Report, felt_changes, mode_summary,
+                                                oracle_changes, reaction_times, switches)
 from server_select.testbed.bag_tables import compare, legend, table, verdict
 from server_select.testbed.scenario import Scenario
 
@@ -28,6 +28,17 @@ def scenario():
 def test_oracle_changes_find_the_ramp_crossing_and_the_down_link():
     changes = oracle_changes(scenario(), [1], 0.0, 40.0, step=0.05)
     assert [(round(t, 2), r, s) for t, r, s in changes] == [(14.05, 1, 2), (30.0, 1, 1)]
+
+
+def test_a_ramp_crossing_is_felt_once_the_gap_is_a_millisecond_a_step_at_once():
+    changes = oracle_changes(scenario(), [1], 0.0, 40.0, step=0.05)
+    felt = felt_changes(scenario(), changes)
+    # s1 grows 1 ms a second one way: 1 ms of round trip slower than s2 0.5 s after the
+    # crossing; s2's link going down is felt when it happens
+    assert [(round(t, 2), r, s) for t, r, s in felt] == [(14.5, 1, 2), (30.0, 1, 1)]
+    # a change undone before it is felt is left out
+    assert [(round(t, 2), r, s) for t, r, s in felt_changes(
+        scenario(), [(14.05, 1, 2), (14.3, 1, 1)])] == [(30.0, 1, 1)]
 
 
 def test_reaction_times():

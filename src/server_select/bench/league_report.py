@@ -29,6 +29,7 @@ NETWORK_COLUMNS = (('mean', 'mean ms', '%.1f', 1e3), ('p99', 'p99 ms', '%.0f', 1
                    ('failed', 'failed', '%d', 1), ('switches_per_min', 'switches /min /robot',
                                                    '%.2f', 1),
                    ('reaction_mean', 'reaction s', '%.2f', 1),
+                   ('reaction_felt', 'reaction felt s', '%.2f', 1),
                    ('extra_sends', 'extra sends %', '%.1f', 1),
                    ('samples_per_s', 'probes /s', '%.0f', 1), ('robot_cpu', 'robot CPU %',
                                                                '%.1f', 1))
@@ -50,7 +51,7 @@ def network_table(per_run):
         oracle = [r.get('oracle_fleet') for r in per_run if v in r]
         ratio = [f['mean'] / o['mean'] if o and o['mean'] and f['mean'] else None
                  for f, o in zip(runs, oracle)]
-        cells = [_cell([f[k] for f in runs], spec, scale)
+        cells = [_cell([f.get(k) for f in runs], spec, scale)
                  for k, _, spec, scale in NETWORK_COLUMNS]
         rows.append([v, len(runs)] + cells[:2] + [_cell(ratio, '%.3f')] + cells[2:])
     return markdown_table(['variant', 'runs', 'mean ms', 'p99 ms', 'mean / oracle'] +
@@ -75,7 +76,10 @@ def capacity_table(rows):
 def report(results, plot_path=None):
     text = ['# League', '', 'Each cell: median (min-max) over the runs. Failed tasks count '
             'at the task timeout in every mean and p99; switches and reactions from where '
-            'tasks went.', '']
+            'tasks went. Reaction: from a change of the truly nearest server to the first '
+            'task sent to it; reaction felt: from when the previous nearest server is 1 ms '
+            'of round trip slower than the new one, or down (two ramps are equal where they '
+            'cross).', '']
     for name, per_run in results.get('network', {}).items():
         if per_run:
             text += ['## %s (network)' % name, '', network_table(per_run), '']

@@ -90,6 +90,29 @@ def oracle_changes(scenario, robots, start, end, step=0.05):
     return sorted(changes)
 
 
+def felt_changes(scenario, changes, step=0.05, gap=1.0):
+    """The changes of :func:`oracle_changes` from when a task would feel them: the first
+    moment the previous nearest server is ``gap`` ms of round trip slower than the new one
+    (or down). A step is felt at once; where two ramps cross, the servers are equal at the
+    crossing and no measurement can tell them apart until the gap has grown. A change the
+    robot's next one comes before it is felt is left out."""
+    felt = []
+    for i, (t, robot, new) in enumerate(changes):
+        old = scenario.nearest_server(robot, t - step)
+        following = [c[0] for c in changes[i + 1:] if c[1] == robot]
+        limit = following[0] if following else scenario.duration
+        u = t
+        while u < limit:
+            ranked, _ = scenario.ranking(robot, u)
+            delays = dict((server, delay) for delay, server in ranked)
+            if old not in delays or (new in delays and
+                                     2.0 * (delays[old] - delays[new]) >= gap):
+                felt.append((u, robot, new))
+                break
+            u += step
+    return felt
+
+
 def reaction_times(flags, changes):
     """For each oracle change, seconds until the flags select the new nearest server.
 

@@ -17,14 +17,14 @@ import statistics
 
 from server_select.core.util.stats import summarize
 from server_select.core.util.tables import fmt, markdown_table, median_range
-from server_select.testbed.bag_analysis import oracle_changes, reaction_times
+from server_select.testbed.bag_analysis import felt_changes, oracle_changes, reaction_times
 from server_select.testbed.scenario import Scenario
 from server_select.testbed.suite import VARIANTS
 
 Figures = collections.namedtuple('Figures', 'tasks failed mean p99 switches_per_min '
                                  'reaction_mean reaction_max missed samples_per_s robot_cpu '
-                                 'extra_sends')
-Figures.__new__.__defaults__ = (None, None, None)
+                                 'extra_sends reaction_felt')
+Figures.__new__.__defaults__ = (None, None, None, None)
 TARGETS = {      # scenario: what the fleet profile is to reach
     'paper_moving': dict(mean=1.05, p99=1.2, failed=0, reaction=1.5),
     'crossing': dict(mean=1.05, p99=1.2, failed=0, reaction=1.5),
@@ -71,9 +71,16 @@ def flag_switches(flags, start, end):
     return count
 
 
-def figures(reports, flags, robots, changes, start, end, timeout, samples=(), cpu=None):
+def _mean_reaction(flags, changes, robots, start, end):
+    mine = [c for c in changes if c[1] in robots and start <= c[0] <= end]
+    reached = [r[3] for r in reaction_times(flags, mine) if r[3] is not None]
+    return sum(reached) / len(reached) if reached else None
+
+
+def figures(reports, flags, robots, changes, start, end, timeout, samples=(), cpu=None,
+            felt=()):
     """:class:`Figures` of one variant in one run (``cpu``: its robots' mean CPU share,
-    %)."""
+    %; ``felt``: the changes from when a task would feel them, for ``reaction_felt``)."""
     measured = [r for r in reports if start <= r.t <= end]
     rtt = summarize([r.rtt if r.ok else timeout for r in measured])
     minutes = max(1e-9, (end - start) / 60.0)
@@ -86,7 +93,8 @@ def figures(reports, flags, robots, changes, start, end, timeout, samples=(), cp
                    max(reached) if reached else None, len(reactions) - len(reached),
                    sum(1 for x in samples if start <= x.t <= end) / max(1e-9, end - start),
                    cpu, 100.0 * sum(max(0, r.attempts - 1) for r in measured)
-                   / max(1, len(measured)))
+                   / max(1, len(measured)),
+                   _mean_reaction(flags, felt, robots, start, end) if flags else None)
 
 
 def run_figures(meta, run, by_tasks=False):
@@ -97,6 +105,7 @@ def run_figures(meta, run, by_tasks=False):
     scenario = Scenario.load(meta['scenario'])
     start, end = meta['measure_from'], meta['duration']
     changes = oracle_changes(scenario, sorted(owners), start, end)
+    felt = felt_changes(scenario, changes)
     timeout, cpu = meta['options']['task_timeout'], meta.get('robot_cpu', {})
 
     def share(robots):
@@ -104,7 +113,7 @@ def run_figures(meta, run, by_tasks=False):
         return sum(known) / len(known) if known else None
     return collections.OrderedDict(
         (variant, figures(reports, reports if by_tasks else flags, robots, changes, start,
-                          end, timeout, samples, share(robots)))
+                          end, timeout, samples, share(robots), felt))
         for variant, (reports, flags, robots, samples) in split(run, owners).items())
 
 
