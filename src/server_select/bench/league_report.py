@@ -34,6 +34,7 @@ NETWORK_COLUMNS = (('mean', 'mean ms', '%.1f', 1e3), ('p99', 'p99 ms', '%.0f', 1
                    ('samples_per_s', 'probes /s', '%.0f', 1), ('robot_cpu', 'robot CPU %',
                                                                '%.1f', 1))
 CAPACITY_COLUMNS = (('goodput_share', 'goodput % of capacity', '%.0f', 100),
+                    ('of_static', "goodput % of static's work", '%.0f', 100),
                     ('wanted', 'work still wanted %', '%.0f', 100),
                     ('failed', 'failed', '%d', 1), ('mean', 'mean ms', '%.0f', 1e3),
                     ('p99', 'p99 ms', '%.0f', 1e3),
@@ -59,11 +60,18 @@ def network_table(per_run):
 
 
 def capacity_table(rows):
-    """One row per load and variant; goodput as a share of the servers' capacity."""
+    """One row per load and variant; goodput as a share of the servers' capacity (by CPU)
+    and of what they finished under the static assignment in the same repeat."""
     groups = collections.OrderedDict()
+    # what the servers finished under the best static assignment, same load and repeat
+    # (servers kept busy: the capacity they really have, with every cost of a task)
+    static = dict(((r['load'], r['repeat']), r.get('work')) for r in rows
+                  if r['variant'] == 'static')
     for row in sorted(rows, key=lambda r: (r['load'], CAPACITY_VARIANTS.index(r['variant'])
                                            if r['variant'] in CAPACITY_VARIANTS else 99)):
-        row = dict(row, goodput_share=row['goodput'] / row['capacity'])
+        done = static.get((row['load'], row['repeat']))
+        row = dict(row, goodput_share=row['goodput'] / row['capacity'],
+                   of_static=row['goodput'] / done if done else None)
         groups.setdefault((row['load'], row['variant']), []).append(row)
     columns = [c for c in CAPACITY_COLUMNS
                if any(r.get(c[0]) is not None for g in groups.values() for r in g)]
