@@ -10,6 +10,7 @@ import collections
 from server_select.core.fleet.groups import parse_groups
 from server_select.core.fleet.leases import LEASE_PERIODS
 from server_select.core.selection.policy import POLICIES
+from server_select.core.selection.window import STATISTICS
 from server_select.core.config.params import (one_of, parse_bool, parse_count, parse_id,
                                               parse_members, parse_mode, parse_names,
                                               parse_non_negative, parse_node_pattern, parse_number,
@@ -130,21 +131,18 @@ PARAMS = {
     'hysteresis': Param(0.0, parse_non_negative, 'keep the current server while within this '
                         'of the best (s); 0: the paper'),
     'policy': Param('mean', one_of(*POLICIES), 'which ranked server a robot gets: mean (the '
-                    'paper), hysteresis, bound or peak_ewma (docs/design.md, "Policies"); or a '
+                    'paper) or hysteresis (docs/design.md, "Policies"); or a '
                     'rule the robot applies per task: hot_cold (docs/selection.md), or a peer: '
                     'p2c_peak_ewma, least_request, prequal, round_robin, replicate '
                     '(docs/league.md)'),
-    'statistic': Param('mean', one_of('mean', 'median', 'trimmed', 'peak_ewma'), 'what the '
-                       'window ranks by (policies mean, hysteresis, bound)'),
+    'statistic': Param('mean', one_of(*STATISTICS), 'what the window ranks by (policies '
+                       'mean, hysteresis)'),
     'dwell': Param(0.0, parse_non_negative, 'policy hysteresis: no move within this long of '
                    'the last one (s)'),
     'margin_z': Param(0.0, parse_non_negative, 'policy hysteresis: the margin grows by this '
                       'many standard errors of the two means'),
-    'latency_bound': Param(0.05, parse_positive, 'policy bound: keep the current server while '
-                           'its statistic is under this (s)'),
     'fail_fast': Param(0, parse_count, 'rank no server whose newest this many samples failed '
                        '(0, the paper: only when no good sample is left in the window)'),
-    'ewma_tau': Param(1.0, parse_positive, 'policy peak_ewma: decay time of a spike (s)'),
     'passive': Param(False, parse_bool, "robots' answered tasks are latency samples too "
                      '(on task_samples, to the manager)'),
     'task_memory': Param(0.0, parse_non_negative, 'with ~passive: what a server\'s tasks cost '

@@ -80,7 +80,7 @@ class ManagerNode(object):
                                          param('servers'))
         else:
             self.rankings = FleetRankings(param('window'), param('robots'), param('servers'),
-                                          statistic, param('ewma_tau'), param('fail_fast'),
+                                          statistic, param('fail_fast'),
                                           self.policy.robust,
                                           param('task_memory') if param('passive') else 0.0,
                                           param('window_samples'), param('window_max'))

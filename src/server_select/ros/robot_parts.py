@@ -29,7 +29,7 @@ def robot_selection(robot_id, servers, mode):
     policy, statistic = from_params(param)
     selection = Selection(robot_id, servers, mode, fixed, health, param('window'), policy,
                           param('manager_timeout'), statistic=statistic,
-                          tau=param('ewma_tau'), passive=param('passive') and mode == 'select',
+                          passive=param('passive') and mode == 'select',
                           task_memory=param('task_memory'), keep=param('window_samples'),
                           horizon=param('window_max'), fail_fast=param('fail_fast'))
     return selection, health, policy

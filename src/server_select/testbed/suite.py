@@ -66,8 +66,6 @@ VARIANTS = collections.OrderedDict([
     ('fleet', Variant('select', 'fleet', {})),
     ('hysteresis', Variant('select', 'paper', dict(policy='hysteresis', hysteresis=0.0005,
                                                    margin_z=2.5, dwell=5.0))),
-    ('bound', Variant('select', 'paper', {'policy': 'bound', 'latency_bound': 0.02})),
-    ('peak_ewma', Variant('select', 'paper', {'policy': 'peak_ewma'})),
     ('fleet_no_hedge', Variant('select', 'fleet', {'hedge': False})),
     ('fleet_uniform', Variant('select', 'fleet', {'contender_rate': 0})),
     # not in the default run: ask for them with --variants

@@ -27,7 +27,7 @@ class Selection(object):
 
     def __init__(self, robot_id, servers, mode, fixed_server=None, health=None, window=5.0,
                  policy=None, manager_timeout=3.0, clock=time.monotonic, statistic=None,
-                 tau=1.0, passive=False, task_memory=0.0, keep=0, horizon=None, fail_fast=0):
+                 passive=False, task_memory=0.0, keep=0, horizon=None, fail_fast=0):
         if mode not in MODES:
             raise ValueError('unknown mode %r' % (mode,))
         self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
@@ -37,7 +37,7 @@ class Selection(object):
         self.manager_timeout = manager_timeout
         # the robot's samples, kept as the manager keeps every robot's (its own view)
         self.rankings = FleetRankings(window, [robot_id], (), statistic or policy.statistic(),
-                                      tau, fail_fast, policy.robust,
+                                      fail_fast, policy.robust,
                                       task_memory if passive else 0.0, keep, horizon)
         self.window = self.rankings.window
         # probes only, what a task sample is compared with: a window of its own only when

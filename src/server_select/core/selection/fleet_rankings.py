@@ -72,10 +72,10 @@ class FleetRankings(Members):
     """Samples in, :class:`~server_select.core.selection.rank.Ranking` per robot out.
     Thread-safe."""
 
-    def __init__(self, window, robots=(), servers=(), statistic='mean', tau=1.0,
-                 fail_fast=0, robust=False, task_memory=0.0, keep=0, horizon=None):
+    def __init__(self, window, robots=(), servers=(), statistic='mean', fail_fast=0,
+                 robust=False, task_memory=0.0, keep=0, horizon=None):
         Members.__init__(self, robots, servers)
-        self.window = LatencyWindow(window, statistic, tau, robust, keep, horizon)
+        self.window = LatencyWindow(window, statistic, robust, keep, horizon)
         # task samples' cost above the probes, remembered (core/selection/passive.py; 0: off)
         self.cost = TaskCost(task_memory) if task_memory > 0 else None
         self.fail_fast = fail_fast

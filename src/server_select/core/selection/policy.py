@@ -12,10 +12,6 @@ window's statistic) and the current choice, and returns the server to select:
   that grows with the noise; the errors are robust ones, from the median absolute
   deviation, so a step in the current server's latency does not widen it), and never move
   within ``dwell`` s of the last move unless the current server has left the ranking.
-- ``bound`` (FogROS2-LS): keep the current server while its statistic is at most
-  ``bound`` s; else move to the best.
-- ``peak_ewma`` (Finagle / Linkerd): the best by a peak-sensitive moving average (the
-  window's ``peak_ewma`` statistic): a spike or a slowdown shows at the next sample.
 
 A server that leaves the ranking (no good sample in the window) is always left at once.
 
@@ -31,7 +27,7 @@ import math
 from server_select.core.selection.balancers import PEERS
 from server_select.core.selection.rank import NO_SERVER
 
-POLICIES = ('mean', 'hysteresis', 'bound', 'peak_ewma', 'hot_cold') + PEERS
+POLICIES = ('mean', 'hysteresis', 'hot_cold') + PEERS
 # policies a robot applies per task itself (a balancer): the fleet's rule and the peers
 PER_TASK = ('hot_cold',) + PEERS
 
@@ -40,18 +36,18 @@ class Policy(object):
     """One policy's rule and parameters (stateless: the caller keeps the current choice
     and when it was made)."""
 
-    def __init__(self, kind='mean', margin=0.0, dwell=0.0, z=0.0, bound=0.05):
+    def __init__(self, kind='mean', margin=0.0, dwell=0.0, z=0.0):
         if kind not in POLICIES:
             raise ValueError('unknown policy %r (expected one of %s)'
                              % (kind, ', '.join(POLICIES)))
-        for name, value in (('margin', margin), ('dwell', dwell), ('z', z), ('bound', bound)):
+        for name, value in (('margin', margin), ('dwell', dwell), ('z', z)):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ValueError('%s must be a finite number >= 0, got %r' % (name, value))
-        self.kind, self.margin, self.dwell, self.z, self.bound = kind, margin, dwell, z, bound
+        self.kind, self.margin, self.dwell, self.z = kind, margin, dwell, z
 
     def statistic(self, requested='mean'):
-        """The window statistic this policy ranks by (``requested`` unless peak_ewma)."""
-        return 'peak_ewma' if self.kind == 'peak_ewma' else requested
+        """The window statistic this policy ranks by: ``requested``."""
+        return requested
 
     @property
     def per_task(self):
@@ -72,8 +68,6 @@ class Policy(object):
         if current is None or current == NO_SERVER or current not in ranking.ranking:
             return best
         here = ranking.means[ranking.ranking.index(current)]
-        if self.kind == 'bound':
-            return current if here <= self.bound else best
         if self.kind == 'hysteresis':
             if since is not None and now is not None and now - since < self.dwell:
                 return current
@@ -92,8 +86,6 @@ class Policy(object):
         if self.kind == 'hysteresis':
             text = 'hysteresis (margin %.3g ms + %g se, dwell %.3g s)' % (
                 self.margin * 1e3, self.z, self.dwell)
-        elif self.kind == 'bound':
-            text = 'bound (keep while under %.3g ms)' % (self.bound * 1e3)
         else:
             text = self.kind + (' (margin %.3g ms)' % (self.margin * 1e3) if self.margin else '')
         return text
@@ -118,8 +110,6 @@ class Chooser(object):
 
 def from_params(get):
     """The :class:`Policy` and the window statistic that parameters ask for (``get(name)``
-    reads one: ``policy``, ``statistic``, ``hysteresis``, ``dwell``, ``margin_z``,
-    ``latency_bound``)."""
-    policy = Policy(get('policy'), get('hysteresis'), get('dwell'), get('margin_z'),
-                    get('latency_bound'))
+    reads one: ``policy``, ``statistic``, ``hysteresis``, ``dwell``, ``margin_z``)."""
+    policy = Policy(get('policy'), get('hysteresis'), get('dwell'), get('margin_z'))
     return policy, policy.statistic(get('statistic'))

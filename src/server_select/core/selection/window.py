@@ -5,11 +5,7 @@ A pair's latency *statistic* is what a policy ranks by (:data:`STATISTICS`):
 - ``mean``: the mean of the window's successful samples (the paper);
 - ``median``: their median, and ``trimmed``: their mean without the highest and lowest
   quarter (at least one of each once there are three), so that one probe that needed a
-  TCP retransmission cannot reorder a ranking;
-- ``peak_ewma``: a peak-sensitive moving average (Finagle's "peak EWMA"): a sample above
-  the value replaces it at once, one below pulls it down with weight
-  ``1 - exp(-dt / tau)``. It reacts to a spike or a slowdown at the next sample and
-  forgets it over a few ``tau``.
+  TCP retransmission cannot reorder a ranking.
 """
 
 import collections
@@ -17,7 +13,7 @@ import math
 import threading
 from statistics import median
 
-STATISTICS = ('mean', 'median', 'trimmed', 'peak_ewma')
+STATISTICS = ('mean', 'median', 'trimmed')
 
 Sample = collections.namedtuple('Sample', 'time ok rtt wait')
 PairStats = collections.namedtuple('PairStats',
@@ -71,18 +67,16 @@ def variance_of(values):
 
 
 class _Pair(object):
-    """One pair's samples and their running sums (O(1) amortised per sample for the mean
-    and the peak EWMA; the median and trimmed mean cost O(n log n) of the window's n)."""
-    __slots__ = ('samples', 'rtt_sum', 'sq_sum', 'ok_count', 'ewma', 'ewma_time',
-                 'failed_run', 'aware')
+    """One pair's samples and their running sums (O(1) amortised per sample for the mean;
+    the median and trimmed mean cost O(n log n) of the window's n)."""
+    __slots__ = ('samples', 'rtt_sum', 'sq_sum', 'ok_count', 'failed_run', 'aware')
 
     def __init__(self):
         self.samples, self.rtt_sum, self.sq_sum, self.ok_count = collections.deque(), 0.0, 0.0, 0
         self.aware = 0          # successful samples that say their wait part
-        self.ewma = self.ewma_time = None
         self.failed_run = 0
 
-    def append(self, sample, tau):
+    def append(self, sample):
         self.samples.append(sample)
         self.failed_run = 0 if sample.ok else self.failed_run + 1
         if sample.ok:
@@ -90,12 +84,6 @@ class _Pair(object):
             self.sq_sum += sample.rtt * sample.rtt
             self.ok_count += 1
             self.aware += sample.wait is not None
-            if self.ewma is None or sample.rtt >= self.ewma:
-                self.ewma = sample.rtt
-            else:
-                weight = math.exp(-max(0.0, sample.time - self.ewma_time) / tau)
-                self.ewma = self.ewma * weight + sample.rtt * (1.0 - weight)
-            self.ewma_time = sample.time
 
     def prune(self, start, keep=0, oldest=None):
         """Drop the samples taken at or before ``start``, but the newest ``keep`` of them
@@ -111,7 +99,6 @@ class _Pair(object):
                 self.aware -= old.wait is not None
         if not self.ok_count:
             self.rtt_sum = self.sq_sum = 0.0     # no rounding residue survives an empty window
-            self.ewma = self.ewma_time = None    # a pair back from silence starts afresh
 
     def stats(self, statistic, robust=False):
         failed = len(self.samples) - self.ok_count
@@ -130,8 +117,6 @@ class _Pair(object):
             # its quota is spent: spikes the tasks pay in their work already) + the
             # mean wait
             value = median(ok) + sum(waits) / n if self.aware else mean
-        elif statistic == 'peak_ewma':
-            value = self.ewma
         else:
             value = median(ok) if statistic == 'median' else trimmed_mean(ok)
             value += sum(waits) / n if self.aware else 0.0
@@ -152,9 +137,9 @@ class LatencyWindow(object):
     Times are those of the caller's clock (the manager's receive time, because robot and
     manager clocks are not shared). Each pair keeps running sums, so adding a sample and
     reading a pair's mean cost O(1) amortised, whatever the number of pairs. ``statistic``
-    (one of :data:`STATISTICS`) is the pair's ``value``; ``tau`` (s) is the peak EWMA's
-    decay time; ``robust``: standard errors from the median absolute deviation (O(n log n)
-    per read). Thread-safe: subscriber callbacks add, a timer reads.
+    (one of :data:`STATISTICS`) is the pair's ``value``; ``robust``: standard errors from
+    the median absolute deviation (O(n log n) per read). Thread-safe: subscriber callbacks
+    add, a timer reads.
 
     Pairs need not be sampled at one rate (adaptive probing samples contenders often and
     the other servers rarely). The window is a time, the same for every pair: a pair's
@@ -168,7 +153,7 @@ class LatencyWindow(object):
     pair's newest ``keep`` and t - its time < ``horizon``.
     """
 
-    def __init__(self, window, statistic='mean', tau=1.0, robust=False, keep=0, horizon=None):
+    def __init__(self, window, statistic='mean', robust=False, keep=0, horizon=None):
         if not window > 0:
             raise ValueError('window must be positive, got %r' % (window,))
         if not (isinstance(keep, int) and keep >= 0):
@@ -179,9 +164,7 @@ class LatencyWindow(object):
         if statistic not in STATISTICS:
             raise ValueError('unknown statistic %r (expected one of %s)'
                              % (statistic, ', '.join(STATISTICS)))
-        if not tau > 0:
-            raise ValueError('tau must be positive, got %r' % (tau,))
-        self.window, self.statistic, self.tau = float(window), statistic, float(tau)
+        self.window, self.statistic = float(window), statistic
         self.robust = bool(robust)
         self._lock = threading.Lock()
         self._pairs = {}
@@ -204,7 +187,7 @@ class LatencyWindow(object):
             had_value = pair.ok_count > 0
             pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan'),
                                min(float(wait), float(rtt)) if ok and wait is not None
-                               else None), self.tau)
+                               else None))
             return had_value, pair.stats(self.statistic)
 
     def stats(self, robot_id, server_id, now, errors=True):
