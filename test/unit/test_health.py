@@ -50,7 +50,7 @@ def test_ejection_time_doubles_in_a_row_up_to_the_longest_and_resets_when_health
     assert h.failure(1).seconds == 1.0
 
 
-def test_probes_while_ejected_do_not_count_toward_probation():
+def test_probes_while_ejected_for_a_failed_task_do_not_count_toward_probation():
     h, clock = make(base=1.0, probation_probes=1)
     h.failure(3)
     h.probe_ok(3)
@@ -80,3 +80,43 @@ def test_a_server_that_never_answered_is_down_not_ejected_for_longer_and_longer(
 def test_a_new_server_is_a_candidate_before_any_evidence():
     h = ServerHealth([1], clock=Clock(0.0))
     assert h.usable(1) and h.state(1) == HEALTHY
+
+
+def test_a_server_ejected_for_its_probes_is_back_once_they_answer_again():
+    h, clock = make(base=1.0, longest=30.0, probation_probes=2)
+    for _ in range(5):                              # a long outage: 1, 2, 4, 8, 16 s
+        ejection = h.failure(1, 'probe failed', probe=True)
+        clock.now += ejection.seconds
+    assert ejection.seconds == 16.0 and h.state(1) == PROBATION
+    assert h.failure(1, 'probe failed', probe=True).seconds == 30.0
+    clock.now += 1.0                                # the link is back 1 s into 30
+    h.probe_ok(1)
+    assert not h.usable(1)                          # one answer is not yet a row
+    h.probe_ok(1)
+    assert h.state(1) == PROBATION and h.usable(1)  # two in a row: a candidate at once
+    assert h.task_ok(1) and h.state(1) == HEALTHY
+
+
+def test_a_server_ejected_for_its_tasks_serves_its_time_whatever_its_probes_say():
+    h, clock = make(base=1.0, longest=30.0, probation_probes=2)
+    assert h.failure(1, 'no answer within 2 s').seconds == 1.0
+    for _ in range(5):
+        h.probe_ok(1)                               # its probe service still answers
+    assert h.state(1) == EJECTED and not h.usable(1)
+    clock.now += 1.0
+    assert h.state(1) == PROBATION
+    # probes in a row: a failure between two answers starts the count again
+    h2, _ = make(base=1.0, longest=30.0, probation_probes=2)
+    h2.failure(2, 'probe failed', probe=True)
+    h2.probe_ok(2)
+    h2.failure(2, 'probe failed', probe=True)      # still ejected: the row is broken
+    h2.probe_ok(2)
+    assert not h2.usable(2)
+    h2.probe_ok(2)
+    assert h2.usable(2)
+    # a task that fails while it is ejected for its probes: it serves its time
+    h2.failure(2, 'probe failed', probe=True)
+    h2.failure(2, 'no answer within 2 s')
+    h2.probe_ok(2)
+    h2.probe_ok(2)
+    assert h2.state(2) == EJECTED

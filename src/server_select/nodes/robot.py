@@ -161,7 +161,7 @@ class RobotNode(object):
             if self.selection.balancer is not None and self.load is None:
                 self.selection.balancer.probed(server, rtt)   # (with a load: from RobotLoad)
         else:
-            self.on_failure(server, 'probe failed: %s' % error)
+            self.on_failure(server, 'probe failed: %s' % error, probe=True)
 
     def on_servers(self, added, removed):
         """Servers joined or left the fleet (``fleet_servers``)."""
@@ -186,8 +186,8 @@ class RobotNode(object):
         self.flag_senders.expect(self.manager_node)
         self.selection.restrict(servers)
 
-    def on_failure(self, server, why):
-        ejection = self.health.failure(server, why)
+    def on_failure(self, server, why, probe=False):
+        ejection = self.health.failure(server, why, probe)
         if ejection is not None and ejection.seconds:
             rospy.logwarn('robot %d: server %d ejected for %.3g s: %s', self.robot_id,
                           server, ejection.seconds, why)

@@ -6,6 +6,11 @@ ejection in a row (``base`` s, at most ``longest`` s; as Envoy's outlier detecti
 the time is over the server is on probation: it becomes a candidate again after
 ``probation_probes`` good probes, and its first good task makes it healthy (the ejection
 time starts from ``base`` again); a failure on probation ejects it for twice as long.
+A server ejected because its *probes* failed (its link down, its host stopped) is on
+probation as soon as ``probation_probes`` probes in a row are answered again: the
+evidence that ejected it is gone (after a 20 s outage, the doubled time would otherwise
+keep a server that is back out for up to ``longest`` s more). One ejected because its
+tasks failed serves its time: its probes may answer while its tasks do not.
 
 A server that has never answered is not failing but not up yet (a host still starting,
 a server launched later): its failures do not eject it with a growing time, which would
@@ -28,12 +33,14 @@ Ejection = collections.namedtuple('Ejection', 'server seconds why')
 
 
 class _Server(object):
-    __slots__ = ('state', 'until', 'ejections', 'good_probes', 'busy_until', 'answered')
+    __slots__ = ('state', 'until', 'ejections', 'good_probes', 'busy_until', 'answered',
+                 'by_probe')
 
     def __init__(self):
         self.state, self.until, self.ejections, self.good_probes = HEALTHY, 0.0, 0, 0
         self.busy_until = 0.0
         self.answered = False
+        self.by_probe = False   # the last ejection was for a failed probe
 
 
 class ServerHealth(object):
@@ -65,12 +72,15 @@ class ServerHealth(object):
             entry.state, entry.good_probes = PROBATION, 0
         return entry
 
-    def failure(self, server, why=''):
-        """Evidence that ``server`` failed: an :class:`Ejection` if this ejects it (of 0 s
-        when it makes a server that never answered *down*), else None (an unknown server,
-        or one already ejected or down)."""
+    def failure(self, server, why='', probe=False):
+        """Evidence that ``server`` failed (``probe``: a probe of it did): an
+        :class:`Ejection` if this ejects it (of 0 s when it makes a server that never
+        answered *down*), else None (an unknown server, or one already ejected or down)."""
         with self._lock:
             entry = self._get(server, self._clock())
+            if entry is not None and entry.state == EJECTED:
+                entry.good_probes = 0           # answers since must be in a row
+                entry.by_probe = entry.by_probe and probe
             if entry is None or entry.state == EJECTED:
                 return None
             if not entry.answered:
@@ -79,6 +89,7 @@ class ServerHealth(object):
             entry.ejections += 1
             seconds = min(self.longest, self.base * 2 ** (entry.ejections - 1))
             entry.state, entry.until, entry.good_probes = EJECTED, self._clock() + seconds, 0
+            entry.by_probe = probe
             return Ejection(server, seconds, why)
 
     def busy(self, server, seconds):
@@ -93,8 +104,11 @@ class ServerHealth(object):
             entry = self._get(server, self._clock())
             if entry is not None:
                 entry.answered = True
-                if entry.state in (PROBATION, DOWN):
+                if entry.state in (PROBATION, DOWN) or (entry.state == EJECTED and
+                                                        entry.by_probe):
                     entry.good_probes += 1
+                if entry.state == EJECTED and entry.good_probes >= self.probation_probes:
+                    entry.state = PROBATION       # its probes are answered again
 
     def task_ok(self, server):
         """A good answer; True when it ends ``server``'s probation."""
