@@ -216,7 +216,7 @@ catkin-test: deps
 
 # Servers killed and stopped, manager and roscore killed, forged input: counts printed.
 # A process of its own: this pytest process is a ROS node of the roscore it starts.
-FAULT_TEST := $(PY) -m pytest -q -s -p no:logging -W ignore::DeprecationWarning --durations=10 \
+FAULT_TEST := $(PY) -m pytest -q -rs -s -p no:logging -W ignore::DeprecationWarning --durations=10 \
   test/fault
 fault-test: build
 	@$(ROSENV) cd $(TOP) && $(FAULT_TEST)

@@ -91,7 +91,8 @@ class CameraTest(unittest.TestCase):
             # the camera frame's own header goes through: stamp and frame_id
             headers = [r.compressed.header if transport == 'compressed' else r.image.header
                        for r in results] + [m.header for m in self.of('detections', robot)]
-            self.assertTrue(headers)
+            self.assertGreaterEqual(len(results), 5, 'robot %d: results %d of %d answered'
+                                    % (robot, len(results), len(reports)))
             self.assertEqual(set(h.frame_id for h in headers), {'camera%d_optical' % robot})
             self.assertLessEqual(set(h.stamp for h in headers), self.stamps[robot])
             found = [d for m in self.of('detections', robot) for d in m.detections]

@@ -30,6 +30,7 @@ from fleet_recorder import FleetRecorder
 
 
 NO_SERVER = 'no server selected'     # the report's error when no server may be used
+MAX_UNSERVED = 2     # tasks a robot may fail that way (start-up on a loaded machine)
 
 
 class FleetTest(unittest.TestCase):
@@ -52,8 +53,12 @@ class FleetTest(unittest.TestCase):
 
     def test_every_robot_selects_a_live_server(self):
         if self.mode == 'fixed':   # no manager runs: no flag names a server the robots do not use
-            self.assertTrue(self.rec.wait_for(lambda: len(self.rec.reports_of(1)) >= 5, 20.0))
+            self.assertTrue(self.rec.wait_for(lambda: all(
+                len(self.rec.reports_of(r)) >= 5 for r in self.robots), 20.0))
             self.assertEqual(self.rec.snapshot(self.rec.flags), [])
+            served = set(r.answered_by for robot in self.robots
+                         for r in self.rec.reports_of(robot) if r.ok)
+            self.assertEqual(served, {self.fixed_server})
             return
 
         def all_selected():
@@ -70,15 +75,30 @@ class FleetTest(unittest.TestCase):
             self.assertEqual(list(flag.mean_latency), sorted(flag.mean_latency))
             self.assertTrue(all(0 < m < 1.0 for m in flag.mean_latency), flag.mean_latency)
 
-    def test_each_robot_hears_its_own_flags_only(self):
+    def test_each_robot_hears_its_flags_where_its_profile_says(self):
         """Fleet profile: the manager sends robot r's flags on robot_<r>/server_select_flag,
-        latched, and no robot listens on the shared topic (only recorders do)."""
-        if not self.direct or self.mode == 'fixed':
-            return
+        latched, and no robot listens on the shared topic (only recorders do). Paper
+        profile: every robot listens on the shared topic, which the manager publishes, and
+        no robot topic exists. Fixed mode: no node publishes any flag."""
         master = rosgraph.Master(rospy.get_name())
+        own = ['/' + names.robot_topic(r, names.SELECTION_TOPIC) for r in self.robots]
+        shared_topic = '/' + names.SELECTION_TOPIC
+        if self.mode == 'fixed' or not self.direct:
+            self.assertTrue(self.rec.wait_for(lambda: len(self.rec.reports_of(
+                self.robots[-1])) >= 3, 30.0), 'no task reports')
+            pubs, subs = (dict(x) for x in master.getSystemState()[:2])
+            self.assertEqual([t for t in own if t in pubs], [], pubs)
+            flaggers = pubs.get(shared_topic, [])
+            self.assertEqual(flaggers, [] if self.mode == 'fixed' else ['/manager'])
+            robot_nodes = [n for n in rosnode.get_node_names() if '/robot' in n]
+            self.assertEqual(len(robot_nodes), len(self.robots), robot_nodes)
+            self.assertLessEqual(set(robot_nodes), set(subs.get(shared_topic, ())), subs)
+            print('flags: %s; the robots %s listen on the shared topic' % (
+                'no node publishes one (fixed mode)' if self.mode == 'fixed'
+                else 'the manager publishes the shared topic', robot_nodes))
+            return
         listeners = {}
-        for robot in self.robots:
-            topic = '/' + names.robot_topic(robot, names.SELECTION_TOPIC)
+        for robot, topic in zip(self.robots, own):
             got = []
             sub = rospy.Subscriber(topic, SelectionFlag, got.append)   # latched: at once
             self.assertTrue(self.rec.wait_for(lambda: got, 20.0), 'no flag on %s' % topic)
@@ -88,7 +108,7 @@ class FleetTest(unittest.TestCase):
             self.assertEqual(dict(pubs).get(topic), ['/manager'], topic)
             listeners[robot] = set(dict(subs).get(topic, ())) - {rospy.get_name()}
             self.assertEqual(len(listeners[robot]), 1, (topic, listeners[robot]))
-        shared = set(dict(master.getSystemState()[1]).get('/' + names.SELECTION_TOPIC, ()))
+        shared = set(dict(master.getSystemState()[1]).get(shared_topic, ()))
         robot_nodes = set.union(*listeners.values())
         self.assertEqual(len(robot_nodes), len(self.robots), listeners)
         self.assertEqual(shared & robot_nodes, set(), shared)
@@ -173,9 +193,9 @@ class FleetTest(unittest.TestCase):
             failed = [(r.task_id, r.error) for r in reports
                       if not r.ok and r.task_id not in unserved]
             self.assertEqual(failed, [])
-            if unserved:
-                print('robot %d: tasks %s failed with every server ejected or not answering '
-                      '(its log)' % (robot, unserved))
+            print('robot %d: tasks %s failed with every server ejected or not answering '
+                  '(its log)' % (robot, unserved))
+            self.assertLessEqual(len(unserved), MAX_UNSERVED, unserved)
             by_id = dict((r.task_id, r) for r in reports)
             sends = collections.defaultdict(list)     # task id: its sends, in arrival order
             for t in tasks:
@@ -220,9 +240,10 @@ class FleetTest(unittest.TestCase):
             print('robot %d: %d tasks, %d sends beyond the first (hedged or re-sent), round '
                   'trip median %.1f ms, max %.1f ms'
                   % (robot, len(sends), extra, rtts[len(rtts) // 2] * 1e3, rtts[-1] * 1e3))
-            for report in (r for r in reports if r.ok):
-                self.assertGreater(report.rtt, 0.0)
-                self.assertLess(report.rtt, 2.0)
+            # a sort task on one host takes milliseconds: a median near a timeout means
+            # tasks waited for attempts that failed
+            self.assertTrue(all(r.rtt > 0.0 for r in reports if r.ok), reports)
+            self.assertLess(rtts[len(rtts) // 2], 0.25, rtts)
         if self.mode == 'fixed':
             self.assertEqual(set(r.msg.server_id for r in results), {self.fixed_server})
         if self.direct:     # nothing went on the broadcast topics

@@ -35,7 +35,9 @@ class PluginTest(unittest.TestCase):
         self.assertEqual(ids, list(range(1, len(ids) + 1)))       # each task reported once
         self.assertTrue(all(r.answered_by in (1, 2) and r.attempts == 1 for r in reports))
         answered = [r for r in results if r.ok]
-        self.assertTrue(answered)
+        # this test's subscription may have missed the first few, not more
+        self.assertGreaterEqual(len(answered), 10, len(results))
+        self.assertEqual(len(set((r.robot_id, r.task_id) for r in answered)), len(answered))
         self.assertGreaterEqual(max(r.count for r in answered), 50)   # texture gives features
         for result in answered:
             self.assertLessEqual(result.count, 300)

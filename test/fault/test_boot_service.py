@@ -114,7 +114,10 @@ def test_systemd_accepts_the_units(tmp_path):
                            universal_newlines=True, timeout=60)
     problems = [line for line in check.stdout.splitlines()
                 if any(str(u) in line for u in units)]
-    assert check.returncode == 0 or not problems, check.stdout
+    assert problems == [], check.stdout
+    if check.returncode != 0:     # it named none of the units: it could not run here
+        pytest.skip('systemd-analyze verify could not check the units here (exit %d): %s'
+                    % (check.returncode, check.stdout.strip()[-300:]))
     print('\nsystemd-analyze verify: %s' % (check.stdout.strip() or 'no remarks'))
 
 

@@ -237,12 +237,21 @@ def test_robot_results(nodes, robot, task, server, ok, error, data, width, sende
     st.tuples(uint32, uint32, uint32, uint32, text, floats), max_size=4), x=floats, y=floats,
     label=text)
 def test_robot_search_callbacks(nodes, robot, task, boxes, x, y, label):
+    """Detections of the robot's own frames and targets other robots found: each adds at
+    most one known target per box or report, and only at a place (finite coordinates)."""
     search = nodes['robot'].search
-    search.on_detections(Detections(robot_id=robot, task_id=task, detections=[
+    before = len(search.on_known_targets(KnownTargetsRequest()).targets)
+    search.on_detections(sent_by(Detections(robot_id=robot, task_id=task, detections=[
         Detection(roi=RegionOfInterest(x_offset=a, y_offset=b, width=c, height=d), label=e,
-                  score=f) for a, b, c, d, e, f in boxes]))
-    search.on_found(FoundTarget(robot_id=robot, task_id=task, label=label, x=x, y=y))
-    search.on_known_targets(KnownTargetsRequest())
+                  score=f) for a, b, c, d, e, f in boxes]), '/server1'))
+    mine = len(search.on_known_targets(KnownTargetsRequest()).targets)
+    assert before <= mine <= before + (len(boxes) if robot == 1 else 0)
+    search.on_found(sent_by(FoundTarget(robot_id=robot, task_id=task, label=label, x=x, y=y),
+                            '/robot2'))
+    known = search.on_known_targets(KnownTargetsRequest()).targets
+    placed = robot != 1 and math.isfinite(x) and math.isfinite(y)
+    assert mine <= len(known) <= mine + placed
+    assert all(math.isfinite(t.x) and math.isfinite(t.y) for t in known), known[-3:]
 
 
 def test_every_node_still_serves(nodes):

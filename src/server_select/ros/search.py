@@ -1,6 +1,7 @@
 """A robot's part in the cooperative search: targets found in its frames are shared once."""
 
 import collections
+import math
 import threading
 
 import rospy
@@ -8,6 +9,7 @@ from std_msgs.msg import Header
 
 from server_select.core.config import names
 from server_select.msg import Detections, FoundTarget
+from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet
 from server_select.ros.seal import SealedPublisher
 from server_select.ros.senders import SenderGate
@@ -73,9 +75,15 @@ class SearchParticipant(object):
                 self.found_pub.publish(_message(found))
 
     def on_found(self, msg):
-        if msg.robot_id != self.robot_id and self.gate.admits(msg, 'a found target'):
-            self.registry.add(Found(msg.robot_id, msg.task_id, msg.label, msg.x, msg.y,
-                                    msg.header.stamp.to_sec()))
+        if msg.robot_id == self.robot_id or not self.gate.admits(msg, 'a found target'):
+            return
+        if not (math.isfinite(msg.x) and math.isfinite(msg.y)):
+            rospy.logwarn_throttle(5.0, 'robot %d: ignored a found target of %s at (%r, %r): '
+                                   'not a place' % (self.robot_id, publisher_of(msg), msg.x,
+                                                    msg.y))
+            return
+        self.registry.add(Found(msg.robot_id, msg.task_id, msg.label, msg.x, msg.y,
+                                msg.header.stamp.to_sec()))
 
     def on_known_targets(self, _request):
         return KnownTargetsResponse(targets=[_message(f) for f in self.registry.all()])
