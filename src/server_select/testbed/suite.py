@@ -34,11 +34,11 @@ Variant.__new__.__defaults__ = ({},)     # host: what its robots' hosts are like
 PI3_BUSY = {'like': 'pi3', 'busy': 0.5}  # a Raspberry Pi 3 robot half busy with its own work
 # the per-task rules: the fleet's own (hot_cold) and the league's peers
 RULES = ('hot_cold',) + PEERS
-# the fleet profile's selection before it chose per task with hot_cold (for the league)
-# (less its draws for moves, ~spread, which went with it)
 # the fleet profile's robots following the oracle's flags: a rule that chooses per task
 # (the profile's hot_cold) keeps flags for the record only
 FOLLOW_FLAGS = {'policy': 'mean'}
+# the fleet profile's selection before it chose per task with hot_cold (for the league)
+# (less its draws for moves, ~spread, which went with it)
 PREVIOUS_FLEET = {'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
                   'passive': True, 'task_memory': 5.0}
 
