@@ -18,7 +18,7 @@ import rospy
 import rostest
 
 from server_select.core.config import names
-from server_select.core.util.procs import stop_group, wait_until
+from server_select.core.util.procs import stop_group, stopped, wait_until
 from server_select.ros.graph import node_pid
 from server_select.ros.probe_client import ProbeTimeout, TimedServiceProxy
 from server_select.srv import LatencyProbe, LatencyProbeRequest, LatencyProbeResponse
@@ -63,6 +63,7 @@ class ProbeClientTest(unittest.TestCase):
         pid = node_pid('/server1', rospy.get_name())
         os.kill(pid, signal.SIGSTOP)
         try:
+            self.assertTrue(wait_until(lambda: stopped(pid), 5.0), 'server1 did not stop')
             for seq in range(2, 5):
                 outcome, elapsed = timed(self.proxy, seq)
                 self.assertIsInstance(outcome, ProbeTimeout)

@@ -1,7 +1,10 @@
 import os
+import signal
+import subprocess
+import sys
 import time
 
-from server_select.core.util.procs import measure
+from server_select.core.util.procs import measure, stopped, wait_until
 
 
 def busy(seconds):
@@ -21,3 +24,20 @@ def test_idle_process_shows_little_cpu_and_missing_pids_are_skipped():
     usage = measure([os.getpid(), 2 ** 22 + 12345], 0.3)
     assert list(usage) == [os.getpid()]
     assert usage[os.getpid()]['cpu_percent'] < 20.0
+
+
+def test_stopped_says_when_a_sigstop_has_taken_effect_in_every_thread():
+    code = 'import threading, time\nthreading.Thread(target=time.sleep, args=(30,)).start()\n' \
+        'time.sleep(30)'
+    proc = subprocess.Popen([sys.executable, '-c', code])
+    try:
+        assert wait_until(lambda: len(os.listdir('/proc/%d/task' % proc.pid)) == 2, 10.0)
+        assert not stopped(proc.pid)
+        os.kill(proc.pid, signal.SIGSTOP)
+        assert wait_until(lambda: stopped(proc.pid), 5.0)
+        os.kill(proc.pid, signal.SIGCONT)
+        assert wait_until(lambda: not stopped(proc.pid), 5.0)
+    finally:
+        proc.kill()
+        proc.wait()
+    assert not stopped(proc.pid)           # gone

@@ -119,6 +119,20 @@ def alive(pid):
         return False
 
 
+def stopped(pid):
+    """Whether every thread of ``pid`` is stopped: a SIGSTOP takes effect when each
+    thread next enters the kernel, so a request sent right after ``kill`` may still be
+    answered."""
+    try:
+        for tid in os.listdir('/proc/%d/task' % pid):
+            with open('/proc/%d/task/%s/stat' % (pid, tid)) as stream:
+                if stream.read().rsplit(')', 1)[1].split()[0] not in ('T', 't'):
+                    return False
+    except OSError:        # gone, or a thread gone between the listing and the read
+        return False
+    return True
+
+
 def measure(pids, duration, clock=time.monotonic, sleep=time.sleep):
     """``{pid: {'cpu_percent', 'rss_mb', 'threads'}}`` over ``duration`` seconds.
 
