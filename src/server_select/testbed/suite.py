@@ -22,6 +22,7 @@ import threading
 import yaml
 
 from server_select.core.selection.balancers import PEERS
+from server_select.core.util.procs import stat_fields
 from server_select.testbed.runner import RECORDED, HostRun, RunOptions, host_ids
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.netns import Testbed, netns_pids
@@ -157,8 +158,7 @@ class SuiteRun(HostRun):
         for host in self.scenario.of_role('robot'):
             for pid in netns_pids(self.tb.hosts[host.name]['netns']):
                 try:
-                    with open('/proc/%d/stat' % pid) as stream:
-                        fields = stream.read().rsplit(')', 1)[1].split()
+                    fields = stat_fields('/proc/%d/stat' % pid)
                     with open('/proc/%d/cmdline' % pid) as stream:
                         command = stream.read()
                 except OSError:

@@ -71,10 +71,17 @@ def flag_switches(flags, start, end):
     return count
 
 
-def _mean_reaction(flags, changes, robots, start, end):
+def _reactions(flags, changes, robots, start, end):
+    """``(reached, missed)``: the reactions (s) of ``robots`` to the ``changes`` between
+    ``start`` and ``end``, and how many were not reached (none without flags)."""
     mine = [c for c in changes if c[1] in robots and start <= c[0] <= end]
-    reached = [r[3] for r in reaction_times(flags, mine) if r[3] is not None]
-    return sum(reached) / len(reached) if reached else None
+    reactions = [r[3] for r in reaction_times(flags, mine)] if flags else []
+    reached = [r for r in reactions if r is not None]
+    return reached, len(reactions) - len(reached)
+
+
+def _mean(values):
+    return sum(values) / len(values) if values else None
 
 
 def figures(reports, flags, robots, changes, start, end, timeout, samples=(), cpu=None,
@@ -84,17 +91,14 @@ def figures(reports, flags, robots, changes, start, end, timeout, samples=(), cp
     measured = [r for r in reports if start <= r.t <= end]
     rtt = summarize([r.rtt if r.ok else timeout for r in measured])
     minutes = max(1e-9, (end - start) / 60.0)
-    mine = [c for c in changes if c[1] in robots and start <= c[0] <= end]
-    reactions = [r[3] for r in reaction_times(flags, mine)] if flags else []
-    reached = [r for r in reactions if r is not None]
+    reached, missed = _reactions(flags, changes, robots, start, end)
     return Figures(len(measured), sum(1 for r in measured if not r.ok), rtt.get('mean'),
                    rtt.get('p99'), flag_switches(flags, start, end) / minutes / len(robots),
-                   sum(reached) / len(reached) if reached else None,
-                   max(reached) if reached else None, len(reactions) - len(reached),
+                   _mean(reached), max(reached) if reached else None, missed,
                    sum(1 for x in samples if start <= x.t <= end) / max(1e-9, end - start),
                    cpu, 100.0 * sum(max(0, r.attempts - 1) for r in measured)
                    / max(1, len(measured)),
-                   _mean_reaction(flags, felt, robots, start, end) if flags else None)
+                   _mean(_reactions(flags, felt, robots, start, end)[0]) if flags else None)
 
 
 def run_figures(meta, run, by_tasks=False):

@@ -105,6 +105,14 @@ def kill_all(pids, grace=5.0):
                 pass
 
 
+def stat_fields(path):
+    """The fields of a ``/proc/.../stat`` file after the command name (which may hold
+    spaces and parentheses): ``[0]`` the state, ``[11]`` and ``[12]`` user and system
+    ticks, ``[19]`` the start time. OSError when the process is gone."""
+    with open(path) as stream:
+        return stream.read().rsplit(')', 1)[1].split()
+
+
 def alive(pid):
     try:
         os.kill(pid, 0)
@@ -113,8 +121,7 @@ def alive(pid):
     except PermissionError:
         return True
     try:  # a zombie child counts as gone
-        with open('/proc/%d/stat' % pid) as stream:
-            return stream.read().split(')')[-1].split()[0] != 'Z'
+        return stat_fields('/proc/%d/stat' % pid)[0] != 'Z'
     except OSError:
         return False
 
@@ -125,9 +132,8 @@ def stopped(pid):
     answered."""
     try:
         for tid in os.listdir('/proc/%d/task' % pid):
-            with open('/proc/%d/task/%s/stat' % (pid, tid)) as stream:
-                if stream.read().rsplit(')', 1)[1].split()[0] not in ('T', 't'):
-                    return False
+            if stat_fields('/proc/%d/task/%s/stat' % (pid, tid))[0] not in ('T', 't'):
+                return False
     except OSError:        # gone, or a thread gone between the listing and the read
         return False
     return True
