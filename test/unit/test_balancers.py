@@ -372,3 +372,69 @@ def test_hot_cold_robots_spread_to_a_new_server_without_a_herd():
         assert min(counts[20:]) >= 5, counts
         assert all(7 <= n <= 13 for n in counts[-10:]), counts
         assert sum(moves.values()) <= 25, moves
+
+
+def overload(seed, works=(1.25, 0.833, 0.625), robots=6, rate=1.2, steps=300, lag=5):
+    """6 robots streaming ``rate`` frames/s to 3 servers of unequal speed (``works``: s of
+    work a frame, one worker each) at twice what they can do together, all choosing at
+    once at the start; every 0.2 s each robot hears each server's load as the robots'
+    choices ``lag`` steps before made it (its answers lag), and sends a frame at its rate.
+    Robots per server each step, and the moves by reason."""
+    clock, rng = Clock(), random.Random(seed)
+    rules = [hot_cold(clock, seed * 100 + i) for i in range(robots)]
+    on, counts = [None] * robots, []
+    past = [list(on)] * (lag + 1)
+    for step in range(steps):
+        seen = past[-lag - 1]
+        total = collections.Counter(seen)
+        for i, rule in enumerate(rules):
+            for s, work in enumerate(works, start=1):
+                utilization = (total[s] - (seen[i] == s)) * rate * work
+                rif = min(utilization, 2.0)
+                rule.probed(s, 0.001 + rng.gauss(0, 0.0002),
+                            Load(int(rif) + (rng.random() < rif - int(rif)), 0, 1, 0.0,
+                                 {'image': work}, utilization))
+        for i, rule in enumerate(rules):
+            if on[i] is None or rng.random() < rate * 0.2:
+                on[i] = rule.order([1, 2, 3], 'image')[0]
+        clock.now += 0.2
+        past.append(list(on))
+        counts.append(tuple(on.count(s) for s in (1, 2, 3)))
+    return counts, sum((r.moves for r in rules), collections.Counter())
+
+
+def goodput(counts, works=(1.25, 0.833, 0.625), rate=1.2):
+    """The share of the servers' capacity a split of robots ``counts`` keeps busy."""
+    return sum(min(n * rate, 1 / w) for n, w in zip(counts, works)) / sum(1 / w for w in works)
+
+
+def test_hot_cold_robots_that_read_alike_spread_over_unequal_servers_in_overload():
+    for seed in range(3):
+        counts, moves = overload(seed)
+        # the robots all start on the fastest server (its answers were idle) and each
+        # moves with the share of its like that makes the servers meet: the proportional
+        # split (1:2:3) in a few moves, no herd from server to server
+        assert counts[0] == (0, 0, 6), counts[0]
+        kept = [goodput(c) for c in counts[50:]]
+        assert sum(kept) / len(kept) >= 0.97, (counts[::10], moves)
+        assert moves['faster'] + moves['hot'] <= 12, moves      # 2 a minute a robot
+        assert counts[-1] == (1, 2, 3), counts[-10:]
+
+
+def test_hot_cold_share_of_robots_alike_that_move():
+    clock = Clock()
+    rule = hot_cold(clock)
+    rule.current = 3
+    works = {1: 1.25, 2: 0.833, 3: 0.625}
+    for _ in range(5):     # five others like it on server 3 (0.75 of its time each)
+        for s, u in ((1, 0.0), (2, 0.0), (3, 5 * 1.2 * 0.625)):
+            rule.probed(s, 0.001, Load(0, 0, 1, 0.0, {'image': works[s]}, u))
+        rule.sends['image'].append(clock.now)
+        clock.now += 1 / 1.2
+    fresh = dict(rule.probes)
+    rate = rule.rate('image', clock.now)
+    share = rule.share(3, 2, 'image', fresh, rate, clock.now)
+    # 6-7 alike on server 3 (its rate over the last 5 s is 0.96 frames/s): one to three
+    # moving to server 2 make the two meet, not all of them
+    assert 1 / 7.5 <= share <= 3 / 6, share
+    assert rule.share(3, 2, 'image', fresh, 0.0, clock.now) == 1.0   # own load unknown

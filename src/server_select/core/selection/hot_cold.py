@@ -39,6 +39,17 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
    same servers do not all move to one); every candidate hot: the least work in flight;
    no answer yet from any candidate: one at random (Prequal with fewer than 2 answers),
    which also spreads robots that start together.
+5. Robots on one server read the same answers and would leave it together, each on
+   answers a second old, and herd from server to server. So a robot that would leave a
+   server it can still use (for a faster or a cold one) moves with a probability: the
+   share of the robots like it there (the others' utilization over its own, itself
+   included) whose moving makes the two servers' latencies meet, each server's as step
+   2 has it with that many more or fewer robots like this one; 1 where the move pays
+   even if all of them make it (a robot whose own load is small beside the server's:
+   every network change). Staying, it asks again with its next task. (Selfish routing
+   with stale information converges when agents move with a probability that shrinks
+   with what their moving together would change, rather than all at once: Fischer and
+   Vöcking, "Adaptive routing with stale information", PODC 2005.)
 
 Adapted from Prequal (NSDI '24) for robots: latency is the robot's own round trip plus the
 server's expected wait and work (a robot's network differs per server; a web client's does
@@ -64,6 +75,8 @@ HOT_QUANTILE = 2 ** -0.25
 Z = 3.0                  # standard errors a challenger must win by
 MAX_AGE = 3.0            # s: an older probe answer does not count (the probes stopped)
 RATE_HORIZON = 5.0       # s of the robot's own tasks its rate is counted over
+JOINING = 2              # robots like this one a server it joins is judged with
+MAX_ALIKE = 1000         # robots like this one a server is counted to have at most
 
 
 Answer = collections.namedtuple('Answer', 'rtt others utilization')
@@ -117,20 +130,20 @@ class HotCold(Balancer):
         span = now - times[0] if len(times) > 1 else 0.0
         return (len(times) - 1) / span if span > 0 else 0.0
 
-    def estimate(self, newest, kind, fresh, rate=0.0, joining=False, now=None):
+    def estimate(self, newest, kind, fresh, rate=0.0, alike=1, now=None):
         """``(latency, its standard error, work in flight per worker, a task's work per
         worker)`` of a ``kind`` task at ``newest``'s server (its newest answer), from
         each of the server's answers of the last window (at least :data:`MIN_ANSWERS`):
         round trip + the others' work in flight there per worker (what a task sent then
         would wait for) + the work; the mean of those and its standard error, and the
-        median of the work in flight. ``joining``: a
-        server the robot is not on is judged with one more robot like it arriving too
-        (the robot's ``rate`` x the work, what such a robot keeps in flight): robots that
-        read the same reports move together, and a move must pay even then."""
+        median of the work in flight. ``alike``: how many robots like this one (its
+        ``rate`` x the work, what such a robot keeps in flight) the server has, this one
+        included: 1 for the robot's own server as the answers show it, 2 for a server it
+        would join with one more like it, 1 - j for its own server when j others leave."""
         work = self._work(newest, kind, fresh)
         workers = float(newest.workers)
         mine = rate * work / workers
-        extra = mine * work if joining else 0.0
+        extra = (alike - 1) * mine * work
         now = newest.at if now is None else now
         latencies, heat = [], []
         answers = self._recent(self.answers[newest.server], now, MIN_ANSWERS)
@@ -138,10 +151,35 @@ class HotCold(Balancer):
             queued = a.others * work / workers
             # asked for more than it can do, a server does 1/u of it: a task gets through
             # in u tries (busy answers, re-sends), in expectation
-            tries = max(1.0, a.utilization + mine * (2 if joining else 1))
-            latencies.append((a.rtt + queued + extra + work) * tries)
+            tries = max(1.0, a.utilization + mine * alike)
+            latencies.append((a.rtt + max(0.0, queued + extra) + work) * tries)
             heat.append(queued)
         return _mean_error(latencies) + (statistics.median(heat), work / workers)
+
+    def share(self, here, there, kind, fresh, rate, now):
+        """The share of the robots like this one at ``here`` (itself included) that should
+        move to ``there``: robots that read the same answers decide alike, so each moves
+        with the probability that brings the number that makes the two servers' latencies
+        meet, in expectation (1.0 when this robot's own load is unknown or when the move
+        pays even if all of them make it)."""
+        newest = fresh[here]
+        mine = rate * self._work(newest, kind, fresh) / float(newest.workers)
+        if mine <= 0.0:
+            return 1.0
+        others = [a.utilization for a in
+                  self._recent(self.answers[here], now, MIN_ANSWERS)] or [0.0]
+        alike = min(MAX_ALIKE, 1.0 + statistics.mean(others) / mine)
+
+        def pays(k):
+            return (self.estimate(fresh[there], kind, fresh, rate, k, now)[0] <=
+                    self.estimate(newest, kind, fresh, rate, 2 - k, now)[0])
+        if pays(alike):
+            return 1.0
+        low, high = 1, max(1, int(math.ceil(alike)) - 1)     # the move pays alone: low
+        while low < high:
+            middle = (low + high + 1) // 2
+            low, high = (middle, high) if pays(middle) else (low, middle - 1)
+        return low / alike
 
     def _order(self, servers, kind, now):
         self.sends[kind].append(now)
@@ -152,7 +190,8 @@ class HotCold(Balancer):
                 self._move(self.rng.choice(servers), 'unknown', 'no answer yet: at random')
             return [self.current] + [s for s in servers if s != self.current]
         rate = self.rate(kind, now)
-        estimates = dict((s, self.estimate(a, kind, fresh, rate, s != self.current, now))
+        estimates = dict((s, self.estimate(a, kind, fresh, rate,
+                                           1 if s == self.current else JOINING, now))
                          for s, a in fresh.items())
         latency = dict((s, e[0]) for s, e in estimates.items())
         self.errors = dict((s, e[1]) for s, e in estimates.items())
@@ -162,7 +201,8 @@ class HotCold(Balancer):
         # that caught another robot's task is not a reason to move
         cold = [s for s in fresh if rifs[s] <= limit +
                 (estimates[s][3] if s == self.current else 0.0)]
-        choice = self._choose(cold, latency, rifs)
+        choice = self._choose(cold, latency, rifs, lambda there: self.share(
+            self.current, there, kind, fresh, rate, now))
         ranked = sorted(fresh, key=lambda s: (s not in cold, latency[s] if s in cold
                                               else rifs[s]))
         ranked.remove(choice)
@@ -183,7 +223,7 @@ class HotCold(Balancer):
                 self.on_move(server, why)
         return server
 
-    def _choose(self, cold, latency, rifs):
+    def _choose(self, cold, latency, rifs, share):
         here = self.current
         if not cold:      # every candidate hot (cannot happen with a strict quantile: kept)
             return self._move(min(rifs, key=lambda s: (rifs[s], latency[s])), 'all hot',
@@ -197,6 +237,8 @@ class HotCold(Balancer):
             return self._move(choice, 'gone' if here is not None else 'first',
                               'server %s not usable: the fastest cold server' % here
                               if here is not None else 'the fastest cold server')
+        if self.rng.random() >= share(choice):
+            return here          # this time, one of the others like it moves
         if here not in cold:
             return self._move(choice, 'hot', 'server %s hot (%.3g s of work in flight per '
                               'worker, above the %.2g quantile)'
