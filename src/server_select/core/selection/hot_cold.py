@@ -18,15 +18,11 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
    task or two out each, so servers and robots make a closed system: a task waits for
    the work in flight ahead of it, whatever the utilization (an open queue's mean wait,
    M/D/c at the reported utilization, grows without bound at saturation and made servers
-   of unequal speed look alike). A server
-   the robot is not on is judged with one more robot like it arriving (its rate x the
-   work, what such a robot keeps in flight there): robots that read the same reports
-   decide alike, and a move that pays only if the robot moves alone makes them swap
-   back and forth. A server asked for more work than it can do (the utilization of the
-   others' announced rates plus the robot's own, and the other's like it, above 1) does
-   1/u of it and answers the rest busy: a task there takes u times as long to get
-   through, in expectation (a server that refuses keeps its queue short, so its work in
-   flight alone would make it look fast).
+   of unequal speed look alike). A server asked for more work than it can do (the
+   utilization of the others' announced rates plus the robot's own, its rate x the work,
+   above 1) does 1/u of it and answers the rest busy: a task there takes u times as long
+   to get through, in expectation (a server that refuses keeps its queue short, so its
+   work in flight alone would make it look fast).
 3. A server is *hot* when the others' work in flight per worker (the median over its
    answers of the window) is above the 2^-0.25 quantile of the candidates' (Prequal's rule, on work
    rather than on requests: servers of unequal speed carry unequal numbers of requests);
@@ -40,16 +36,17 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
    no answer yet from any candidate: one at random (Prequal with fewer than 2 answers),
    which also spreads robots that start together.
 5. Robots on one server read the same answers and would leave it together, each on
-   answers a second old, and herd from server to server. So a robot that would leave a
+   answers a window old, and herd from server to server. So a robot that would leave a
    server it can still use (for a faster or a cold one) moves with a probability: the
    share of the robots like it there (the others' utilization over its own, itself
-   included) whose moving makes the two servers' latencies meet, each server's as step
-   2 has it with that many more or fewer robots like this one; 1 where the move pays
-   even if all of them make it (a robot whose own load is small beside the server's:
-   every network change). Staying, it asks again with its next task. (Selfish routing
-   with stale information converges when agents move with a probability that shrinks
-   with what their moving together would change, rather than all at once: Fischer and
-   Vöcking, "Adaptive routing with stale information", PODC 2005.)
+   included) whose moving makes the two servers' latencies meet (each server's as step
+   2 has it, with that many robots like this one more or fewer), spread over the tasks
+   it sends in a window (the time its answers take to show who moved); 1 where the move
+   pays even if all of them make it (a robot whose own load is small beside the
+   server's: every network change). Staying, it asks again with its next task. (Agents
+   routing on stale information settle when each moves with a probability that shrinks
+   with what their moving together would change, and oscillate when all move at once:
+   Fischer and Vöcking, "Adaptive routing with stale information", PODC 2005.)
 
 Adapted from Prequal (NSDI '24) for robots: latency is the robot's own round trip plus the
 server's expected wait and work (a robot's network differs per server; a web client's does
@@ -75,7 +72,6 @@ HOT_QUANTILE = 2 ** -0.25
 Z = 3.0                  # standard errors a challenger must win by
 MAX_AGE = 3.0            # s: an older probe answer does not count (the probes stopped)
 RATE_HORIZON = 5.0       # s of the robot's own tasks its rate is counted over
-JOINING = 2              # robots like this one a server it joins is judged with
 MAX_ALIKE = 1000         # robots like this one a server is counted to have at most
 
 
@@ -135,11 +131,11 @@ class HotCold(Balancer):
         worker)`` of a ``kind`` task at ``newest``'s server (its newest answer), from
         each of the server's answers of the last window (at least :data:`MIN_ANSWERS`):
         round trip + the others' work in flight there per worker (what a task sent then
-        would wait for) + the work; the mean of those and its standard error, and the
-        median of the work in flight. ``alike``: how many robots like this one (its
-        ``rate`` x the work, what such a robot keeps in flight) the server has, this one
-        included: 1 for the robot's own server as the answers show it, 2 for a server it
-        would join with one more like it, 1 - j for its own server when j others leave."""
+        would wait for) + the work, x the tries at the utilization; the mean of those
+        and its standard error, and the median of the work in flight. ``alike``: the
+        robots like this one (its ``rate`` x the work, and what such a robot keeps in
+        flight) the server is judged with, this one included: 1 as the answers show it,
+        k with k - 1 more arriving, 2 - k with k - 1 of the others leaving."""
         work = self._work(newest, kind, fresh)
         workers = float(newest.workers)
         mine = rate * work / workers
@@ -157,15 +153,12 @@ class HotCold(Balancer):
         return _mean_error(latencies) + (statistics.median(heat), work / workers)
 
     def share(self, here, there, kind, fresh, rate, now):
-        """The share of the robots like this one at ``here`` (itself included) that should
-        move to ``there``: robots that read the same answers decide alike, so each moves
-        with the probability that brings the number that makes the two servers' latencies
-        meet, in expectation (1.0 when this robot's own load is unknown or when the move
-        pays even if all of them make it)."""
+        """The probability that this robot, one of those like it at ``here``, moves to
+        ``there`` with this task (the module docstring's step 5)."""
         newest = fresh[here]
         mine = rate * self._work(newest, kind, fresh) / float(newest.workers)
         if mine <= 0.0:
-            return 1.0
+            return 1.0                         # its own load unknown yet
         others = [a.utilization for a in
                   self._recent(self.answers[here], now, MIN_ANSWERS)] or [0.0]
         alike = min(MAX_ALIKE, 1.0 + statistics.mean(others) / mine)
@@ -179,7 +172,7 @@ class HotCold(Balancer):
         while low < high:
             middle = (low + high + 1) // 2
             low, high = (middle, high) if pays(middle) else (low, middle - 1)
-        return low / alike
+        return low / alike / max(1.0, rate * self.window)
 
     def _order(self, servers, kind, now):
         self.sends[kind].append(now)
@@ -190,8 +183,7 @@ class HotCold(Balancer):
                 self._move(self.rng.choice(servers), 'unknown', 'no answer yet: at random')
             return [self.current] + [s for s in servers if s != self.current]
         rate = self.rate(kind, now)
-        estimates = dict((s, self.estimate(a, kind, fresh, rate,
-                                           1 if s == self.current else JOINING, now))
+        estimates = dict((s, self.estimate(a, kind, fresh, rate, now=now))
                          for s, a in fresh.items())
         latency = dict((s, e[0]) for s, e in estimates.items())
         self.errors = dict((s, e[1]) for s, e in estimates.items())
