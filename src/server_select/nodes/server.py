@@ -99,6 +99,7 @@ class ServerNode(object):
         return next(h for h in self.handlers if h.plugin.kind == kind)
 
     def start(self):
+        self._unwarmed = set(h.plugin.kind for h in self.handlers)   # no probe named them
         self.test_knobs = param('test_knobs')
         if self.test_knobs:      # from now on as the master says: any node may change it
             self.work_delay = live_param('work_delay')
@@ -144,6 +145,9 @@ class ServerNode(object):
             self._pool.submit(self._prepare, req.robot_id)
         if req.task_kinds:
             self.work.announce(req.robot_id, zip(req.task_kinds, req.task_rates))
+            for kind in self._unwarmed.intersection(req.task_kinds):   # before its 1st task
+                self._unwarmed.discard(kind)
+                self._pool.submit(self._warm, kind)
         load = self.work.load(req.robot_id)
         return seal.seal_answer(LatencyProbeResponse(
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),
@@ -151,6 +155,15 @@ class ServerNode(object):
             backlog=load.backlog, utilization=load.utilization, kinds=list(load.service),
             service_time=list(load.service.values())), self.probe_srv.resolved_name,
             self.probe_srv.uri, req)
+
+    def _warm(self, kind):
+        for handler in self.handlers:
+            if handler.plugin.kind == kind:
+                try:
+                    handler.plugin.warm()
+                except Exception as error:    # its first task will say it again
+                    rospy.logwarn('server %d: cannot load what %s tasks need: %s: %s',
+                                  self.server_id, kind, type(error).__name__, error)
 
     def _prepare(self, robot):
         for handler in self.handlers:

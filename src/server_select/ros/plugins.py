@@ -28,7 +28,7 @@ class TaskPlugin(object):
     and ``process_time`` (and ``bool busy``); the rest is the plug-in's.
 
     Robot side (``robot_id`` is an int): ``make``, ``check``, ``run_local``, ``rate`` and
-    ``ready``. Server side (``robot_id`` is None): ``start`` and ``handle``.
+    ``ready``. Server side (``robot_id`` is None): ``start``, ``warm`` and ``handle``.
     """
 
     kind = None                          # the name in task reports and of the settings
@@ -50,6 +50,11 @@ class TaskPlugin(object):
     def ready(self):
         """Whether there is input for a task now (False: none is made this time)."""
         return True
+
+    def warm(self):
+        """Server side: load what handling a task needs (a library, a model), once, on a
+        thread of its own, when a robot's probe first says it sends this kind: the first
+        task is then not the one that waits for it (nothing here)."""
 
     def make(self, task_id, stamp):
         """``(request, context)``; raise ValueError when no task can be made now."""

@@ -68,8 +68,8 @@ def stream_kinds(robot_id, mode, param):
 
 def server_kinds(param, workers):
     """Every task type a server's parameters ask for: sort, image (with a detector for
-    each of ``workers``, checked now, OpenCV loaded with the first frame) and the
-    plug-ins; ParamError when they are wrong."""
+    each of ``workers``, checked now, OpenCV loaded once a robot says it sends frames)
+    and the plug-ins; ParamError when they are wrong."""
     return [Sort(None, {'max_len': param('max_task_len')}),
             Frames(None, {'quality': param('jpeg_quality'),
                           'max_pixels': param('max_image_pixels')},

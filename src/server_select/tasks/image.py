@@ -118,6 +118,12 @@ class Frames(TaskPlugin):
 
     # -- server side --------------------------------------------------------------------------
 
+    def warm(self):
+        """Load OpenCV and every worker's detector (on a server capped at a tenth of a
+        core: seconds, during which its probe answers are late too)."""
+        for detector in list(self.detectors.queue):
+            detector.load()
+
     def start(self):
         self.detections_pub = SealedPublisher(fleet(names.DETECTIONS_TOPIC), Detections,
                                               queue_size=100)

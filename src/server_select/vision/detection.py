@@ -39,7 +39,7 @@ def make_detector(param, load=True):
     """The detector the ``detector``, ``cascade``, ``scale_factor``, ``min_neighbors`` and
     ``min_size`` parameters describe; ``param(name)`` reads one (the server and a robot in
     local mode build theirs here, so both do the same work). ``load`` False: OpenCV with
-    the first frame."""
+    :meth:`Detector.load` or the first frame."""
     return Detector(kind=param('detector'), cascade=param('cascade'),
                     scale_factor=param('scale_factor'), min_neighbors=param('min_neighbors'),
                     min_size=param('min_size'), load=load)
@@ -59,8 +59,9 @@ class Detector(object):
     def __init__(self, kind=default('detector'), cascade=default('cascade'),
                  scale_factor=default('scale_factor'), min_neighbors=default('min_neighbors'),
                  min_size=default('min_size'), label=None, load=True):
-        """``load`` False: the parameters are checked now and OpenCV is loaded with the
-        first frame (a server that never gets one needs no OpenCV: 17 MiB)."""
+        """``load`` False: the parameters are checked now and OpenCV is loaded by
+        :meth:`load` or with the first frame (a server that never gets one needs no
+        OpenCV: 17 MiB)."""
         self.kind = kind
         self.scale_factor = float(scale_factor)
         self.min_neighbors = int(min_neighbors)
@@ -83,6 +84,11 @@ class Detector(object):
         else:
             raise DetectorError('unknown detector %r (expected haar or hog)' % kind)
         if load:
+            self._load()
+
+    def load(self):
+        """Load OpenCV and the detector now (else with the first frame)."""
+        with self._lock:
             self._load()
 
     def _load(self):
