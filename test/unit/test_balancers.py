@@ -270,13 +270,34 @@ def test_hot_cold_keeps_its_server_within_the_noise_and_leaves_beyond_it():
     for j in jitter:      # 1 ms apart under +-4 ms of noise: not a reason to move
         rule.probed(1, 0.011 + j, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.0))
         rule.probed(2, 0.010 - j, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.0))
+        clock.now += 0.1                                 # probes at 10 Hz
     rule.current = 1
     assert [rule.order([1, 2], 'image')[0] for _ in range(20)] == [1] * 20
     for _ in range(5):    # server 2 is now 20 ms nearer: far beyond the noise
         rule.probed(1, 0.030, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.0))
         rule.probed(2, 0.010, Load(0, 0, 1, 0.0, {'image': 0.1}, 0.0))
+        clock.now += 0.1
     assert rule.order([1, 2], 'image')[0] == 2
     assert 'faster' in rule.why
+
+
+def test_hot_cold_counts_answers_that_saw_one_queue_as_one():
+    def verdict(work):
+        clock = Clock()
+        rule = hot_cold(clock)
+        rule.current = 1
+        # server 1 had another robot's task queued for the first 0.8 s of the window and
+        # none since; server 2 none: 16 answers each, 0.1 s apart
+        for i in range(16):
+            rule.probed(1, 0.001, Load(int(i < 8), 0, 1, 0.0, {'image': work}, 0.0))
+            rule.probed(2, 0.001, Load(0, 0, 1, 0.0, {'image': work}, 0.0))
+            clock.now += 0.1
+        return rule.order([1, 2], 'image')[0]
+    # with 0.5 s of work a frame the queue changed once in the window: one observation
+    # that server 1 is busier, not 8: the robot stays; with 20 ms of work the queue was
+    # seen queued and empty many times over: server 1 is slower, the robot leaves
+    assert verdict(0.5) == 1
+    assert verdict(0.02) == 2
 
 
 def test_hot_cold_ranks_by_expected_completion_with_the_work_in_flight():

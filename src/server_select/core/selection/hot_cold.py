@@ -11,18 +11,21 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
    (their requests queued and in service x the work per task of the kind, per worker:
    what a task sent then would wait for) + the work (the median of what the servers
    report, where it has done none yet); the mean of those, its noise their standard
-   error. (The robot's own task round trips are not used: they carry the task's own
-   message cost, which the probes do not, so that the robot's own server always looked
-   slower than the others, and robots between near-equal servers moved ten times a
-   minute. A task that fails or times out still ejects its server.) Robots keep a
-   task or two out each, so servers and robots make a closed system: a task waits for
-   the work in flight ahead of it, whatever the utilization (an open queue's mean wait,
-   M/D/c at the reported utilization, grows without bound at saturation and made servers
-   of unequal speed look alike). A server asked for more work than it can do (the
-   utilization of the others' announced rates plus the robot's own, its rate x the work,
-   above 1) does 1/u of it and answers the rest busy: a task there takes u times as long
-   to get through, in expectation (a server that refuses keeps its queue short, so its
-   work in flight alone would make it look fast).
+   error, counting answers closer together than a task's work as one (they saw much the
+   same queue: sixteen answers in a window of 1.5 s about a 0.5 s frame are three
+   observations of the queue, not sixteen). (The robot's own task round trips are not
+   used: they carry the task's own message cost, which the probes do not, so that the
+   robot's own server always looked slower than the others, and robots between
+   near-equal servers moved ten times a minute. A task that fails or times out still
+   ejects its server.) Robots keep a task or two out each, so servers and robots make a
+   closed system: a task waits for the work in flight ahead of it, whatever the
+   utilization (an open queue's mean wait, M/D/c at the reported utilization, grows
+   without bound at saturation and made servers of unequal speed look alike). A server
+   asked for more work than it can do (the utilization of the others' announced rates
+   plus the robot's own, its rate x the work, above 1) does 1/u of it and answers the
+   rest busy: a task there takes u times as long to get through, in expectation (a
+   server that refuses keeps its queue short, so its work in flight alone would make it
+   look fast).
 3. A server is *hot* when the others' work in flight per worker (the median over its
    answers of the window) is above the 2^-0.25 quantile of the candidates' (Prequal's rule, on work
    rather than on requests: servers of unequal speed carry unequal numbers of requests);
@@ -78,9 +81,11 @@ MAX_ALIKE = 1000         # robots like this one a server is counted to have at m
 Answer = collections.namedtuple('Answer', 'rtt others utilization')
 
 
-def _mean_error(values):
-    """``(mean, its standard error)`` of ``values`` (error 0.0 for one value)."""
-    error = statistics.stdev(values) / math.sqrt(len(values)) if len(values) > 1 else 0.0
+def _mean_error(values, independent=None):
+    """``(mean, its standard error)`` of ``values`` (error 0.0 for one value), as if
+    ``independent`` of them (at most all) were independent."""
+    n = len(values) if independent is None else max(1.0, min(len(values), independent))
+    error = statistics.stdev(values) / math.sqrt(n) if len(values) > 1 else 0.0
     return statistics.mean(values), error
 
 
@@ -106,11 +111,15 @@ class HotCold(Balancer):
         self.answers[answer.server].append(
             (answer.at, Answer(answer.rtt, others, answer.utilization)))
 
+    def _window(self, entries, now, keep=0):
+        """The ``entries`` ((time, value), oldest first) of the last window, and at
+        least the newest ``keep``."""
+        recent = [(t, v) for t, v in entries if now - t <= self.window]
+        return recent if len(recent) >= keep else list(entries)[-keep:]
+
     def _recent(self, entries, now, keep=0):
-        """The values of ``entries`` ((time, value), oldest first) of the last window,
-        and at least the newest ``keep``."""
-        values = [v for t, v in entries if now - t <= self.window]
-        return values if len(values) >= keep else [v for _, v in list(entries)[-keep:]]
+        """The values of :meth:`_window`."""
+        return [v for _, v in self._window(entries, now, keep)]
 
     def _work(self, answer, kind, fresh):
         if kind in answer.service:
@@ -142,15 +151,20 @@ class HotCold(Balancer):
         extra = (alike - 1) * mine * work
         now = newest.at if now is None else now
         latencies, heat = [], []
-        answers = self._recent(self.answers[newest.server], now, MIN_ANSWERS)
-        for a in answers or [Answer(newest.rtt, 0, newest.utilization)]:
+        entries = self._window(self.answers[newest.server], now, MIN_ANSWERS)
+        for a in [a for _, a in entries] or [Answer(newest.rtt, 0, newest.utilization)]:
             queued = a.others * work / workers
             # asked for more than it can do, a server does 1/u of it: a task gets through
             # in u tries (busy answers, re-sends), in expectation
             tries = max(1.0, a.utilization + mine * alike)
             latencies.append((a.rtt + max(0.0, queued + extra) + work) * tries)
             heat.append(queued)
-        return _mean_error(latencies) + (statistics.median(heat), work / workers)
+        # answers closer together than a task's work see much the same queue: about one
+        # a task's work over their span is independent of the others
+        span = entries[-1][0] - entries[0][0] if entries else 0.0
+        independent = 1.0 + span * workers / work if work > 0 else None
+        return _mean_error(latencies, independent) + (statistics.median(heat),
+                                                      work / workers)
 
     def share(self, here, there, kind, fresh, rate, now):
         """The probability that this robot, one of those like it at ``here``, moves to
