@@ -23,6 +23,7 @@ if ok:
         ok, why = False, str(error)
 pytestmark = pytest.mark.skipif(not ok, reason=why)
 
+CPU, PERIOD = netns.own_prefix('sscpu'), netns.own_prefix('ssper')   # this run's own
 SPIN = [sys.executable, '-c', 'import time\nend = time.time() + 30\nwhile time.time() < end: pass']
 
 
@@ -33,7 +34,7 @@ def test_a_host_with_a_cpu_share_gets_that_share_of_a_core(tmp_path):
     path = str(tmp_path / 'cpu.yaml')
     with open(path, 'w') as stream:
         stream.write(repr(data).replace("'", '"'))        # JSON is YAML
-    with netns.Testbed(Scenario(data), path, str(tmp_path / 'run'), prefix='sscpu') as tb:
+    with netns.Testbed(Scenario(data), path, str(tmp_path / 'run'), prefix=CPU) as tb:
         slow, free = tb.popen('slow', SPIN), tb.popen('free', SPIN)
         limit = tb.limits['slow']
         assert wait_until(lambda: slow.pid in limit.pids(), 5.0), limit.pids()
@@ -49,7 +50,7 @@ def test_a_host_with_a_cpu_share_gets_that_share_of_a_core(tmp_path):
     # a core at rest; less while make test's background stream builds the catkin workspace)
     assert 'free' not in tb.limits and shares['free'] > 1.5 * shares['slow']
     assert stats.get('nr_throttled', 0) > 0
-    assert netns.leftovers("sscpu") == [] and not os.path.exists(limit.path)
+    assert netns.leftovers(CPU) == [] and not os.path.exists(limit.path)
 
 
 # spins for argv[1] s; prints the 99th percentile of its stalls (ms): gaps of over 1 ms
@@ -85,7 +86,7 @@ def test_a_short_period_slows_a_host_evenly_and_own_work_takes_its_share(tmp_pat
         'long': {'role': 'server', 'id': 2, 'cpu': 0.2},
         'pi': {'role': 'robot', 'id': 1, 'like': 'pi3', 'busy': 0.5},
         'idle': {'role': 'robot', 'id': 2, 'like': 'pi3', 'busy': 0.5}})
-    with netns.Testbed(scenario, path, str(tmp_path / 'run'), prefix='ssper') as tb:
+    with netns.Testbed(scenario, path, str(tmp_path / 'run'), prefix=PERIOD) as tb:
         logs = dict((h, str(tmp_path / ('%s.out' % h))) for h in ('short', 'long', 'pi'))
         spin = dict((h, tb.popen(h, STALLS + ['7'], log=logs[h])) for h in logs)
         limits = tb.limits
@@ -115,7 +116,7 @@ def test_a_short_period_slows_a_host_evenly_and_own_work_takes_its_share(tmp_pat
     assert share['pi'] + own_share['pi'] == pytest.approx(0.1, rel=0.10)
     assert own_share['idle'] == pytest.approx(0.05, rel=0.10)
     assert own_share['pi'] > 0.005      # beside a process that never sleeps: it still runs
-    assert limits['pi'].memory_mb == 1024 and netns.leftovers('ssper') == []
+    assert limits['pi'].memory_mb == 1024 and netns.leftovers(PERIOD) == []
 
 
 def test_a_cpu_share_is_checked_where_the_scenario_is_read():
@@ -141,7 +142,7 @@ def test_a_process_in_a_cpu_limited_group_sees_the_cores_it_may_use():
     code = 'from server_select.core.util.procs import usable_cpus; print(usable_cpus())'
     seen = {}
     for share in (0.25, max(0.5, cores - 0.5)):
-        limit = CpuLimit('sscpus-%g' % share, share).create()
+        limit = CpuLimit('%s-%g' % (CPU, share), share).create()
         try:
             seen[share] = subprocess.run([sys.executable, '-c', code], preexec_fn=limit.join,
                                          stdout=subprocess.PIPE, universal_newlines=True,

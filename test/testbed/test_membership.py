@@ -12,10 +12,11 @@ import pytest
 
 from server_select.testbed import bag_analysis
 from server_select.testbed.evaluation import RunOptions, run_mode
-from server_select.testbed.netns import available, leftovers
+from server_select.testbed.netns import available, leftovers, own_prefix
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENARIO = os.path.join(HERE, 'join_leave.yaml')
+PREFIX = own_prefix('ssmem')      # this run's own namespaces
 JOIN, LEAVE = 20.0, 38.0
 
 ok, why = available()
@@ -25,8 +26,8 @@ pytestmark = pytest.mark.skipif(not ok, reason=why)
 @pytest.fixture(scope='module')
 def run(tmp_path_factory):
     out = str(tmp_path_factory.mktemp('membership'))
-    bag = run_mode(SCENARIO, 'select', out, RunOptions(profile='fleet', prefix='ssjoin'))
-    assert leftovers('ssjoin') == []
+    bag = run_mode(SCENARIO, 'select', out, RunOptions(profile='fleet', prefix=PREFIX))
+    assert leftovers(PREFIX) == []
     return bag_analysis.load(bag)
 
 

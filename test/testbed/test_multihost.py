@@ -28,6 +28,7 @@ from server_select.testbed.runner import HostRun
 from server_select.testbed.scenario import Scenario
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+PREFIX = netns.own_prefix('ssmh')     # this run's own namespaces
 LOADER = os.path.abspath(os.path.join(HERE, '..', '..', 'scripts', 'env_loader.sh'))
 WATCH = os.path.join(HERE, 'multihost_watch.py')
 SSHD = shutil.which('sshd') or '/usr/sbin/sshd'
@@ -126,7 +127,7 @@ def test_the_readme_several_host_commands(tmp_path):
         stream.write(json.dumps(data))                        # JSON is YAML
     home, config = keys(tmp_path)
     run_dir = str(tmp_path / 'run')
-    with netns.Testbed(Scenario(data), path, run_dir, prefix='ssmh') as tb:
+    with netns.Testbed(Scenario(data), path, run_dir, prefix=PREFIX) as tb:
         run = HostRun(tb, tb.scenario, run_dir)
         operator = dict(run.env('manager'), HOME=home)
         operator.pop('SSH_AUTH_SOCK', None)
@@ -193,4 +194,4 @@ def test_the_readme_several_host_commands(tmp_path):
               for r, c in sorted(robots.items())])
         assert served and all(c['failed'] == 0 for c in robots.values()), robots
         assert all(set(c['answered_by']) <= {'1', '2'} for c in robots.values()), robots
-    assert netns.leftovers('ssmh') == []
+    assert netns.leftovers(PREFIX) == []

@@ -13,12 +13,13 @@ import pytest
 
 from server_select.testbed import bag_analysis
 from server_select.testbed.evaluation import RunOptions, run_modes
-from server_select.testbed.netns import available, cleanup_abandoned, leftovers
+from server_select.testbed.netns import available, cleanup_abandoned, leftovers, own_prefix
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENARIO = os.path.join(HERE, 'step_down.yaml')
 STEP_AT = 28.0
 WINDOW, PROBE_PERIOD, PROBE_TIMEOUT = 5.0, 1.0, 0.5
+PREFIX, CRASH = own_prefix('sstbd'), own_prefix('sscrh')     # this run's own
 
 ok, why = available()
 pytestmark = pytest.mark.skipif(not ok, reason=why)
@@ -27,11 +28,11 @@ pytestmark = pytest.mark.skipif(not ok, reason=why)
 @pytest.fixture(scope='module')
 def runs(tmp_path_factory):
     out = str(tmp_path_factory.mktemp('testbed'))
-    options = RunOptions(fixed_server=1, window=WINDOW, prefix='sstest')
+    options = RunOptions(fixed_server=1, window=WINDOW, prefix=PREFIX)
     modes = ('select', 'fixed')         # at once, each in a testbed of its own
     bags = run_modes(SCENARIO, modes, out, options, side_by_side=True)
     result = dict((mode, bag_analysis.load(bag)) for mode, bag in zip(modes, bags))
-    assert leftovers('sstest') == []
+    assert leftovers(PREFIX) == []
     return result
 
 
@@ -84,7 +85,7 @@ CRASHER = r'''
 import os, sys, time
 from server_select.testbed.scenario import Scenario
 from server_select.testbed.netns import Testbed
-tb = Testbed(Scenario.load(%(scenario)r), %(scenario)r, %(run)r, prefix='sscrash')
+tb = Testbed(Scenario.load(%(scenario)r), %(scenario)r, %(run)r, prefix=%(prefix)r)
 tb.up()
 tb.popen('robot1', ['sleep', %(marker)r])
 print('up', flush=True)
@@ -106,7 +107,7 @@ def pgrep(pattern):
 @pytest.mark.parametrize('how', ['ctrl-c', 'sigterm', 'crash'])
 def test_teardown_leaves_nothing(tmp_path, how):
     marker = '599.%06d' % (os.getpid() % 1000000)   # this run's own sleeper, "sleep 599.<pid>"
-    script = CRASHER % {'scenario': SCENARIO,
+    script = CRASHER % {'scenario': SCENARIO, 'prefix': CRASH,
                         'run': str(tmp_path), 'marker': marker}
     # Ctrl-C as a terminal sends it, even where this test runs as a background job (which
     # would hand the script SIGINT ignored)
@@ -114,7 +115,7 @@ def test_teardown_leaves_nothing(tmp_path, how):
                             stdout=subprocess.PIPE, universal_newlines=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert proc.stdout.readline().strip() == 'up'
-    assert leftovers('sscrash'), 'the testbed should be up'
+    assert leftovers(CRASH), 'the testbed should be up'
     # what must be gone afterwards is there now: the host's process and the emulator,
     # whose command line names this run's folder (its --hosts file)
     assert len(pgrep('^sleep %s$' % marker)) == 1
@@ -123,9 +124,9 @@ def test_teardown_leaves_nothing(tmp_path, how):
         proc.send_signal(signal.SIGINT if how == 'ctrl-c' else signal.SIGTERM)
     proc.wait(30)
     if how == 'crash':
-        assert leftovers('sscrash'), 'a crash leaves the testbed behind...'
+        assert leftovers(CRASH), 'a crash leaves the testbed behind...'
         # ... which any later run removes (its owner is dead), whatever its own prefix
-        assert 'sscrash-robot1' in cleanup_abandoned()
-    assert leftovers('sscrash') == []
+        assert CRASH + '-robot1' in cleanup_abandoned()
+    assert leftovers(CRASH) == []
     assert pgrep('^sleep %s$' % marker) == []
     assert pgrep('testbed.linkemu .*%s' % tmp_path) == []

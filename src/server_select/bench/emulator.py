@@ -19,7 +19,7 @@ from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.scenario import Scenario
 from server_select.core.util.stats import summarize
 from server_select.core.util.tables import markdown_table
-from server_select.testbed.netns import Testbed
+from server_select.testbed.netns import Testbed, own_prefix
 
 CASES = [(1.0, 0.0), (5.0, 0.0), (20.0, 0.0), (100.0, 0.0), (20.0, 2.0)]
 
@@ -28,7 +28,7 @@ def tolerance_ms(rtt_ms):
     return max(0.05 * rtt_ms, 0.3)
 
 
-def measure_case(rtt_ms, jitter_ms, work_dir, count, probe_count, prefix='ssbench'):
+def measure_case(rtt_ms, jitter_ms, work_dir, count, probe_count, prefix='ssbch'):
     data = {'name': 'emulator_bench', 'duration': 3600,
             'hosts': {'a': {'role': 'manager'}, 'b': {'role': 'server', 'id': 1}},
             'default': {'delay': rtt_ms / 2.0, 'jitter': jitter_ms / 2.0}}
@@ -36,7 +36,8 @@ def measure_case(rtt_ms, jitter_ms, work_dir, count, probe_count, prefix='ssbenc
     with open(path, 'w') as stream:
         yaml.safe_dump(data, stream)
     result = {'configured_rtt_ms': rtt_ms, 'configured_jitter_ms': jitter_ms}
-    with Testbed(Scenario(data), path, os.path.join(work_dir, 'run'), prefix=prefix) as tb:
+    run_dir = os.path.join(work_dir, 'run')
+    with Testbed(Scenario(data), path, run_dir, prefix=own_prefix(prefix)) as tb:
         py = [sys.executable, '-m', 'server_select.bench.netbench']
         tb.popen('b', py + ['echo-server', '--port', '5555'])
         out = tb.run('a', py + ['echo-client', '--host', tb.address('b'), '--port', '5555',

@@ -146,16 +146,17 @@ def scenario_run(data, work, name, prefix, record=('/task_report',)):
     roscore and a rosbag recording ``record``: yields ``(HostRun, bag path)``; the run
     lasts until the scenario's duration once the block has started the nodes. The link
     emulator's counts are then in ``work/name/link_stats.json``, and the scenario's time
-    zero beside the bag (``<bag>.json``), so that a loaded bag's times are scenario times."""
+    zero beside the bag (``<bag>.json``), so that a loaded bag's times are scenario times.
+    ``prefix``: the tag of the run's namespaces (``netns.own_prefix``)."""
     import yaml
     from server_select.testbed.runner import HostRun
-    from server_select.testbed.netns import Testbed
+    from server_select.testbed.netns import Testbed, own_prefix
     from server_select.testbed.scenario import Scenario
     path = os.path.join(work, name + '.yaml')
     with open(path, 'w') as stream:
         yaml.safe_dump(data, stream)
     run_dir, bag = os.path.join(work, name), os.path.join(work, name + '.bag')
-    with Testbed(Scenario(data), path, run_dir, prefix=prefix) as tb:
+    with Testbed(Scenario(data), path, run_dir, prefix=own_prefix(prefix)) as tb:
         run = HostRun(tb, tb.scenario, run_dir)
         run.start_master()
         run.record(bag, *record)

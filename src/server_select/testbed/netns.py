@@ -3,8 +3,9 @@
 A :class:`Testbed` gives every host of a scenario its own network namespace
 ``<prefix>-<host>`` and address ``<subnet>.<n>``, starts :mod:`server_select.testbed.linkemu`
 between them, runs commands inside hosts, and tears everything down on exit, Ctrl-C or
-error. Each run has a namespace prefix of its own (by default ``ssb<pid>``), so two runs on
-one machine leave each other alone; a run removes only what it created, and what a run
+error. Each run has a namespace prefix of its own (by default ``ssb<pid>``; a test or a
+benchmark names its runs with :func:`own_prefix`), so two runs on one machine leave each
+other alone; a run removes only what it created, and what a run
 whose process has died left behind (namespaces with its prefix, the processes inside
 them, a stale emulator: the state file in ``/run`` names the owner). Needs root, TUN.
 """
@@ -109,6 +110,13 @@ def leftovers(prefix):
     except OSError:
         pass
     return found
+
+
+def own_prefix(tag):
+    """``tag`` (5 characters at most are kept) and this process's id: a namespace prefix
+    no other run on this machine has, that says whose the run is (a device is named by
+    the prefix and a number: 15 characters at most)."""
+    return '%s%d' % (tag[:5], os.getpid() % 100000)
 
 
 class Testbed(object):
