@@ -1,16 +1,12 @@
 """A server's workers: the tasks of every kind through one bounded queue
 (:class:`~server_select.core.load.work_queue.WorkQueue`), answered by ``workers`` threads."""
 
-import os
 import threading
 import time
 
 import rospy
 
 from server_select.core.load.work_queue import WorkQueue
-
-
-WORKER_NICE = 10      # a worker thread's nice value above the node's other threads'
 
 
 class ServerWork(object):
@@ -40,15 +36,6 @@ class ServerWork(object):
             self._busy(endpoint, task, direct, why)
 
     def _run(self):
-        # below the probe answers and the message threads of this process: on a server
-        # whose CPU is capped (a cgroup quota) a probe answered while a worker used the
-        # whole quota came seconds late, and robots ejected a server that was only busy
-        # (a thread's nice value is its own on Linux; its helper threads inherit it)
-        try:
-            os.setpriority(os.PRIO_PROCESS, 0,
-                           min(19, os.getpriority(os.PRIO_PROCESS, 0) + WORKER_NICE))
-        except (AttributeError, OSError):    # not Linux: the work competes as it was
-            pass
         # a worker's first task of a kind also loads what the kind needs (OpenCV imported,
         # a detector built: seconds on a slow host): its time is not the kind's work, and
         # reported as such it made every server look seconds slow in turn as robots came
