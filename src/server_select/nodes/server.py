@@ -1,6 +1,7 @@
 """Compute server: answers latency probes, and the tasks of every type addressed to it."""
 
 import concurrent.futures
+import threading
 import time
 
 import rospy
@@ -147,7 +148,8 @@ class ServerNode(object):
             self.work.announce(req.robot_id, zip(req.task_kinds, req.task_rates))
             for kind in self._unwarmed.intersection(req.task_kinds):   # before its 1st task
                 self._unwarmed.discard(kind)
-                self._pool.submit(self._warm, kind)
+                threading.Thread(target=self._warm, args=(kind,), name='warm ' + kind,
+                                 daemon=True).start()
         load = self.work.load(req.robot_id)
         return seal.seal_answer(LatencyProbeResponse(
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),

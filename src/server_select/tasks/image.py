@@ -121,7 +121,9 @@ class Frames(TaskPlugin):
     def warm(self):
         """Load OpenCV and every worker's detector (on a server capped at a tenth of a
         core: seconds, during which its probe answers are late too)."""
-        for detector in list(self.detectors.queue):
+        with self.detectors.mutex:       # (those a worker holds load with its frame)
+            detectors = list(self.detectors.queue)
+        for detector in detectors:
             detector.load()
 
     def start(self):
