@@ -18,7 +18,7 @@ from server_select.core.config import names
 from server_select.core.util.procs import stop_group, wait_until
 from server_select.msg import SortResult, SortTask
 
-from fleet_recorder import until_answered
+from support.record import until_answered
 
 # One case per node: that a refused parameter ends the node with one clear line and exit
 # status 2. Every parameter each node refuses, and why, is test/ros/test_node_params.py's.

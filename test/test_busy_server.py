@@ -29,7 +29,7 @@ from server_select.core.util.procs import wait_until
 from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
 from server_select.srv import LatencyProbe
 
-from fleet_recorder import until_answered
+from support.record import Topics, until_answered
 
 OWN = 99           # the robot id of this node's own tasks
 
@@ -40,18 +40,12 @@ class BusyServerTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node('test_busy_server')
         cls.lock = threading.Lock()
-        cls.results, cls.reports, cls.sent = [], [], {}
-        rospy.Subscriber('/processed_data', SortResult, cls.keep, 'results', queue_size=1000,
-                         tcp_nodelay=True)
-        rospy.Subscriber('/task_report', TaskReport, cls.keep, 'reports', queue_size=1000)
+        cls.sent = {}
+        cls.topics = Topics({'results': ('/processed_data', SortResult),
+                             'reports': ('/task_report', TaskReport)}, tcp_nodelay=True)
         rospy.Subscriber('/data', SortTask, cls.on_task, queue_size=1000, tcp_nodelay=True)
         cls.flags = rospy.Publisher('/server_select_flag', SelectionFlag, queue_size=10)
         cls.tasks = rospy.Publisher('/data', SortTask, queue_size=10)
-
-    @classmethod
-    def keep(cls, msg, key):
-        with cls.lock:
-            getattr(cls, key).append((time.monotonic(), msg))
 
     @classmethod
     def on_task(cls, task):
@@ -60,8 +54,7 @@ class BusyServerTest(unittest.TestCase):
                 cls.sent.setdefault((task.task_id, task.server_id), time.monotonic())
 
     def of(self, key, test):
-        with self.lock:
-            return [(t, m) for t, m in getattr(self, key) if test(m)]
+        return self.topics.received(key, test)
 
     def occupy(self, task_id):
         """One task of this node's own for server 1: 0.6 s of work, no deadline."""

@@ -9,7 +9,6 @@ results and detections must carry the camera frame's stamp and frame_id.
 """
 
 import sys
-import threading
 import time
 import unittest
 
@@ -23,6 +22,8 @@ from server_select.vision.detection import iou
 from server_select.vision.image_codec import encode, from_array
 from server_select.vision.search import sample_image
 
+from support.record import Topics
+
 FACE = (177, 66, 95, 95)
 
 
@@ -31,14 +32,11 @@ class CameraTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node('test_camera')
-        cls.lock = threading.Lock()
-        cls.got = {'tasks': [], 'results': [], 'detections': [], 'reports': [], 'flags': []}
-        for topic, kind, key in (('/server_select_flag', SelectionFlag, 'flags'),
-                                 ('/task_image', ImageTask, 'tasks'),
-                                 ('/processed_image', ImageResult, 'results'),
-                                 ('/detections', Detections, 'detections'),
-                                 ('/task_report', TaskReport, 'reports')):
-            rospy.Subscriber(topic, kind, cls.keep, key, buff_size=1 << 24)
+        cls.topics = Topics({'flags': ('/server_select_flag', SelectionFlag),
+                             'tasks': ('/task_image', ImageTask),
+                             'results': ('/processed_image', ImageResult),
+                             'detections': ('/detections', Detections),
+                             'reports': ('/task_report', TaskReport)}, buff_size=1 << 24)
         photo = sample_image('astronaut.png')
         encoding, height, width, step, data = from_array(photo)
         cls.raw = Image(height=height, width=width, encoding=encoding, step=step, data=data)
@@ -50,14 +48,8 @@ class CameraTest(unittest.TestCase):
         cls.published = 0
         cls.stamps = {1: set(), 2: set()}      # of the frames each camera published
 
-    @classmethod
-    def keep(cls, msg, key):
-        with cls.lock:
-            cls.got[key].append(msg)
-
     def of(self, key, robot):
-        with self.lock:
-            return [m for m in self.got[key] if m.robot_id == robot]
+        return self.topics.messages(key, lambda m: m.robot_id == robot)
 
     def test_frames_from_camera_topics_are_searched_in_either_transport(self):
         # a frame before the robot's first flag is reported failed (no server selected):

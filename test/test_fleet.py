@@ -26,7 +26,7 @@ from server_select.core.config import names
 from server_select.core.config.params import parse_id_list
 from server_select.msg import SelectionFlag
 
-from fleet_recorder import FleetRecorder
+from support.record import FleetRecorder
 
 
 NO_SERVER = 'no server selected'     # the report's error when no server may be used

@@ -28,7 +28,7 @@ from server_select.msg import Detections, FoundTarget, ImageResult, ImageTask
 from server_select.vision.search import sample_image
 from server_select.srv import KnownTargets
 
-from fleet_recorder import until_answered
+from support.record import until_answered
 
 FACE = (177, 66, 95, 95)
 ROBOT = 99

@@ -17,7 +17,7 @@ import rostest
 from server_select.core.config import names
 from server_select.msg import LatencySample
 
-from fleet_recorder import FleetRecorder
+from support.record import FleetRecorder
 
 WINDOW = 2.0
 PUBLISH_RATE = 0.1

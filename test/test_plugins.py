@@ -3,7 +3,6 @@
 built-in ones: selected server, checked results, one task_report each."""
 
 import sys
-import threading
 import unittest
 
 import rospy
@@ -12,23 +11,18 @@ import rostest
 from server_select.core.util.procs import wait_until
 from server_select.msg import OrbResult, TaskReport
 
+from support.record import Topics
+
 
 class PluginTest(unittest.TestCase):
 
     def test_orb_tasks_are_answered_by_the_servers_plugin(self):
         rospy.init_node('test_plugins')
-        lock, reports, results = threading.Lock(), [], []
-
-        def keep(store):
-            def add(msg):
-                with lock:
-                    store.append(msg)
-            return add
-        rospy.Subscriber('/task_report', TaskReport, keep(reports))
-        rospy.Subscriber('/processed_orb', OrbResult, keep(results))
-        self.assertTrue(wait_until(lambda: sum(r.ok for r in reports) >= 15, 40.0), reports[-3:])
-        with lock:
-            reports, results = list(reports), list(results)
+        topics = Topics({'reports': ('/task_report', TaskReport),
+                         'results': ('/processed_orb', OrbResult)})
+        self.assertTrue(wait_until(lambda: sum(r.ok for r in topics.messages('reports')) >= 15,
+                                   40.0), topics.messages('reports')[-3:])
+        reports, results = topics.messages('reports'), topics.messages('results')
         self.assertEqual(set(r.kind for r in reports), {'orb'})
         self.assertEqual([r.error for r in reports if not r.ok], [])
         ids = sorted(r.task_id for r in reports)

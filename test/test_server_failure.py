@@ -19,7 +19,7 @@ import rostest
 from server_select.core.config.params import parse_id_list
 from server_select.ros.graph import node_pid
 
-from fleet_recorder import FleetRecorder
+from support.record import FleetRecorder
 
 
 class ServerFailureTest(unittest.TestCase):

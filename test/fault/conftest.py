@@ -13,7 +13,7 @@ from server_select.bench.harness import Roscore  # noqa: E402
 from server_select.core.trust.keys import make_key  # noqa: E402
 from server_select.ros.master_watch import MasterWatch  # noqa: E402
 
-from fleet import Recorder  # noqa: E402
+from support.fleet import Recorder  # noqa: E402
 
 
 @pytest.fixture(scope='session')

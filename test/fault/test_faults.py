@@ -19,7 +19,7 @@ import rosgraph
 
 from server_select.core.util.procs import stop_group, wait_until
 
-from fleet import NODES, Fleet, kill
+from support.fleet import NODES, Fleet, kill
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TASK_TIMEOUT = 2.0   # the robots' default

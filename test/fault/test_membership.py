@@ -20,7 +20,7 @@ from server_select.core.util.procs import stop_groups, wait_until
 from server_select.msg import FleetServers
 from server_select.ros.graph import publisher_of
 
-from fleet import Fleet
+from support.fleet import Fleet
 from test_faults import show
 
 NS = '/members'

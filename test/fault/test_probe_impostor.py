@@ -24,7 +24,7 @@ from server_select.core.config import names
 from server_select.core.util.procs import wait_until
 from server_select.msg import LatencySample
 
-from fleet import Fleet
+from support.fleet import Fleet
 from test_faults import STABLE, TASK_TIMEOUT, answered, show, warm_up
 
 HERE = os.path.dirname(os.path.abspath(__file__))

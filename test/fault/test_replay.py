@@ -21,7 +21,7 @@ from server_select.core.trust import seal
 from server_select.core.util.procs import wait_until
 from server_select.msg import SelectionFlag
 
-from fleet import Fleet
+from support.fleet import Fleet
 from test_faults import STABLE, answered, show, warm_up
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -24,7 +24,7 @@ from server_select.core.flow.outcome import STOPPED
 from server_select.msg import SortTask
 from server_select.srv import LatencyProbe
 
-from fleet import Fleet, counts
+from support.fleet import Fleet, counts
 from test_faults import STABLE, TASK_TIMEOUT, answered, show, warm_up
 
 

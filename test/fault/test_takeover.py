@@ -17,7 +17,7 @@ import time
 from server_select.core.trust.keys import make_role_key
 from server_select.core.util.procs import wait_until
 
-from fleet import Fleet
+from support.fleet import Fleet
 from test_faults import STABLE, TASK_TIMEOUT, answered, current_server, show, warm_up
 
 HERE = os.path.dirname(os.path.abspath(__file__))

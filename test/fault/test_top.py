@@ -14,7 +14,7 @@ import pytest
 
 from server_select.core.util.procs import wait_until
 
-from fleet import Fleet
+from support.fleet import Fleet
 from test_faults import STABLE, show, warm_up
 
 TOP = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'scripts', 'top')

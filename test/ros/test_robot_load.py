@@ -1,15 +1,11 @@
 """What a load-aware robot's probes announce and what it makes of the answers."""
 
-import os
-import sys
-
 import pytest
 
 from server_select.srv import LatencyProbeResponse
 from server_select.ros.load import RobotLoad
 
-sys.path.append(os.path.join(os.path.dirname(__file__), '..', 'unit'))
-from fake_clock import Clock   # noqa: E402
+from support.clock import Clock
 
 
 def test_a_probe_announces_the_robots_send_rate_only_to_where_its_tasks_go():

@@ -11,7 +11,7 @@ from server_select.core.selection.balancers import PeakEwma, Prequal, quantile
 from server_select.core.load.work_queue import Load
 from server_select.core.flow.task_flow import TaskFlow
 
-from fake_clock import Clock
+from support.clock import Clock
 
 
 class Recorded(random.Random):

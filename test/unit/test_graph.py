@@ -2,7 +2,7 @@ import rosgraph
 
 from server_select.ros.graph import ServiceProviders, publisher_of
 
-from fake_clock import Clock
+from support.clock import Clock
 
 
 class FakeMaster(object):

@@ -1,6 +1,6 @@
 from server_select.core.selection.health import DOWN, EJECTED, HEALTHY, PROBATION, ServerHealth
 
-from fake_clock import Clock
+from support.clock import Clock
 
 
 def make(**kwargs):

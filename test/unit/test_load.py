@@ -10,7 +10,7 @@ from server_select.core.load.demand import Arrivals, Demand
 from server_select.core.load.work_queue import Load, ServiceTimes, WorkQueue
 from server_select.core.load.board import LoadBoard, queueing
 
-from fake_clock import Clock
+from support.clock import Clock
 
 
 def queue_with(work, workers=1, max_queue=10, kind='image'):

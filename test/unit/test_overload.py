@@ -8,7 +8,7 @@ from server_select.core.flow.attempts import AttemptClock
 from server_select.core.flow.budget import RetryBudget
 from server_select.core.flow.task_flow import RETRIED
 
-from fake_clock import Clock
+from support.clock import Clock
 from test_task_flow import World
 
 

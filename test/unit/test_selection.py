@@ -7,7 +7,7 @@ from server_select.core.selection.policy import Policy
 from server_select.core.selection.candidates import Selection
 from server_select.core.flow.task_flow import LOCAL, NO_SERVER
 
-from fake_clock import Clock
+from support.clock import Clock
 
 
 def select(**kwargs):

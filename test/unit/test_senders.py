@@ -2,7 +2,7 @@
 
 import pytest
 
-from fake_clock import Clock
+from support.clock import Clock
 from server_select.core.trust.senders import ExpectedSender, Throttle, owned_by
 
 

@@ -9,7 +9,7 @@ from server_select.core.flow.attempts import AttemptClock
 from server_select.core.flow.task_flow import (DUPLICATE, FOREIGN, LATE, LOCAL, NO_SERVER, RETRIED,
                                                UNKNOWN, TaskFlow)
 
-from fake_clock import Clock
+from support.clock import Clock
 
 
 class World(object):

@@ -1,4 +1,6 @@
-"""Shared helper of the rostest test nodes: records what a fleet says on its topics."""
+"""What the rostest test nodes record of a fleet: :class:`Topics` (any topics, as they
+arrive) and :class:`FleetRecorder` (a fleet's flags, tasks, results, reports and probe
+samples, by routing); :func:`until_answered` (a test's first task)."""
 
 import collections
 import threading
@@ -12,6 +14,32 @@ from server_select.core.util.procs import wait_until
 from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask, TaskReport
 
 Received = collections.namedtuple('Received', 'time msg')
+
+
+class Topics(object):
+    """What some topics carry, as it arrives: ``Topics({'flags': ('/server_select_flag',
+    SelectionFlag), ...}, buff_size=1 << 24)``; every store keeps ``Received(time, msg)``
+    (monotonic receive time), and ``options`` go to every subscriber."""
+
+    def __init__(self, stores, **options):
+        self.lock = threading.Lock()
+        self._got = dict((name, []) for name in stores)
+        options.setdefault('queue_size', 1000)
+        self.subs = [rospy.Subscriber(topic, kind, self._add, name, **options)
+                     for name, (topic, kind) in sorted(stores.items())]
+
+    def _add(self, msg, name):
+        with self.lock:
+            self._got[name].append(Received(time.monotonic(), msg))
+
+    def received(self, name, test=None):
+        """The ``Received`` of store ``name`` so far (those whose message passes ``test``)."""
+        with self.lock:
+            return [r for r in self._got[name] if test is None or test(r.msg)]
+
+    def messages(self, name, test=None):
+        """The messages of :meth:`received`."""
+        return [r.msg for r in self.received(name, test)]
 
 
 def until_answered(send, answered, timeout=20.0, period=0.5):
