@@ -12,7 +12,8 @@ import pytest
 
 from server_select.testbed import bag_analysis
 from server_select.testbed.evaluation import RunOptions, run_mode
-from server_select.testbed.netns import available, leftovers, own_prefix
+from server_select.testbed.netns import available
+from server_select.testbed.traces import leftovers, own_prefix
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENARIO = os.path.join(HERE, 'join_leave.yaml')

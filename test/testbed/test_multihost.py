@@ -23,12 +23,12 @@ import time
 import pytest
 
 from server_select.core.util.procs import wait_until
-from server_select.testbed import netns
+from server_select.testbed import netns, traces
 from server_select.testbed.runner import HostRun
 from server_select.testbed.scenario import Scenario
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-PREFIX = netns.own_prefix('ssmh')     # this run's own namespaces
+PREFIX = traces.own_prefix('ssmh')     # this run's own namespaces
 LOADER = os.path.abspath(os.path.join(HERE, '..', '..', 'scripts', 'env_loader.sh'))
 WATCH = os.path.join(HERE, 'multihost_watch.py')
 SSHD = shutil.which('sshd') or '/usr/sbin/sshd'
@@ -87,7 +87,7 @@ def nodes_on(tb):
     found = {}
     for host, info in tb.hosts.items():
         names = []
-        for pid in netns.netns_pids(info['netns']):
+        for pid in traces.netns_pids(info['netns']):
             try:
                 with open('/proc/%d/cmdline' % pid, 'rb') as stream:
                     argv = stream.read().decode(errors='replace').split('\0')
@@ -194,4 +194,4 @@ def test_the_readme_several_host_commands(tmp_path):
               for r, c in sorted(robots.items())])
         assert served and all(c['failed'] == 0 for c in robots.values()), robots
         assert all(set(c['answered_by']) <= {'1', '2'} for c in robots.values()), robots
-    assert netns.leftovers(PREFIX) == []
+    assert traces.leftovers(PREFIX) == []

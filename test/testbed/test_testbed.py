@@ -13,7 +13,8 @@ import pytest
 
 from server_select.testbed import bag_analysis
 from server_select.testbed.evaluation import RunOptions, run_modes
-from server_select.testbed.netns import available, cleanup_abandoned, leftovers, own_prefix
+from server_select.testbed.netns import available
+from server_select.testbed.traces import cleanup_abandoned, leftovers, own_prefix
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENARIO = os.path.join(HERE, 'step_down.yaml')

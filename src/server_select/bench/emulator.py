@@ -19,7 +19,8 @@ from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.scenario import Scenario
 from server_select.core.util.stats import summarize
 from server_select.core.util.tables import markdown_table
-from server_select.testbed.netns import Testbed, own_prefix
+from server_select.testbed.netns import Testbed
+from server_select.testbed.traces import own_prefix
 
 CASES = [(1.0, 0.0), (5.0, 0.0), (20.0, 0.0), (100.0, 0.0), (20.0, 2.0)]
 

@@ -147,10 +147,11 @@ def scenario_run(data, work, name, prefix, record=('/task_report',)):
     lasts until the scenario's duration once the block has started the nodes. The link
     emulator's counts are then in ``work/name/link_stats.json``, and the scenario's time
     zero beside the bag (``<bag>.json``), so that a loaded bag's times are scenario times.
-    ``prefix``: the tag of the run's namespaces (``netns.own_prefix``)."""
+    ``prefix``: the tag of the run's namespaces (``traces.own_prefix``)."""
     import yaml
     from server_select.testbed.runner import HostRun
-    from server_select.testbed.netns import Testbed, own_prefix
+    from server_select.testbed.netns import Testbed
+    from server_select.testbed.traces import own_prefix
     from server_select.testbed.scenario import Scenario
     path = os.path.join(work, name + '.yaml')
     with open(path, 'w') as stream:

@@ -18,42 +18,33 @@ from server_select.ros.probe_seal import ProbeSeal
 from server_select.ros.seal import SealedPublisher
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
-
-# the error of a probe not sent because the previous one to that server is still out
-STILL_OUT = 'previous probe still in progress'
+STILL_OUT = 'previous probe still in progress'   # a probe not sent: the last one is still out
 
 
 class Prober(object):
-    """Probes the servers when ``plan`` (a :class:`~server_select.core.selection.probing.ProbePlan`)
-    says, a round when its next time comes (one thread sleeps until then), and publishes
-    each sample, failed ones too.
-    ``contenders``, for adaptive plans, is ``(rule, view)``: a
-    :class:`~server_select.core.selection.probing.ContenderRule` and the robot's
-    :class:`~server_select.core.selection.candidates.Selection`, whose ``contenders(rule)`` the plan
-    takes each tick; a sample of a background server that lands near them
-    (``view.near(rule, value)``, after ``on_sample`` has entered it) makes that server a
-    contender at once (a fast re-check).
+    """Probes the servers when ``plan`` (a ``ProbePlan``) says, a round when its next time
+    comes, and publishes each sample, failed ones too. ``contenders``, for adaptive plans,
+    is ``(rule, view)``: a ``ContenderRule`` and the robot's ``Selection``, whose
+    ``contenders(rule)`` the plan takes each tick; a sample of a background server that
+    lands near them (``view.near(rule, value)``) makes it a contender at once.
 
-    Each server is probed from a worker thread over a persistent connection, every call
-    bounded by ``timeout``; a server whose previous probe is still running gets a failed
-    sample instead of a second call. ``stream`` ``pair`` publishes each sample on
-    ``latency_R<r>S<s>`` (the paper); ``robot`` and ``view`` publish one ``latency_samples``
-    batch per round, when its last probe has ended (``view``: for recorders; the manager
-    hears the robot's own ranking instead). Servers can be added and removed at run time.
-    ``answered`` is the set of servers that have answered at least once;
-    ``on_sample(server, ok, rtt, error, wait)`` hears every sample. With ``load_of``, each
-    answer's load goes to ``load_of(server, response, rtt)``, which returns the *wait* at that
-    server (s, what a task of this robot would wait for there; None: unknown), carried in
-    the sample and in the batch's ``wait`` (a load-aware robot ranks by rtt + wait);
-    ``announce(server)`` gives the ``(task kinds, rates)`` a probe of it carries.
-    ``node_of(server, refresh)`` names the node the master says serves its probe service: with a
-    fleet key an answer counts only when sealed by that node, for this request, at the
-    address probed (:func:`server_select.ros.seal.answer_refusal`); any other answer is
-    a failed probe and a throttled warning naming the node and address that answered.
-    ``addresses`` (a :class:`~server_select.ros.membership.ProbeAddresses`, with a key):
-    each server is probed at the address, and its answers checked against the node, that
-    its sealed announcement names, whatever the master lists (a warning says when the
-    master lists another).
+    Probes go out on one loop thread over persistent connections (a probe that must
+    connect first, on a worker thread), each bounded by ``timeout``; a server whose
+    previous probe is still out gets a failed sample (:data:`STILL_OUT`) instead of a
+    second call. ``stream`` ``pair`` publishes each sample on ``latency_R<r>S<s>`` (the
+    paper); ``robot`` and ``view`` one ``latency_samples`` batch per round, when its last
+    probe has ended (``view``: for recorders; the manager hears the robot's own ranking).
+    Servers can be added and removed at run time. ``answered``: the servers that have
+    answered at least once; ``on_sample(server, ok, rtt, error, wait)`` hears every sample.
+    With ``load_of``, each answer's load goes to ``load_of(server, response, rtt)``, which
+    returns the *wait* at that server (s; None: unknown), carried in the sample and the
+    batch; ``announce(server)`` gives the ``(task kinds, rates)`` a probe of it carries.
+    ``node_of(server, refresh)`` names the node the master says serves its probe service:
+    with a fleet key an answer counts only when sealed by that node, for this request, at
+    the address probed (``seal.answer_refusal``); any other is a failed probe and a
+    throttled warning naming who answered. ``addresses`` (a ``ProbeAddresses``, with a
+    key): each server is probed at the address, and checked against the node, that its
+    sealed announcement names, whatever the master lists.
     """
 
     def __init__(self, robot_id, servers, plan, timeout, on_sample=None, stream='pair',

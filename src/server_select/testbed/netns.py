@@ -3,11 +3,9 @@
 A :class:`Testbed` gives every host of a scenario its own network namespace
 ``<prefix>-<host>`` and address ``<subnet>.<n>``, starts :mod:`server_select.testbed.linkemu`
 between them, runs commands inside hosts, and tears everything down on exit, Ctrl-C or
-error. Each run has a namespace prefix of its own (by default ``ssb<pid>``; a test or a
-benchmark names its runs with :func:`own_prefix`), so two runs on one machine leave each
-other alone; a run removes only what it created, and what a run
-whose process has died left behind (namespaces with its prefix, the processes inside
-them, a stale emulator: the state file in ``/run`` names the owner). Needs root, TUN.
+error. Each run has a namespace prefix of its own (by default ``ssb<pid>``): it removes
+only what it created, and what a run whose process has died left behind
+(:mod:`server_select.testbed.traces`). Needs root, TUN.
 """
 
 import json
@@ -18,11 +16,10 @@ import subprocess
 import sys
 import time
 
-from server_select.core.util.procs import alive, kill_all, stop_group, stop_groups
+from server_select.core.util.procs import stop_group, stop_groups
 from server_select.testbed import busy, cpu
 from server_select.testbed.linkemu import EmulatorError
-
-STATE_DIR = '/run/server_select-testbed'
+from server_select.testbed.traces import STATE_DIR, cleanup, cleanup_abandoned
 
 
 def check_privileges():
@@ -43,80 +40,6 @@ def available():
     except EmulatorError as error:
         return False, str(error)
     return True, ''
-
-
-def _netns_list():
-    out = subprocess.run(['ip', 'netns', 'list'], stdout=subprocess.PIPE,
-                         universal_newlines=True, check=False).stdout
-    return [line.split()[0] for line in out.splitlines() if line.strip()]
-
-
-def netns_pids(netns):
-    out = subprocess.run(['ip', 'netns', 'pids', netns], stdout=subprocess.PIPE,
-                         stderr=subprocess.DEVNULL, universal_newlines=True, check=False).stdout
-    return [int(p) for p in out.split()]
-
-
-def cleanup(prefix):
-    """Remove the namespaces, processes and emulator a run with ``prefix`` left behind."""
-    removed = []
-    state = os.path.join(STATE_DIR, prefix + '.json')
-    if os.path.exists(state):
-        try:
-            with open(state) as stream:
-                pid = json.load(stream).get('emulator_pid')
-            if pid and alive(pid):
-                kill_all([pid])
-                removed.append('emulator %d' % pid)
-        except (OSError, ValueError):
-            pass
-        os.unlink(state)
-    for netns in _netns_list():
-        if netns.startswith(prefix + '-'):
-            kill_all(netns_pids(netns))
-            subprocess.run(['ip', 'netns', 'del', netns], check=False)
-            removed.append(netns)
-    return removed + cpu.cleanup(prefix)
-
-
-def cleanup_abandoned():
-    """Clean up after every run whose owner process is gone; returns what was removed."""
-    removed = []
-    try:
-        states = [f for f in os.listdir(STATE_DIR) if f.endswith('.json')]
-    except OSError:
-        return removed
-    for name in states:
-        try:
-            with open(os.path.join(STATE_DIR, name)) as stream:
-                owner = json.load(stream).get('owner_pid')
-        except (OSError, ValueError):
-            continue
-        if owner and owner != os.getpid() and not alive(owner):
-            removed += cleanup(name[:-len('.json')])
-    return removed
-
-
-def leftovers(prefix):
-    """What of a testbed with ``prefix`` still exists (for tests of the teardown)."""
-    found = [n for n in _netns_list() if n.startswith(prefix + '-')]
-    links = subprocess.run(['ip', '-o', 'link'], stdout=subprocess.PIPE,
-                           universal_newlines=True, check=False).stdout
-    found += [x.split(':')[1].strip() for x in links.splitlines()
-              if x.split(':')[1].strip().startswith(prefix)] + cpu.leftovers(prefix)
-    try:
-        found += ['state file %s' % f for f in os.listdir(STATE_DIR)
-                  if f.startswith(prefix) and f.endswith('.json')]
-    except OSError:
-        pass
-    return found
-
-
-def own_prefix(tag):
-    """``tag`` (5 characters at most are kept) and this process's id: a namespace prefix
-    no other run on this machine has, that says whose the run is (a device is named by
-    the prefix and a number: 15 characters at most)."""
-    return '%s%d' % (tag[:5], os.getpid() % 100000)
 
 
 class Testbed(object):

@@ -25,7 +25,8 @@ from server_select.core.selection.balancers import PEERS
 from server_select.core.util.procs import stat_fields
 from server_select.testbed.runner import RECORDED, HostRun, RunOptions, host_ids
 from server_select.testbed.linkemu import EmulatorError
-from server_select.testbed.netns import Testbed, netns_pids
+from server_select.testbed.netns import Testbed
+from server_select.testbed.traces import netns_pids
 from server_select.testbed.scenario import Scenario, ScenarioError
 from server_select.testbed.suite_scenario import (expand, launch_args, scenario_path,
                                                   scenario_robot_args, short_name)

@@ -12,11 +12,9 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
    what a task sent then would wait for) + the work (the median of what the servers
    report, where it has done none yet); the mean of those, its noise their standard
    error, counting answers closer together than a task's work as one (they saw much the
-   same queue: sixteen answers in a window of 1.5 s about a 0.5 s frame are three
-   observations of the queue, not sixteen). (The robot's own task round trips are not
-   used: they carry the task's own message cost, which the probes do not, so that the
-   robot's own server always looked slower than the others, and robots between
-   near-equal servers moved ten times a minute. A task that fails or times out still
+   same queue). (Not the robot's own task round trips: they carry the task message's
+   cost, which probes do not, so the robot's own server looked slower than the others
+   and robots between near-equal servers moved ten times a minute. A failed task still
    ejects its server.) Robots keep a task or two out each, so servers and robots make a
    closed system: a task waits for the work in flight ahead of it, whatever the
    utilization (an open queue's mean wait, M/D/c at the reported utilization, grows
@@ -38,14 +36,13 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
    same servers do not all move to one); every candidate hot: the least work in flight;
    no answer yet from any candidate: one at random (Prequal with fewer than 2 answers),
    which also spreads robots that start together.
-5. Robots on one server read the same answers and would leave it together, each on
-   answers a window old, and herd from server to server. So a robot that would leave a
-   server it can still use (for a faster or a cold one) moves with a probability: the
-   share of the robots like it there (the others' utilization over its own, itself
-   included) whose moving makes the two servers' latencies meet (each server's as step
-   2 has it, with that many robots like this one more or fewer), spread over the tasks
-   it sends in a window (the time its answers take to show who moved); 1 where the move
-   pays even if all of them make it (a robot whose own load is small beside the
+5. Robots on one server read the same answers, a window old, and would leave it together
+   and herd. So a robot that would leave a server it can still use moves with a
+   probability: the share of the robots like it there (the others' utilization over its
+   own, itself included) whose moving makes the two servers' latencies meet (each as
+   step 2 has it, with that many robots like this one more or fewer), spread over the
+   tasks it sends in a window (the time its answers take to show who moved); 1 where the
+   move pays even if all of them make it (a robot whose own load is small beside the
    server's: every network change). Staying, it asks again with its next task. (Agents
    routing on stale information settle when each moves with a probability that shrinks
    with what their moving together would change, and oscillate when all move at once:
