@@ -55,6 +55,7 @@ def main(argv=None):
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stopped.append(True))
     end = time.monotonic() + args.seconds if args.seconds > 0 else float('inf')
+    print('busy: using %.4f of a core' % args.share, flush=True)   # started: at its pace now
     burn(args.share, lambda: stopped or time.monotonic() >= end, args.slice)
     return 0
 
