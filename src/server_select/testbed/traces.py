@@ -16,9 +16,10 @@ STATE_DIR = '/run/server_select-testbed'
 
 
 def own_prefix(tag):
-    """``tag`` (its first 5 characters) and this process's id: a prefix no other run on
-    this machine has (a device is the prefix and a number: 15 characters at most)."""
-    return '%s%d' % (tag[:5], os.getpid() % 100000)
+    """``tag`` (its first 5 characters) and this process's id in 5 digits: a prefix no other
+    run on this machine has, nor begins another's (a device is the prefix and a number: 15
+    characters at most)."""
+    return '%s%05d' % (tag[:5], os.getpid() % 100000)
 
 
 def _netns_list():
