@@ -15,13 +15,15 @@ held=$(mktemp /tmp/server_select_alongside.XXXXXX)
 # is a scheduling group of its own where the kernel groups by session (autogroup): there
 # nice counts only inside the group, so the group's own nice is set too.
 setsid bash -c 'if [ -w /proc/self/autogroup ]; then echo 19 > /proc/self/autogroup; fi;
-  exec nice -n 19 bash -c "$1"' alongside "$background_cmd" > "$held" 2>&1 &
+  nice -n 19 bash -c "$1"; status=$?; echo "=== background: done after $SECONDS s"; exit $status' \
+  alongside "$background_cmd" > "$held" 2>&1 &
 background=$!
 trap 'kill -INT -- -$background 2>/dev/null; wait $background 2>/dev/null; rm -f "$held"' EXIT
 trap 'exit 130' INT TERM
 started=$SECONDS
 "$@"
 foreground=$?
+echo "=== foreground: done after $((SECONDS - started)) s"
 echo "=== in the background since the start: $background_cmd"
 wait $background
 status=$?

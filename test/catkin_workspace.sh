@@ -26,10 +26,10 @@ run() {  # a clean environment: Debian's python3 and ROS, nothing of the caller'
 }
 passed=0; failed=0
 step() {
-  local name=$1; shift
+  local name=$1 began=$SECONDS; shift
   echo "=== catkin workspace: $name"
   if run "$*" > "$ws/$name.log" 2>&1; then
-    passed=$((passed + 1)); echo "=== $name: ok"
+    passed=$((passed + 1)); echo "=== $name: ok after $((SECONDS - began)) s"
     grep -a '^Summary:' "$ws/$name.log" || true      # catkin_test_results: every test counted
   else
     failed=$((failed + 1)); echo "=== $name: FAILED; last lines:"; tail -150 "$ws/$name.log"
