@@ -16,7 +16,7 @@ from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.load import RobotLoad
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
 from server_select.ros.prober import STILL_OUT
-from server_select.ros.robot_parts import robot_prober, robot_selection, task_stream
+from server_select.ros.robot_parts import Joining, robot_prober, robot_selection, task_stream
 from server_select.ros.node import fleet, param
 from server_select.ros.runner import run
 from server_select.ros.passive import TaskSamples
@@ -42,10 +42,9 @@ class RobotNode(object):
           ``~top_manager_node``); ``~profile``, ``~routing``, ``~sample_stream``
         - ``~mode``, ``~fixed_server``, ``~probe_rate`` or ``~contender_rate`` (adaptive), the task
           streams' (``~sort_tasks``, ``~task_rate``, ``~image_source`` or
-          ``~image_topic``, ``~frame_rate``, ``~task_plugins``, ...), failover and health
-          (``~retry_factor``, ...), policy (``~policy``, ...), ``~passive``,
-          ``~manager_node`` or, grouped, ``~group_manager_node``; ``~start_delay``;
-          capacity (``~load_aware``, ``~max_in_flight``, ``~retry_budget``)
+          ``~image_topic``, ``~frame_rate``, ``~task_plugins``, ...), failover, health and
+          policy (``~retry_factor``, ``~policy``, ...), ``~passive``, ``~manager_node`` or,
+          grouped, ``~group_manager_node``; ``~start_delay``; capacity (``~load_aware``, ...)
     :ROS Publishers:
         - ``latency_R<robot_id>S<s>`` or ``latency_samples`` (fleet); ``task_samples``;
           ``robot_rankings`` (its own ranking, ``~sample_stream view``: fleet)
@@ -98,6 +97,7 @@ class RobotNode(object):
         # one retry budget and one series of task ids for all of the robot's streams
         self.budget, self._task_ids = RetryBudget(param('retry_budget')), itertools.count(1)
         self.streams = [task_stream(self, kind, rate, mode) for kind, rate in kinds]
+        self.joining = Joining(self.streams, self.selection.add_server)
         top = param('top_manager_node')     # grouped: servers and manager from its table
         self.announcements = GroupFollower(self.robot_id, servers, top, self.on_servers,
                                            self.on_group) if top else ServerAnnouncements(
@@ -164,19 +164,19 @@ class RobotNode(object):
             self.on_failure(server, 'probe failed: %s' % error, probe=True)
 
     def on_servers(self, added, removed):
-        """Servers joined or left the fleet (``fleet_servers``)."""
+        """Servers joined (candidates once their task topics connect) or left the fleet."""
         for server in added:
-            self.selection.add_server(server)
+            for stream in self.streams:
+                stream.add_server(server)
             self.prober.add(server)
+            self.joining.add(server)
         for server in removed:
+            self.joining.discard(server)
             self.prober.remove(server)
             self.selection.remove_server(server)
             if self.load is not None:
                 self.load.forget(server)
-        for stream in self.streams:
-            for server in added:
-                stream.add_server(server)
-            for server in removed:
+            for stream in self.streams:
                 stream.remove_server(server)
 
     def on_group(self, group, servers):
@@ -212,6 +212,7 @@ class RobotNode(object):
                                    % (self.robot_id, publisher_of(flag), refused))
 
     def on_decision_timer(self, _event):
+        self.joining.check()
         local = self.selection.deciding_locally()
         starting = time.monotonic() < self._start_after + self.selection.manager_timeout
         if local and starting and not self.selection.flagged():
@@ -238,11 +239,8 @@ class RobotNode(object):
     def on_shutdown(self):
         for timer in self.timers:
             timer.shutdown()
-        for stream in self.streams:
-            stream.shutdown()
-        self.prober.shutdown()
-        if self.view is not None:
-            self.view.shutdown()
+        for part in self.streams + [self.prober] + [self.view] * (self.view is not None):
+            part.shutdown()
         rospy.loginfo(self.summary())
 
 

@@ -96,11 +96,13 @@ class TaskStream(object):
 
     def wired(self):
         """Whether the first candidate's task topic and our result topic are connected."""
-        if self.route is None:
-            return True
         candidates = self.flow.candidates()
-        return bool(candidates) and self.route.wired(
-            candidates[0], self.node_of(candidates[0]) if self.node_of else None)
+        return bool(candidates) and self.wired_to(candidates[0])
+
+    def wired_to(self, server):
+        """Whether our task topic reaches ``server`` (and our result topic hears one)."""
+        return self.route is None or self.route.wired(
+            server, self.node_of(server) if self.node_of else None)
 
     def on_timer(self):
         if rospy.is_shutdown() or (self.limit and self.flow.sent >= self.limit):
