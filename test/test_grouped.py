@@ -8,7 +8,6 @@ its tasks answered.
 """
 
 import sys
-import threading
 import unittest
 
 import rospy
@@ -20,6 +19,8 @@ from server_select.core.util.procs import wait_until
 from server_select.msg import GroupAssignments, LatencySamples, SelectionFlag, TaskReport
 from server_select.ros.graph import publisher_of
 
+from support.record import Topics
+
 ROBOTS = (1, 2)
 
 
@@ -28,32 +29,28 @@ class GroupedTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node('test_grouped')
-        cls.lock = threading.Lock()
-        cls.table, cls.batches, cls.flags, cls.reports = None, [], [], []
-        cls.subs = [
-            rospy.Subscriber(names.GROUPS_TOPIC, GroupAssignments, cls.keep_table),
-            rospy.Subscriber(names.SAMPLES_TOPIC, LatencySamples, cls.keep, 'batches'),
-            rospy.Subscriber(names.SELECTION_TOPIC, SelectionFlag, cls.keep, 'flags'),
-            rospy.Subscriber(names.TASK_REPORT_TOPIC, TaskReport, cls.keep, 'reports')]
+        cls.got = Topics({'tables': (names.GROUPS_TOPIC, GroupAssignments),
+                          'batches': (names.SAMPLES_TOPIC, LatencySamples),
+                          'flags': (names.SELECTION_TOPIC, SelectionFlag),
+                          'reports': (names.TASK_REPORT_TOPIC, TaskReport)}, clock=rospy.get_time)
 
-    @classmethod
-    def keep_table(cls, msg):
-        with cls.lock:
-            cls.table = (dict((g.group_id, list(g.servers)) for g in msg.groups),
-                         dict(zip(msg.robot_id, msg.group_id)), rospy.get_time())
-
-    @classmethod
-    def keep(cls, msg, store):
-        with cls.lock:
-            getattr(cls, store).append((rospy.get_time(), publisher_of(msg), msg))
+    def table(self):
+        """The last assignment table: ({group: servers}, {robot: group}, ROS time received),
+        or None."""
+        tables = self.got.received('tables')
+        if not tables:
+            return None
+        t, msg = tables[-1]
+        return (dict((g.group_id, list(g.servers)) for g in msg.groups),
+                dict(zip(msg.robot_id, msg.group_id)), t)
 
     def snapshot(self, store):
-        with self.lock:
-            return list(getattr(self, store))
+        """(ROS time received, sender, message) of each message of ``store``."""
+        return [(t, publisher_of(m), m) for t, m in self.got.received(store)]
 
     def test_robots_are_grouped_probe_their_group_and_follow_its_manager(self):
-        self.assertTrue(wait_until(lambda: self.table and all(
-            r in self.table[1] for r in ROBOTS), 30.0), 'assignments: %s' % (self.table,))
+        self.assertTrue(wait_until(lambda: self.table() and all(
+            r in self.table()[1] for r in ROBOTS), 30.0), 'assignments: %s' % (self.table(),))
         self.assertTrue(wait_until(lambda: all(
             sum(1 for _, _, m in self.snapshot('reports') if m.robot_id == r) >= 20
             for r in ROBOTS), 60.0))
@@ -62,7 +59,7 @@ class GroupedTest(unittest.TestCase):
             """Every robot has probed all of its probe set, been flagged and had a task
             answered since 2 s after the last table (robots that choose per task start
             sending before that: wait for the state, not for a count of tasks)."""
-            groups, assigned, since = self.table
+            groups, assigned, since = self.table()
             for robot in ROBOTS:
                 after = since + 2.0
                 probed = set().union(*([set(m.server_id) for t, _, m in
@@ -74,8 +71,8 @@ class GroupedTest(unittest.TestCase):
                                    for _, _, m in self.snapshot('reports')):
                     return False
             return True
-        self.assertTrue(wait_until(settled, 30.0), 'table %s' % (self.table,))
-        groups, assigned, since = self.table
+        self.assertTrue(wait_until(settled, 30.0), 'table %s' % (self.table(),))
+        groups, assigned, since = self.table()
         reports = [m for _, _, m in self.snapshot('reports')]
         self.assertEqual([(m.robot_id, m.task_id, m.error) for m in reports if not m.ok], [])
         for robot in ROBOTS:

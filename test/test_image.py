@@ -9,7 +9,6 @@
 """
 
 import sys
-import threading
 import time
 import unittest
 
@@ -28,7 +27,7 @@ from server_select.msg import Detections, FoundTarget, ImageResult, ImageTask
 from server_select.vision.search import sample_image
 from server_select.srv import KnownTargets
 
-from support.record import until_answered
+from support.record import Topics, until_answered
 
 FACE = (177, 66, 95, 95)
 ROBOT = 99
@@ -39,27 +38,16 @@ class ImageTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node('test_image')
-        cls.lock = threading.Lock()
-        cls.results, cls.detections, cls.found = {}, {}, []
-        cls.subs = [
-            rospy.Subscriber(names.IMAGE_RESULT_TOPIC, ImageResult, cls.keep, 'results',
-                             tcp_nodelay=True, buff_size=1 << 24),
-            rospy.Subscriber(names.DETECTIONS_TOPIC, Detections, cls.keep, 'detections',
-                             tcp_nodelay=True),
-            rospy.Subscriber(names.FOUND_TARGETS_TOPIC, FoundTarget, cls.keep_found,
-                             tcp_nodelay=True)]
+        cls.got = Topics({'results': (names.IMAGE_RESULT_TOPIC, ImageResult),
+                          'detections': (names.DETECTIONS_TOPIC, Detections),
+                          'found': (names.FOUND_TARGETS_TOPIC, FoundTarget)},
+                         tcp_nodelay=True, buff_size=1 << 24)
         cls.pub = rospy.Publisher(names.IMAGE_TASK_TOPIC, ImageTask, queue_size=10)
 
-    @classmethod
-    def keep(cls, msg, store):
-        if msg.robot_id == ROBOT:
-            with cls.lock:
-                getattr(cls, store)[msg.task_id] = msg
-
-    @classmethod
-    def keep_found(cls, msg):
-        with cls.lock:
-            cls.found.append((time.monotonic(), msg))
+    def mine(self, store, task_id):
+        """The last message of ``store`` about our task ``task_id`` (None: none yet)."""
+        got = self.got.messages(store, lambda m: m.robot_id == ROBOT and m.task_id == task_id)
+        return got[-1] if got else None
 
     @staticmethod
     def wait(condition, timeout):
@@ -77,15 +65,17 @@ class ImageTest(unittest.TestCase):
 
     def send(self, task_id, fields):
         self.publish(task_id, fields)
-        self.assertTrue(self.wait(lambda: task_id in self.results, 10.0), 'no result %d' % task_id)
-        return self.results[task_id], self.detections.get(task_id)
+        self.assertTrue(self.wait(lambda: self.mine('results', task_id), 10.0),
+                        'no result %d' % task_id)
+        return self.mine('results', task_id), self.mine('detections', task_id)
 
     def test_server_detects_in_every_encoding_and_refuses_others(self):
         self.assertTrue(self.wait(lambda: self.pub.get_num_connections() >= 2
-                                  and self.subs[0].get_num_connections() >= 2, 20.0))
+                                  and self.got.subs[2].get_num_connections() >= 2, 20.0))
         astronaut = sample_image('astronaut.png')
         self.assertTrue(until_answered(lambda: self.publish(0, from_array(astronaut, 'bgr8')),
-                                       lambda: 0 in self.results and 0 in self.detections),
+                                       lambda: self.mine('results', 0)
+                                       and self.mine('detections', 0)),
                         'server 2 never answered')
         gray = cv2.cvtColor(astronaut, cv2.COLOR_BGR2GRAY)
         boxes = {}
@@ -127,9 +117,9 @@ class ImageTest(unittest.TestCase):
         self.assertTrue(result.ok)
 
     def test_target_found_by_robot1_is_known_to_robot2_within_one_second(self):
-        self.assertTrue(self.wait(lambda: any(m.robot_id == 1 for _, m in self.found), 60.0),
-                        'robot 1 found nothing')
-        found_at, first = next((t, m) for t, m in self.found if m.robot_id == 1)
+        self.assertTrue(self.wait(lambda: self.got.messages('found', lambda m: m.robot_id == 1),
+                                  60.0), 'robot 1 found nothing')
+        found_at, first = next((t, m) for t, m in self.got.received('found') if m.robot_id == 1)
         known = rospy.ServiceProxy('/robot2/known_targets', KnownTargets, persistent=True)
         rospy.wait_for_service('/robot2/known_targets', 5.0)
 
@@ -140,7 +130,8 @@ class ImageTest(unittest.TestCase):
                         'robot 2 did not learn of the target within 1 s')
         self.assertLess(abs(first.x - 420) + abs(first.y - 240), 150, (first.x, first.y))
         time.sleep(2.0)
-        self.assertEqual([m.robot_id for _, m in self.found], [1], 'reported more than once')
+        self.assertEqual([m.robot_id for m in self.got.messages('found')], [1],
+                         'reported more than once')
 
 
 def padded(fields, padding):

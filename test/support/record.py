@@ -19,10 +19,11 @@ Received = collections.namedtuple('Received', 'time msg')
 class Topics(object):
     """What some topics carry, as it arrives: ``Topics({'flags': ('/server_select_flag',
     SelectionFlag), ...}, buff_size=1 << 24)``; every store keeps ``Received(time, msg)``
-    (monotonic receive time), and ``options`` go to every subscriber."""
+    (the receive time by ``clock``: monotonic, or ``rospy.get_time`` to compare with
+    stamps), and ``options`` go to every subscriber."""
 
-    def __init__(self, stores, **options):
-        self.lock = threading.Lock()
+    def __init__(self, stores, clock=time.monotonic, **options):
+        self.lock, self.clock = threading.Lock(), clock
         self._got = dict((name, []) for name in stores)
         options.setdefault('queue_size', 1000)
         self.subs = [rospy.Subscriber(topic, kind, self._add, name, **options)
@@ -30,7 +31,7 @@ class Topics(object):
 
     def _add(self, msg, name):
         with self.lock:
-            self._got[name].append(Received(time.monotonic(), msg))
+            self._got[name].append(Received(self.clock(), msg))
 
     def received(self, name, test=None):
         """The ``Received`` of store ``name`` so far (those whose message passes ``test``)."""
