@@ -96,10 +96,11 @@ def _kill(pid, sig):
 
 
 class Fleet(object):
-    """``demo.launch`` with ``args`` (3 servers, 2 robots by default), under one roslaunch."""
+    """``demo.launch`` with ``args`` (3 servers, 2 robots by default), under one roslaunch;
+    each robot's first task waits until this node hears its task reports."""
 
     def __init__(self, log, **args):
-        self.log, self.args = log, args
+        self.log, self.args = log, dict({'report_listeners': rospy.get_name()}, **args)
         self.extra = []
         self.signalled = set()   # pids: a stopped node cannot tell its pid any more
 
@@ -162,6 +163,7 @@ class Fleet(object):
         rate = ['_task_rate:=%s' % self.args['task_rate']] if 'task_rate' in self.args else []
         return self.start('rosrun', 'server_select', 'robot', '_robot_id:=%d' % robot,
                           '_servers:=1,2,3', '__name:=robot%d' % robot, *rate,
+                          '_report_listeners:=%s' % rospy.get_name(),
                           *['_%s:=%s' % (k, self.args[k]) for k in ('fleet_key', 'hysteresis')
                             if k in self.args])
 

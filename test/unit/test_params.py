@@ -3,7 +3,8 @@ import pytest
 from server_select.core.config import names
 from server_select.core.config.params import (ParamError, parse_fixed_server, parse_id,
                                               parse_id_list, parse_members, parse_mode,
-                                              parse_non_negative, parse_positive)
+                                              parse_node_names, parse_non_negative,
+                                              parse_positive)
 
 
 @pytest.mark.parametrize('value, expected', [
@@ -80,6 +81,18 @@ def test_fixed_server_must_be_listed():
                                              ('3,1', [3, 1]), ([2], [2])])
 def test_member_lists_may_be_empty(value, expected):
     assert parse_members('~servers', value) == expected
+
+
+@pytest.mark.parametrize('value, expected', [('', []), ([], []), (None, []),
+                                             ('/rec', ['/rec']), ('/a, b', ['/a', 'b']),
+                                             (['/a', '/b'], ['/a', '/b'])])
+def test_node_name_lists_may_be_empty(value, expected):
+    assert parse_node_names('~report_listeners', value) == expected
+
+
+def test_node_name_lists_are_names():
+    with pytest.raises(ParamError, match='list of names'):
+        parse_node_names('~report_listeners', [1, 2])
 
 
 def test_member_lists_refuse_what_id_lists_refuse():

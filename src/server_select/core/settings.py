@@ -13,7 +13,8 @@ from server_select.core.selection.policy import POLICIES
 from server_select.core.selection.window import STATISTICS
 from server_select.core.config.params import (one_of, parse_bool, parse_count, parse_id,
                                               parse_members, parse_mode, parse_names,
-                                              parse_non_negative, parse_node_pattern, parse_number,
+                                              parse_node_names, parse_non_negative,
+                                              parse_node_pattern, parse_number,
                                               parse_plugins, parse_positive, parse_positive_int,
                                               parse_publisher, parse_quantile, parse_text)
 
@@ -75,6 +76,9 @@ PARAMS = {
     'task_timeout': Param(2.0, parse_positive, 'a task without result after this fails (s)'),
     'tasks': Param(0, parse_count, 'stop each stream after this many tasks (0: never)'),
     'start_delay': Param(0.0, parse_non_negative, 'seconds to wait before the first task'),
+    'report_listeners': Param([], parse_node_names, 'the first task waits until these nodes '
+                              'hear task_report, and the task topics they subscribe to (a '
+                              'recorder that must see every task; empty: start at once)'),
     'summary_period': Param(10.0, parse_positive, 'period of the log summary (s)'),
     'seed': Param(None, parse_id, 'task data random seed (default: the robot id)'),
     'image_source': Param('', parse_text, 'folder, video file or search:<area.yaml>'),

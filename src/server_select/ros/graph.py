@@ -1,5 +1,5 @@
 """Look-ups in the ROS graph: which process a node is, who published a message, who
-provides a service."""
+provides a service, who hears a publisher."""
 
 import threading
 import time
@@ -55,6 +55,23 @@ class Liveness(object):
         with self._lock:
             self._known[node] = (now, alive)
         return alive
+
+
+def hearing(pub):
+    """The nodes connected to ``pub`` (rospy names a connection by its subscriber)."""
+    return set(c.endpoint_id for c in list(pub.impl.connections))
+
+
+def unheard(nodes, first, others, caller_id):
+    """The nodes of ``nodes`` that do not hear yet what they listen to: the publisher
+    ``first`` (each must), and those of the publishers ``others`` whose topics the master
+    says they subscribe to."""
+    missing = [n for n in nodes if n not in hearing(first)]
+    if missing or not others:
+        return missing
+    subscribers = dict(rosgraph.Master(caller_id).getSystemState()[1])
+    return [n for n in nodes if any(n in subscribers.get(p.resolved_name, ())
+                                    and n not in hearing(p) for p in others)]
 
 
 def publisher_of(msg):

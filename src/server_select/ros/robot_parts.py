@@ -4,6 +4,8 @@ servers that joined and wait for their task topics."""
 
 import functools
 
+import rospy
+
 from server_select.core.config.params import ParamError, parse_fixed_server
 from server_select.core.flow.attempts import AttemptClock
 from server_select.core.selection import probing
@@ -72,7 +74,8 @@ def task_stream(robot, kind, rate, mode):
                                if robot.load and kind.newest_wins and fresh > 0 else None),
         on_answer=functools.partial(robot.passive.on_answer, kind.kind)
         if robot.passive else None), local=mode == 'local',
-        expected_publisher=robot.server_node, route=ROUTES[param('routing')], load=robot.load)
+        expected_publisher=robot.server_node, route=ROUTES[param('routing')], load=robot.load,
+        listeners=[rospy.resolve_name(n) for n in param('report_listeners')])
 
 
 class Joining(object):

@@ -34,6 +34,9 @@ class BroadcastRoute(object):
     def publish(self, request, _server):
         self.pub.publish(request)
 
+    def publishers(self):
+        return [self.pub]
+
     def wired(self, _server, node=None):
         """Whether our result topic hears a server and our task topic reaches ``node`` (the
         server's node name; None: unknown, any server will do). A robot started again under
@@ -80,6 +83,10 @@ class DirectRoute(object):
 
     def publish(self, request, server):
         self._pub(server).publish(request)
+
+    def publishers(self):
+        with self._lock:
+            return list(self.pubs.values())
 
     def wired(self, server, _node=None):
         # The server makes our result publisher at our first task and waits for us to

@@ -15,7 +15,7 @@ from server_select.core.util.stats import format_ms, summarize
 from server_select.core.flow.outcome import STOPPED
 from server_select.core.flow.task_flow import ENDED, RETRIED, TaskFlow
 from server_select.msg import TaskReport
-from server_select.ros.graph import publisher_of
+from server_select.ros.graph import publisher_of, unheard
 from server_select.ros.senders import SenderGate
 from server_select.ros.node import fleet, flush
 from server_select.ros.routing import BroadcastRoute
@@ -27,9 +27,11 @@ class TaskStream(object):
     ``rate``.
 
     The stream waits until ``ready()`` and, unless the robot works ``local``ly, until its
-    task and result topics are connected; then it sends a task every ``1/rate`` s (at most
-    ``limit``, 0: no limit) and publishes one ``task_report`` per task. A result counts
-    only if the node ``expected_publisher(server, refresh)`` names published it (a
+    task and result topics are connected, and until every node of ``listeners`` (a
+    recorder that must see every task) hears its task reports, and its tasks where it
+    subscribes to them; then it sends a task every ``1/rate`` s (at most ``limit``, 0: no
+    limit) and publishes one ``task_report`` per task. A result counts only if the node
+    ``expected_publisher(server, refresh)`` names published it (a
     :class:`~server_select.ros.senders.SenderGate`).
     With ``load`` (a :class:`~server_select.ros.load.RobotLoad`: load-aware), each attempt
     tells its server the seconds its robot still waits (``budget``), and the load board
@@ -44,8 +46,9 @@ class TaskStream(object):
     """
 
     def __init__(self, robot_id, kind, rate, limit, ready, flow_args, local=False,
-                 expected_publisher=None, route=BroadcastRoute, load=None):
+                 expected_publisher=None, route=BroadcastRoute, load=None, listeners=()):
         self.robot_id, self.kind, self.rate, self.limit = robot_id, kind, rate, limit
+        self.listeners = list(listeners)
         self.ready, self.local, self.load = ready, local, load
         self.senders = SenderGate('robot %d' % robot_id, 'server {key}',
                                   lookup=expected_publisher)
@@ -99,6 +102,13 @@ class TaskStream(object):
         candidates = self.flow.candidates()
         return bool(candidates) and self.wired_to(candidates[0])
 
+    def deaf(self):
+        """The nodes of ``listeners`` that do not hear our task reports yet, or our tasks
+        where they subscribe to them."""
+        return unheard(self.listeners, self.report_pub, self.route.publishers()
+                       if self.route is not None else [], rospy.get_name()) \
+            if self.listeners else []
+
     def wired_to(self, server):
         """Whether our task topic reaches ``server`` (and our result topic hears one)."""
         return self.route is None or self.route.wired(
@@ -120,9 +130,11 @@ class TaskStream(object):
             return
         self._no_input_since = None
         if not self.started:
-            if not (self.ready() and self.wired()):
-                rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for a server'
-                                       % (self.robot_id, self.flow.kind))
+            deaf = self.deaf()
+            if deaf or not (self.ready() and self.wired()):
+                rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for %s' % (
+                    self.robot_id, self.flow.kind, '%s to hear them' % ', '.join(deaf)
+                    if deaf else 'a server'))
                 return
             self.started = True
             rospy.loginfo('robot %d: sending %s tasks', self.robot_id, self.flow.kind)

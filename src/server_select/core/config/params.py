@@ -169,6 +169,11 @@ def parse_names(name, value):
     return value
 
 
+def parse_node_names(name, value):
+    """A possibly empty list of node names (a YAML list, or one string)."""
+    return [] if value in ('', None, []) else parse_names(name, value)
+
+
 def parse_plugins(name, value):
     """A possibly empty list of ``module:Class`` names (a YAML list, or one string)."""
     if value in ('', None, []):
