@@ -198,16 +198,20 @@ check: deps
 	@cd $(TOP) && $(LINT) && env -u PYTHONPATH ROS_PACKAGE_PATH=$(TOP) \
 	  $(PY) -m pytest -q -p no:cacheprovider test/unit
 
-# Lint first. Then two streams at once (test/alongside.sh). In the background: the package
-# in a fresh catkin workspace (`catkin_make run_tests` runs every launch-level rostest once,
-# then the demo and a bag), then one tiny run of every benchmark; their output comes last.
-# In the foreground: the unit tests, the ROS-side tests that need the build but no master,
-# the testbed tests (root and TUN; reported as skipped elsewhere), then the fault tests (a
-# roscore of their own, real signals; they print their counts). The slowest are listed.
+# Lint first. Then three streams at once (test/alongside.sh; each mostly waits for nodes,
+# messages and windows: alone, a stream kept this host's 2 cores about half busy). At the
+# lowest priority: the package in a fresh catkin workspace (`catkin_make run_tests` runs
+# every launch-level rostest once, then the demo and a bag), then one tiny run of every
+# benchmark. At normal priority, each in a scheduling group of its own: the fault tests (a
+# roscore of their own, real signals; they print their counts), and in the foreground the
+# unit tests, the ROS-side tests that need the build but no master and the testbed tests
+# (root and TUN; reported as skipped elsewhere). The streams held back print when the
+# foreground is done; the slowest tests are listed.
 test: build
 	@$(ROSENV) cd $(TOP) && $(LINT) && bash test/alongside.sh \
 	  'bash test/catkin_workspace.sh; c=$$?; $(PY) -m pytest -q -rs --durations=5 test/bench && exit $$c' \
-	  bash -c '$(PY) -m pytest -q -rs --durations=20 test/unit test/ros test/testbed && $(FAULT_TEST)'
+	  bash test/alongside.sh --nice 0 '$(FAULT_TEST)' \
+	  $(PY) -m pytest -q -rs --durations=20 test/unit test/ros test/testbed
 
 # The package in a fresh catkin workspace with Debian's packages only: catkin_make,
 # catkin_make run_tests, the timed demo.
