@@ -199,7 +199,8 @@ check: deps
 	  $(PY) -m pytest -q -p no:cacheprovider test/unit
 
 # Lint first. Then three streams at once (test/alongside.sh; each mostly waits for nodes,
-# messages and windows: alone, a stream kept this host's 2 cores about half busy). At the
+# messages and windows: alone, a stream kept this host's 2 cores about half busy), after
+# the tests of CPU limits (QUIET_TESTS: they need no other work beside them). At the
 # lowest priority: the package in a fresh catkin workspace (`catkin_make run_tests` runs
 # every launch-level rostest once, then the demo and a bag), then one tiny run of every
 # benchmark. At normal priority, each in a scheduling group of its own: the fault tests (a
@@ -210,8 +211,11 @@ check: deps
 test: build
 	@$(ROSENV) cd $(TOP) && $(LINT) && bash test/alongside.sh \
 	  'bash test/catkin_workspace.sh; c=$$?; $(PY) -m pytest -q -rs --durations=5 test/bench && exit $$c' \
-	  bash test/alongside.sh --nice 0 '$(FAULT_TEST)' \
-	  $(PY) -m pytest -q -rs --durations=20 test/unit test/ros test/testbed
+	  bash -c '$(PY) -m pytest -q -rs $(QUIET_TESTS) && bash test/alongside.sh --nice 0 \
+	    "$(FAULT_TEST)" $(PY) -m pytest -q -rs --durations=20 --ignore=$(QUIET_TESTS) \
+	    test/unit test/ros test/testbed'
+# Tests that measure this machine's CPU: first, while only the lowest priority runs beside.
+QUIET_TESTS := test/testbed/test_cpu_limit.py
 
 # The package in a fresh catkin workspace with Debian's packages only: catkin_make,
 # catkin_make run_tests, the timed demo.
