@@ -205,6 +205,13 @@ class FleetTest(unittest.TestCase):
                                              if i not in unserved])
             answers = collections.Counter(
                 (r.msg.task_id, r.msg.server_id) for r in results if r.msg.robot_id == robot)
+            # direct routing: a server makes its result topic to a robot at that robot's
+            # first task and waits for the robot to connect, not for this test: that first
+            # answer may pass before the test hears the topic
+            first_to = {}
+            for task_id in sorted(sends):
+                for server in (c.server_id for c in sends[task_id]):
+                    first_to.setdefault(server, task_id)
             extra = 0
             for task_id, copies in sends.items():
                 report = by_id[task_id]
@@ -221,7 +228,9 @@ class FleetTest(unittest.TestCase):
                 # each server that got the task answered it once; no other server did
                 for server in targets:
                     self.assertLessEqual(answers[(task_id, server)], 1, what)
-                self.assertEqual(answers[(task_id, report.answered_by)], 1, what)
+                heard = (0, 1) if self.direct and first_to.get(report.answered_by) == task_id \
+                    else (1,)
+                self.assertIn(answers[(task_id, report.answered_by)], heard, what)
                 self.assertEqual(sum(n for (t, s), n in answers.items()
                                      if t == task_id and s not in targets), 0, what)
                 if report.attempts == 1:
