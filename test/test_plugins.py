@@ -20,8 +20,14 @@ class PluginTest(unittest.TestCase):
         rospy.init_node('test_plugins')
         topics = Topics({'reports': ('/task_report', TaskReport),
                          'results': ('/processed_orb', OrbResult)})
-        self.assertTrue(wait_until(lambda: sum(r.ok for r in topics.messages('reports')) >= 15,
-                                   40.0), topics.messages('reports')[-3:])
+
+        def reported_in_full():
+            """15 answered, and every task up to the last reported one reported (reports
+            come as tasks end: a task on its second attempt after later ones)."""
+            ids = sorted(r.task_id for r in topics.messages('reports'))
+            return sum(r.ok for r in topics.messages('reports')) >= 15 and \
+                ids == list(range(1, len(ids) + 1))
+        self.assertTrue(wait_until(reported_in_full, 40.0), topics.messages('reports')[-3:])
         reports, results = topics.messages('reports'), topics.messages('results')
         self.assertEqual(set(r.kind for r in reports), {'orb'})
         self.assertEqual([r.error for r in reports if not r.ok], [])
