@@ -43,6 +43,8 @@ class ProbeSeal(object):
 
     def forgery(self, server, response, proxy, request):
         """Why the answer is not the server's, by the fleet key (None: it is, or no key)."""
+        if not seal.enabled():
+            return None     # no key: nothing to check, no node to look up
         node = self.node(server)
         forged = seal.answer_refusal(response, proxy.resolved_name, proxy.uri, request,
                                      node or '?')

@@ -15,7 +15,7 @@ from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
 from server_select.ros.probe_loop import ProbeLoop
 from server_select.ros.probe_seal import ProbeSeal
-from server_select.ros.seal import SealedPublisher
+from server_select.ros.seal import SealedPublisher, enabled as keyed
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
 STILL_OUT = 'previous probe still in progress'   # a probe not sent: the last one is still out
@@ -58,7 +58,7 @@ class Prober(object):
         self.load_of = load_of
         self.announce = announce
         self.seal = ProbeSeal(robot_id, node_of, addresses)
-        self._nonce = random.SystemRandom()
+        self._nonce, self._keyed = random.SystemRandom(), keyed()
         self._seq = itertools.count(1)
         self._rounds = itertools.count(1)
         self._lock = threading.Lock()
@@ -153,8 +153,9 @@ class Prober(object):
 
     def _request(self, server, seq):
         stamp = rospy.Time.now()
+        # the nonce makes a sealed answer fit one request: without a key, none is drawn
         request = LatencyProbeRequest(robot_id=self.robot_id, seq=seq, stamp=stamp,
-                                      nonce=self._nonce.getrandbits(64))
+                                      nonce=self._nonce.getrandbits(64) if self._keyed else 0)
         if self.announce is not None:
             request.task_kinds, request.task_rates = self.announce(server)
         return stamp, request
