@@ -29,7 +29,7 @@ def test_a_server_of_both_task_types_loads_opencv_once_a_robot_says_it_sends_fra
     import sys
     code = ('import sys\nimport server_select.nodes.server\n'
             'from server_select.core.settings import default\n'
-            'from server_select.ros.task_kinds import server_kinds\n'
+            'from server_select.tasks.kinds import server_kinds\n'
             'kinds = dict((k.kind, k) for k in server_kinds(\n'
             '    lambda name, default_=None: default(name), 2))\n'
             'at_start = "cv2" in sys.modules\n'

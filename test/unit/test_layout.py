@@ -163,3 +163,22 @@ def test_no_module_imports_itself_through_others():
     for module in sorted(graph):
         visit(module, [])
     assert cycles == []
+
+
+# the package's layers, each importing only those before it (generated messages aside)
+LAYERS = ('core', 'vision', 'ros', 'tasks', 'testbed', 'nodes', 'bench')
+
+
+def test_layers_import_only_those_below_them():
+    """One import direction between the layers: ``ros/`` knows no task type, ``tasks/`` no
+    node, nothing below the testbed or the nodes a benchmark."""
+    upward = set()
+    for path in modules():
+        layer = (module_name(path).split('.') + [''])[1]
+        if layer not in LAYERS:
+            continue
+        for name in imports_of(path):
+            used = name.split('.')[1] if name.count('.') else ''
+            if used in LAYERS and LAYERS.index(used) > LAYERS.index(layer):
+                upward.add((layer, used))
+    assert sorted(upward) == []

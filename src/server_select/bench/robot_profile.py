@@ -25,7 +25,7 @@ PARTS = (   # (part, what the file of the innermost frame of ours contains)
     ('ranking messages', ('ros/view.py',)),
     ('flags', ('ros/flags.py',)),
     ('task path', ('core/flow/', 'ros/task_stream.py', 'ros/routing.py', 'server_select/tasks/',
-                   'ros/camera.py', 'vision/', 'ros/task_kinds.py')),
+                   'ros/camera.py', 'vision/', 'tasks/kinds.py')),
     ('membership', ('ros/membership.py', 'ros/graph.py', 'ros/senders.py',
                     'ros/master_watch.py')),
     ('seal', ('core/trust/',)),

@@ -21,7 +21,7 @@ from server_select.ros.node import fleet, param
 from server_select.ros.runner import run
 from server_select.ros.passive import TaskSamples
 from server_select.ros.senders import SenderGate
-from server_select.ros.task_kinds import stream_kinds
+from server_select.tasks.kinds import stream_kinds
 from server_select.ros.view import RankingSender
 from server_select.tasks.image import Frames
 

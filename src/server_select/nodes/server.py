@@ -15,7 +15,7 @@ from server_select.ros.node import fleet, live_param, param
 from server_select.ros.runner import run
 from server_select.ros.plugins import PluginHandler
 from server_select.ros.server_work import ServerWork
-from server_select.ros.task_kinds import server_kinds
+from server_select.tasks.kinds import server_kinds
 from server_select.srv import LatencyProbe, LatencyProbeResponse
 
 
