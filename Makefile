@@ -211,9 +211,9 @@ check: deps
 test: build
 	@$(ROSENV) cd $(TOP) && $(LINT) && bash test/alongside.sh \
 	  'bash test/alongside.sh "$(PY) -m pytest -q -rs --durations=5 test/bench" bash test/catkin_workspace.sh' \
-	  bash -c '$(PY) -m pytest -q -rs $(QUIET_TESTS) && bash test/alongside.sh --nice 0 \
+	  bash -c '$(PY) -m pytest -q -rs $(QUIET_TESTS); quiet=$$?; bash test/alongside.sh --nice 0 \
 	    "$(FAULT_TEST)" $(PY) -m pytest -q -rs --durations=20 --ignore=$(QUIET_TESTS) \
-	    test/unit test/ros test/testbed'
+	    test/unit test/ros test/testbed && exit $$quiet'
 # Tests that measure this machine's CPU: first, while only the lowest priority runs beside.
 QUIET_TESTS := test/testbed/test_cpu_limit.py
 

@@ -69,7 +69,10 @@ def unheard(nodes, first, others, caller_id):
     missing = [n for n in nodes if n not in hearing(first)]
     if missing or not others:
         return missing
-    subscribers = dict(rosgraph.Master(caller_id).getSystemState()[1])
+    try:
+        subscribers = dict(rosgraph.Master(caller_id).getSystemState()[1])
+    except (rosgraph.MasterError, OSError):
+        return list(nodes)      # the master is away: nothing is known to be heard
     return [n for n in nodes if any(n in subscribers.get(p.resolved_name, ())
                                     and n not in hearing(p) for p in others)]
 

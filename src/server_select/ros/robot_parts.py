@@ -3,6 +3,7 @@ wires them): its selection and health table, its prober, a task stream per kind,
 servers that joined and wait for their task topics."""
 
 import functools
+import threading
 
 import rospy
 
@@ -87,17 +88,21 @@ class Joining(object):
     def __init__(self, streams, admit):
         self.streams, self.admit = streams, admit
         self.waiting = set()
+        self._lock = threading.Lock()   # membership's thread adds, the robot's timer checks
 
     def add(self, server):
-        self.waiting.add(server)
+        with self._lock:
+            self.waiting.add(server)
         self.check()
 
     def discard(self, server):
-        self.waiting.discard(server)
+        with self._lock:
+            self.waiting.discard(server)
 
     def check(self):
         """Admit the servers whose task topics are connected now (the robot's timer)."""
-        for server in sorted(self.waiting):
-            if all(stream.wired_to(server) for stream in self.streams):
-                self.waiting.discard(server)
-                self.admit(server)
+        with self._lock:
+            for server in sorted(self.waiting):
+                if all(stream.wired_to(server) for stream in self.streams):
+                    self.waiting.discard(server)
+                    self.admit(server)
