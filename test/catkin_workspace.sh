@@ -33,6 +33,10 @@ step() {
     grep -a '^Summary:' "$ws/$name.log" || true      # catkin_test_results: every test counted
   else
     failed=$((failed + 1)); echo "=== $name: FAILED; last lines:"; tail -150 "$ws/$name.log"
+    # the workspace goes with this script: what its robots warned of and waited for, kept
+    echo "=== $name: the robots' warnings, errors and waits (last 120):"
+    grep -a -H -E '\[(WARN|ERROR)\]|wait for' "$ws"/ros_home/log/*/robot*-stdout.log 2>/dev/null \
+      | sed "s|$ws/ros_home/log/||" | tail -120
   fi
 }
 step run_tests "catkin_make run_tests -j1 && catkin_test_results --verbose build/test_results"
