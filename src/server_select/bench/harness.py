@@ -3,6 +3,7 @@
 import contextlib
 import json
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -53,7 +54,15 @@ class Roscore(object):
         return self
 
     def __exit__(self, *exc):
+        # roslaunch starts rosout in a process group of its own: stopping roscore's group
+        # left it running (one rosout a fault-test run); its pid from its own XML-RPC API
+        rosout = pid_or_none('/rosout', self.uri)
         stop_group(self.proc)
+        if rosout is not None:
+            try:
+                os.kill(rosout, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
         return False
 
 
