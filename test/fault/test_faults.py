@@ -219,9 +219,13 @@ def test_roscore_restart(ros):
     core = ros['core']
     with Fleet(ros['log'], task_rate=5) as fleet:
         warm_up(rec)
-        master_pid = rosgraph.Master('/fault_tests').getPid()
+        # roscore's every process: roslaunch, rosmaster and rosout (each in a process
+        # group of its own: a rosout left running would outlive the tests)
+        master_pid, rosout_pid = rosgraph.Master('/fault_tests').getPid(), fleet.pid('/rosout')
         stop_group(core.proc, signal.SIGKILL)
-        os.kill(master_pid, signal.SIGKILL)
+        for pid in (master_pid, rosout_pid):
+            if pid is not None:
+                os.kill(pid, signal.SIGKILL)
         t_down = time.monotonic()
         # the master is down until 40 tasks were answered without it (at 5 Hz, 4 s)
         wait_until(lambda: answered(rec, 1, t_down, 20) and answered(rec, 2, t_down, 20), 15.0)
