@@ -68,11 +68,15 @@ CAMERA_RAW = _serialized(Image(**dict(zip(('encoding', 'height', 'width', 'step'
 def nodes(ros):
     for name, value in {'server_id': 1, 'robot_id': 1, 'robots': '1,2', 'servers': '1,2',
                         'max_task_len': 2000, 'image_source': 'search:' + AREA,
-                        'frame_rate': 1.0, 'task_rate': 1.0}.items():
+                        'frame_rate': 1.0, 'task_rate': 1.0, 'tasks': 1}.items():
         rospy.set_param('~' + name, value)
     built = {'server': ServerNode(), 'manager': ManagerNode(), 'robot': RobotNode()}
     for node in built.values():
         node.start()
+    # the robot's one task of each kind ended before any count is read: the server tests
+    # count what server 1 worked on, and a task of this robot's would count as theirs
+    assert wait_until(lambda: all(s.flow.sent >= 1 and not len(s.flow)
+                                  for s in built['robot'].streams), 30.0)
     yield built
     built['robot'].on_shutdown()       # its timers, streams and prober
     for timer in built['manager'].timers:
