@@ -14,7 +14,7 @@ import time
 import rospy
 
 from server_select.core.config import names
-from server_select.ros.graph import publisher_of
+from server_select.ros.graph import hearing, publisher_of
 from server_select.ros.node import fleet
 from server_select.ros.seal import SealedPublisher
 
@@ -45,7 +45,7 @@ class BroadcastRoute(object):
         if not (self.pub.get_num_connections() > 0 and self.sub.get_num_connections() > 0):
             return False
         # rospy names a publisher's connection by its subscriber's caller id
-        return node is None or node in [c.endpoint_id for c in list(self.pub.impl.connections)]
+        return node is None or node in hearing(self.pub)
 
     def add(self, server):
         pass
