@@ -264,12 +264,3 @@ def test_demand_keeps_running_sums_and_forgets_robots_that_stopped_probing():
     assert demand.rates(4.5) == {'image': pytest.approx(0.1)}   # robot 3's, 3.5 s old
     with pytest.raises(ValueError):
         Demand(announce_age=0.0)
-
-
-def test_a_report_with_every_worker_busy_is_saturated():
-    board = LoadBoard({'image': 1.0})
-    assert not board.saturated(1)                                   # no report
-    board.update(1, Load(0, 1, 2, 0.0, {'image': 0.1}), 0.01)        # one of two busy
-    assert not board.saturated(1)
-    board.update(1, Load(1, 1, 2, 0.0, {'image': 0.1}), 0.01)        # both, one queued
-    assert board.saturated(1)

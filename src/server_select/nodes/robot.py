@@ -15,7 +15,6 @@ from server_select.ros.flags import flag_topic
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.load import RobotLoad
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
-from server_select.ros.prober import STILL_OUT
 from server_select.ros.robot_parts import Joining, robot_prober, robot_selection, task_stream
 from server_select.ros.node import fleet, param
 from server_select.ros.runner import run
@@ -148,8 +147,6 @@ class RobotNode(object):
     # -- evidence ----------------------------------------------------------------------------
 
     def on_sample(self, server, ok, rtt, error, wait=None):
-        if error == STILL_OUT and self.load is not None and self.load.saturated(server):
-            return   # slow while every worker is busy: the probe still out decides by its timeout
         try:   # load-aware: the expected completion, round trip + wait
             self.selection.on_sample(server, ok, rtt + wait if ok and wait else rtt,
                                      wait=wait if ok else None)

@@ -71,8 +71,5 @@ class RobotLoad(object):
             return None if unqueued is None else max(period, factor * unqueued)
         return seconds
 
-    def saturated(self, server):
-        return self.board.saturated(server)
-
     def forget(self, server):
         self.board.forget(server)

@@ -9,13 +9,14 @@ import time
 import rospy
 
 from server_select.core.config import names
+from server_select.core.selection.answer_time import AnswerTimes
 from server_select.core.selection.probing import ProbeRound
-from server_select.msg import LatencySample, LatencySamples
 from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
 from server_select.ros.probe_loop import ProbeLoop
+from server_select.ros.probe_samples import ProbeSamples
 from server_select.ros.probe_seal import ProbeSeal
-from server_select.ros.seal import SealedPublisher, enabled as keyed
+from server_select.ros.seal import enabled as keyed
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
 STILL_OUT = 'previous probe still in progress'   # a probe not sent: the last one is still out
@@ -30,12 +31,13 @@ class Prober(object):
 
     Probes go out on one loop thread over persistent connections (a probe that must
     connect first, on a worker thread), each bounded by ``timeout``; a server whose
-    previous probe is still out gets a failed sample (:data:`STILL_OUT`) instead of a
-    second call. ``stream`` ``pair`` publishes each sample on ``latency_R<r>S<s>`` (the
-    paper); ``robot`` and ``view`` one ``latency_samples`` batch per round, when its last
-    probe has ended (``view``: for recorders; the manager hears the robot's own ranking).
-    Servers can be added and removed at run time. ``answered``: the servers that have
-    answered at least once; ``on_sample(server, ok, rtt, error, wait)`` hears every sample.
+    previous probe is still out is not probed again: once that probe is late for this
+    server (``AnswerTimes``: TCP's retransmission timeout over its answers) it gets a
+    failed sample (:data:`STILL_OUT`) instead of a second call. Samples go out as
+    ``stream`` says (``ProbeSamples``; ``view``: for recorders, the manager hears the
+    robot's own ranking). Servers can be added and removed at run time. ``answered``:
+    the servers that have answered at least once; ``on_sample(server, ok, rtt, error,
+    wait)`` hears every sample.
     With ``load_of``, each answer's load goes to ``load_of(server, response, rtt)``, which
     returns the *wait* at that server (s; None: unknown), carried in the sample and the
     batch; ``announce(server)`` gives the ``(task kinds, rates)`` a probe of it carries.
@@ -52,7 +54,6 @@ class Prober(object):
         self.robot_id = robot_id
         self.plan, self.contenders = plan, contenders
         self.timeout = timeout
-        self.stream = stream
         self.answered = set()
         self.on_sample = on_sample or (lambda server, ok, rtt, error, wait: None)
         self.load_of = load_of
@@ -62,10 +63,10 @@ class Prober(object):
         self._seq = itertools.count(1)
         self._rounds = itertools.count(1)
         self._lock = threading.Lock()
-        self._inflight = {}
-        self._pubs, self._proxies = {}, {}
-        self._batch_pub = SealedPublisher(fleet(names.SAMPLES_TOPIC), LatencySamples,
-                                          queue_size=10) if stream != 'pair' else None
+        self._inflight = {}          # server -> (its probe's future, when it went out)
+        self.answer_times = AnswerTimes()
+        self._proxies = {}
+        self.samples = ProbeSamples(robot_id, stream, load_of is not None)
         self._pool = concurrent.futures.ThreadPoolExecutor(
             max_workers=max(16, len(servers)), thread_name_prefix='probe')
         self.after_answers = None    # called once after each batch of samples
@@ -84,10 +85,7 @@ class Prober(object):
         with self._lock:
             if server in self._proxies:
                 return
-            if self.stream == 'pair':
-                self._pubs[server] = SealedPublisher(
-                    fleet(names.sample_topic(self.robot_id, server)), LatencySample,
-                    queue_size=10)
+            self.samples.add(server)
             self._proxies[server] = TimedServiceProxy(
                 fleet(names.probe_service(server)), LatencyProbe, *self.seal.proxy_args(server))
             self.plan.add(server, time.monotonic())
@@ -96,13 +94,12 @@ class Prober(object):
     def remove(self, server):
         with self._lock:
             proxy = self._proxies.pop(server, None)
-            pub = self._pubs.pop(server, None)
+            self.samples.remove(server)
             self.answered.discard(server)
             self.plan.remove(server)
+        self.answer_times.forget(server)
         if proxy is not None:
             proxy.close()
-        if pub is not None:
-            pub.unregister()
 
     def start(self):
         # the first round one period after the start, as the paper's timer had it (servers
@@ -129,27 +126,35 @@ class Prober(object):
         with self._lock:
             now = time.monotonic()
             self.plan.update(contenders, now)
-            servers = self.plan.due(now)
+            servers = [s for s in self.plan.due(now) if not self._out(s, now)]
         if not servers:
             return
         stamp = rospy.Time.now()
-        batch = ProbeRound(next(self._rounds), stamp, servers) if self._batch_pub else None
+        batch = ProbeRound(next(self._rounds), stamp, servers) if self.samples.batched else None
         for server in servers:
-            previous = self._inflight.get(server)
-            if previous is not None and not previous.done():
+            if self._out(server, None):    # and late: a failed sample, no second call
                 self._publish(server, next(self._seq), stamp, None, STILL_OUT, batch)
                 continue
             seq, proxy = next(self._seq), self._proxies.get(server)
             if proxy is not None and proxy.connected():     # on the loop: one wake-up
                 sent, request = self._request(server, seq)
-                self._inflight[server] = self._loop.start_probe(
+                future = self._loop.start_probe(
                     proxy, request, self.timeout, self._then(server, seq, sent, request,
                                                              proxy, batch))
-                continue
-            try:        # a connection first: on a worker thread, not holding the loop up
-                self._inflight[server] = self._pool.submit(self._probe, server, seq, batch)
-            except RuntimeError:  # pool shut down: the node is stopping
-                return
+            else:       # a connection first: on a worker thread, not holding the loop up
+                try:
+                    future = self._pool.submit(self._probe, server, seq, batch)
+                except RuntimeError:  # pool shut down: the node is stopping
+                    return
+            self._inflight[server] = (future, now)
+
+    def _out(self, server, now):
+        """Whether ``server``'s previous probe is still out (with ``now``: and not late
+        yet, so that this round leaves it out)."""
+        previous, sent = self._inflight.get(server, (None, 0.0))
+        if previous is None or previous.done():
+            return False
+        return now is None or not self.answer_times.late(server, now - sent)
 
     def _request(self, server, seq):
         stamp = rospy.Time.now()
@@ -204,23 +209,17 @@ class Prober(object):
                           % forged, batch)
             return
         self.answered.add(server)
+        self.answer_times.answered(server, rtt)
         wait = self.load_of(server, response, rtt) if self.load_of is not None else None
         self._publish(server, seq, stamp, rtt, '', batch, wait)
 
     def _publish(self, server, seq, stamp, rtt, error, batch, wait=None):
-        if error:
-            rospy.logdebug('robot %d: probe of server %d failed: %s', self.robot_id, server, error)
-        pub = self._pubs.get(server)
-        if pub is not None:
-            sample = LatencySample(robot_id=self.robot_id, server_id=server, seq=seq,
-                                   ok=rtt is not None, rtt=rtt or 0.0, error=error)
-            sample.header.stamp = stamp
-            pub.publish(sample)
+        self.samples.sample(server, seq, stamp, rtt, error)
         self.on_sample(server, not error, rtt, error, wait)
         if not error and self.contenders is not None:
             self._recheck(server, rtt + (wait or 0.0))
         if batch is not None and batch.record(server, not error, rtt, wait):
-            self._publish_round(batch)
+            self.samples.round(batch)
 
     def _recheck(self, server, value):
         """A background server's sample that lands near the contenders: one from now."""
@@ -232,14 +231,6 @@ class Prober(object):
             with self._lock:
                 self.plan.promote(server, time.monotonic())
             self._loop.poke()
-
-    def _publish_round(self, batch):
-        servers, oks, rtts, waits = zip(*sorted(batch.samples)) if batch.samples \
-            else ((), (), (), ())
-        msg = LatencySamples(robot_id=self.robot_id, round=batch.number, server_id=servers,
-                             ok=oks, rtt=rtts, wait=waits if self.load_of is not None else ())
-        msg.header.stamp = batch.stamp
-        self._batch_pub.publish(msg)
 
     def shutdown(self):
         self._loop.stop()

@@ -123,11 +123,3 @@ class LoadBoard(object):
             report, rtts = self._fresh(server), self._rtts.get(server)
             work = self._work(report[0], kind) if report is not None and rtts else 0.0
             return statistics.median(rtts) + work if work > 0 else None
-
-    def saturated(self, server):
-        """Whether the newest fresh report of ``server`` had every worker busy (a slow
-        probe answer is then what its load explains, not a sign that it is gone)."""
-        with self._lock:
-            report = self._fresh(server)
-            return report is not None and \
-                report[0].queued + report[0].in_service >= max(1, report[0].workers)
