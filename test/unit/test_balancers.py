@@ -300,6 +300,23 @@ def test_hot_cold_counts_answers_that_saw_one_queue_as_one():
     assert verdict(0.02) == 2
 
 
+def test_hot_cold_counts_the_error_of_the_servers_reported_work():
+    def verdict(error):
+        clock = Clock()
+        rule = hot_cold(clock)
+        rule.current = 1
+        # two idle servers whose medians of their recent frames differ by 30 ms in 450
+        for _ in range(16):
+            rule.probed(1, 0.001, Load(0, 0, 1, 0.0, {'image': 0.45}, 0.0, {'image': error}))
+            rule.probed(2, 0.001, Load(0, 0, 1, 0.0, {'image': 0.42}, 0.0, {'image': error}))
+            clock.now += 0.1
+        return rule.order([1, 2], 'image')[0]
+    # medians known to 15 ms each: 30 ms is within 3 errors of their difference (64 ms):
+    # the robot stays; medians reported without error: 30 ms is a reason to move
+    assert verdict(0.015) == 1
+    assert verdict(0.0) == 2
+
+
 def test_hot_cold_ranks_by_expected_completion_with_the_work_in_flight():
     clock = Clock()
     rule = hot_cold(clock)

@@ -1,6 +1,7 @@
 """A server's work queue (admission by deadline, shedding, backlog), the robot's load board
 and the retry budget, without a master."""
 
+import statistics
 import threading
 
 import pytest
@@ -28,6 +29,11 @@ def test_service_times_are_the_median_of_the_recent_ones():
         times.add('sort', seconds)
     assert times.get('sort') == pytest.approx(0.3)
     assert times.snapshot() == {'sort': pytest.approx(0.3)}
+    # the median's standard error: sqrt(pi / 2) x their standard deviation / sqrt(3)
+    spread = statistics.stdev([0.9, 0.2, 0.3])
+    assert times.errors() == {'sort': pytest.approx(1.2533 * spread / 3 ** 0.5)}
+    times.add('image', 0.5)
+    assert times.errors()['image'] == 0.0     # one task: no spread known
 
 
 def test_an_idle_server_takes_what_it_can_finish_in_time_and_refuses_the_rest():
@@ -49,7 +55,7 @@ def test_the_backlog_counts_the_work_left_of_tasks_in_service_over_the_workers()
     clock.now += 0.4                                 # both 0.4 s into their 1 s of work
     # (three arrivals at one instant: three per 10 s horizon, 1 s of work each, 2 workers)
     assert q.load() == Load(1, 2, 2, pytest.approx((1.0 + 0.6 + 0.6) / 2), {'image': 1.0},
-                            pytest.approx(0.3 * 1.0 / 2))
+                            pytest.approx(0.3 * 1.0 / 2), {'image': 0.0})
     q.done(first, 1.0)
     q.done(second, 1.0)
     assert q.load().backlog == 0.0                   # one queued, a worker free: no wait

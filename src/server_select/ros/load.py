@@ -13,7 +13,7 @@ def load_of(response):
     """The :class:`~server_select.core.load.work_queue.Load` a LatencyProbe answer reports."""
     return Load(response.queued, response.in_service, max(1, response.workers),
                 response.backlog, dict(zip(response.kinds, response.service_time)),
-                response.utilization)
+                response.utilization, dict(zip(response.kinds, response.service_error)))
 
 
 class RobotLoad(object):

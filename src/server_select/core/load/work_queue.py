@@ -33,14 +33,21 @@ import time
 
 from server_select.core.load.demand import Demand
 
-Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization')
-Load.__new__.__defaults__ = (0.0,)
+Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization '
+                              'service_error')
+Load.__new__.__defaults__ = (0.0, None)
 Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per task}``,
-``utilization`` the share of the workers' time the others' tasks take (0: none)."""
+``utilization`` the share of the workers' time the others' tasks take (0: none),
+``service_error`` ``{kind: the standard error of that work}`` (None: not reported)."""
+
+# the standard error of a median of n draws is about sqrt(pi / 2) x sigma / sqrt(n)
+# (normal draws, large n: Kendall and Stuart, The Advanced Theory of Statistics, 10.10)
+MEDIAN_ERROR = 1.2533
 
 
 class ServiceTimes(object):
-    """The recent work per task of each kind: the median of the last ``keep`` (thread-safe)."""
+    """The recent work per task of each kind: the median of the last ``keep``, and its
+    standard error (thread-safe)."""
 
     def __init__(self, keep=20):
         if keep < 1:
@@ -49,6 +56,7 @@ class ServiceTimes(object):
         self._lock = threading.Lock()
         self._times = {}
         self._medians = {}
+        self._errors = {}
 
     def add(self, kind, seconds):
         with self._lock:
@@ -57,6 +65,8 @@ class ServiceTimes(object):
                 times = self._times[kind] = collections.deque(maxlen=self.keep)
             times.append(float(seconds))
             self._medians[kind] = statistics.median(times)
+            self._errors[kind] = MEDIAN_ERROR * statistics.stdev(times) / len(times) ** 0.5 \
+                if len(times) > 1 else 0.0
 
     def get(self, kind):
         """Seconds of work per task of ``kind`` (0.0 while none was done: optimistic)."""
@@ -66,6 +76,11 @@ class ServiceTimes(object):
         """``{kind: seconds}`` of every kind done so far."""
         with self._lock:
             return dict(self._medians)
+
+    def errors(self):
+        """``{kind: the standard error of its median}`` (0.0 from one task)."""
+        with self._lock:
+            return dict(self._errors)
 
 
 class Job(object):
@@ -197,7 +212,7 @@ class WorkQueue(object):
             now = self._clock()
             return Load(len(self._queue), len(self._running), self.workers,
                         self._backlog(now, excluding), self.times.snapshot(),
-                        self._utilization(now, excluding))
+                        self._utilization(now, excluding), self.times.errors())
 
     def close(self):
         """Wake every worker with None; what is still queued is dropped (returned)."""

@@ -12,18 +12,14 @@ the robot tells it its probe answers, its attempts, and the kind of task it send
    what a task sent then would wait for) + the work (the median of what the servers
    report, where it has done none yet); the mean of those, its noise their standard
    error, counting answers closer together than a task's work as one (they saw much the
-   same queue). (Not the robot's own task round trips: they carry the task message's
-   cost, which probes do not, so the robot's own server looked slower than the others
-   and robots between near-equal servers moved ten times a minute. A failed task still
-   ejects its server.) Robots keep a task or two out each, so servers and robots make a
-   closed system: a task waits for the work in flight ahead of it, whatever the
-   utilization (an open queue's mean wait, M/D/c at the reported utilization, grows
-   without bound at saturation and made servers of unequal speed look alike). A server
-   asked for more work than it can do (the utilization of the others' announced rates
-   plus the robot's own, its rate x the work, above 1) does 1/u of it and answers the
-   rest busy: a task there takes u times as long to get through, in expectation (a
-   server that refuses keeps its queue short, so its work in flight alone would make it
-   look fast).
+   same queue), and the error of the work itself (a server reports the median of its
+   recent tasks' work and that median's standard error: two equal servers' medians
+   differ by a few per cent, and robots moved for that and back). Not the robot's own
+   task round trips (docs/selection.md says why). Robots keep a task or two out each:
+   servers and robots make a closed system, a task waits for the work in flight ahead.
+   A server asked for more work than it can do (the utilization of the others' announced
+   rates plus the robot's own above 1) does 1/u of it and answers the rest busy: a task
+   there takes u times as long to get through (its short queue alone would look fast).
 3. A server is *hot* when the others' work in flight per worker (the median over its
    answers of the window) is above the 2^-0.25 quantile of the candidates' (Prequal's rule, on work
    rather than on requests: servers of unequal speed carry unequal numbers of requests);
@@ -52,10 +48,9 @@ Adapted from Prequal (NSDI '24) for robots: latency is the robot's own round tri
 server's expected wait and work (a robot's network differs per server; a web client's does
 not), requests in flight leave out the robot's own (a robot with one task out would see its
 own server one task hotter than the rest and leave it for nothing), requests count by
-their work (servers differ in speed), each server's answers of the window stand for the pool
-(a robot probes every server several times a second), and the choice is kept while
-nothing beats it (a move is a new connection and a cold start at the server: per-request
-choice suits a web client with many requests in flight, not a robot with one). No
+their work (servers differ in speed), each server's answers of the window stand for the
+pool (a robot probes every server several times a second), and the choice is kept while
+nothing beats it (a move is a new connection and a cold start at the server). No
 parameter of its own: the quantile and the 3 errors are the rule's; the window is the
 robot's ``~window``.
 """
@@ -138,16 +133,18 @@ class HotCold(Balancer):
         each of the server's answers of the last window (at least :data:`MIN_ANSWERS`):
         round trip + the others' work in flight there per worker (what a task sent then
         would wait for) + the work, x the tries at the utilization; the mean of those
-        and its standard error, and the median of the work in flight. ``alike``: the
+        and its standard error (with the error of the server's reported work), and the
+        median of the work in flight. ``alike``: the
         robots like this one (its ``rate`` x the work, and what such a robot keeps in
         flight) the server is judged with, this one included: 1 as the answers show it,
         k with k - 1 more arriving, 2 - k with k - 1 of the others leaving."""
         work = self._work(newest, kind, fresh)
+        work_error = newest.service_error.get(kind, 0.0) if kind in newest.service else 0.0
         workers = float(newest.workers)
         mine = rate * work / workers
         extra = (alike - 1) * mine * work
         now = newest.at if now is None else now
-        latencies, heat = [], []
+        latencies, heat, per_work = [], [], []
         entries = self._window(self.answers[newest.server], now, MIN_ANSWERS)
         for a in [a for _, a in entries] or [Answer(newest.rtt, 0, newest.utilization)]:
             queued = a.others * work / workers
@@ -156,12 +153,15 @@ class HotCold(Balancer):
             tries = max(1.0, a.utilization + mine * alike)
             latencies.append((a.rtt + max(0.0, queued + extra) + work) * tries)
             heat.append(queued)
+            per_work.append((1.0 + a.others / workers) * tries)   # d latency / d work
         # answers closer together than a task's work see much the same queue: about one
         # a task's work over their span is independent of the others
         span = entries[-1][0] - entries[0][0] if entries else 0.0
         independent = 1.0 + span * workers / work if work > 0 else None
-        return _mean_error(latencies, independent) + (statistics.median(heat),
-                                                      work / workers)
+        mean, error = _mean_error(latencies, independent)
+        # the work (a median of the server's recent tasks) has an error every answer shares
+        error = math.hypot(error, work_error * statistics.mean(per_work))
+        return mean, error, statistics.median(heat), work / workers
 
     def share(self, here, there, kind, fresh, rate, now):
         """The probability that this robot, one of those like it at ``here``, moves to
