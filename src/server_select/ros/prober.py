@@ -89,11 +89,11 @@ class Prober(object):
     def remove(self, server):
         with self._lock:
             proxy = self._proxies.pop(server, None)
-            self.samples.remove(server)
             self.answered.discard(server)
             self.plan.remove(server)
         if proxy is not None:
             proxy.close()
+        self.samples.remove(server)
 
     def start(self):
         # the first round one period after the start, as the paper's timer had it (servers

@@ -40,8 +40,8 @@ Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per t
 ``utilization`` the share of the workers' time the others' tasks take (0: none),
 ``service_error`` ``{kind: the standard error of that work}`` (None: not reported)."""
 
-# the standard error of a median of n draws is about sqrt(pi / 2) x sigma / sqrt(n)
-# (normal draws, large n: Kendall and Stuart, The Advanced Theory of Statistics, 10.10)
+# the standard error of a median of n draws: its variance is 1 / (4 n f(median)^2) for
+# large n, sqrt(pi / 2) x sigma / sqrt(n) when the draws are normal
 MEDIAN_ERROR = 1.2533
 
 
