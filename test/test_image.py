@@ -65,8 +65,13 @@ class ImageTest(unittest.TestCase):
 
     def send(self, task_id, fields):
         self.publish(task_id, fields)
+        # the result and the detections are two topics, either may arrive first: a frame
+        # the server worked on has both, a refused one a result only
         self.assertTrue(self.wait(lambda: self.mine('results', task_id), 10.0),
                         'no result %d' % task_id)
+        if self.mine('results', task_id).ok:
+            self.assertTrue(self.wait(lambda: self.mine('detections', task_id), 10.0),
+                            'no detections of task %d' % task_id)
         return self.mine('results', task_id), self.mine('detections', task_id)
 
     def test_server_detects_in_every_encoding_and_refuses_others(self):
