@@ -9,6 +9,7 @@ import time
 import rospy
 
 from server_select.core.config import names
+from server_select.core.selection.answer_time import AnswerTimes
 from server_select.core.selection.probing import ProbeRound
 from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
@@ -17,6 +18,8 @@ from server_select.ros.probe_samples import ProbeSamples
 from server_select.ros.probe_seal import ProbeSeal
 from server_select.ros.seal import enabled as keyed
 from server_select.srv import LatencyProbe, LatencyProbeRequest
+
+STILL_OUT = 'previous probe still in progress'   # a probe not sent: the last one is still out
 
 
 class Prober(object):
@@ -28,8 +31,10 @@ class Prober(object):
 
     Probes go out on one loop thread over persistent connections (a probe that must
     connect first, on a worker thread), each bounded by ``timeout``; a server whose
-    previous probe is still out is not probed again: that probe ends by its answer or its
-    timeout (a probe slow to answer is a server at work, not failing). Samples go out as
+    previous probe is still out is not probed again, and once that probe is late for this
+    server (``AnswerTimes``: twice its longest recent answer) it gets a failed sample
+    (:data:`STILL_OUT`): a link down is known by the next probe, a busy server on a small
+    CPU share is given the time its answers take. Samples go out as
     ``stream`` says (``ProbeSamples``; ``view``: for recorders, the manager hears the
     robot's own ranking). Servers can be added and removed at run time. ``answered``:
     the servers that have answered at least once; ``on_sample(server, ok, rtt, error,
@@ -59,7 +64,8 @@ class Prober(object):
         self._seq = itertools.count(1)
         self._rounds = itertools.count(1)
         self._lock = threading.Lock()
-        self._inflight = {}          # server -> its probe's future
+        self._inflight = {}          # server -> (its probe's future, when it went out)
+        self.answer_times = AnswerTimes()
         self._proxies = {}
         self.samples = ProbeSamples(robot_id, stream, load_of is not None)
         self._pool = concurrent.futures.ThreadPoolExecutor(
@@ -94,6 +100,7 @@ class Prober(object):
         if proxy is not None:
             proxy.close()
         self.samples.remove(server)
+        self.answer_times.forget(server)
 
     def start(self):
         # the first round one period after the start, as the paper's timer had it (servers
@@ -120,12 +127,15 @@ class Prober(object):
         with self._lock:
             now = time.monotonic()
             self.plan.update(contenders, now)
-            servers = [s for s in self.plan.due(now) if not self._out(s)]
+            servers = [s for s in self.plan.due(now) if not self._out(s, now)]
         if not servers:
             return
         stamp = rospy.Time.now()
         batch = ProbeRound(next(self._rounds), stamp, servers) if self.samples.batched else None
         for server in servers:
+            if self._out(server, None):    # and late: a failed sample, no second call
+                self._publish(server, next(self._seq), stamp, None, STILL_OUT, batch)
+                continue
             seq, proxy = next(self._seq), self._proxies.get(server)
             if proxy is not None and proxy.connected():     # on the loop: one wake-up
                 sent, request = self._request(server, seq)
@@ -137,12 +147,15 @@ class Prober(object):
                     future = self._pool.submit(self._probe, server, seq, batch)
                 except RuntimeError:  # pool shut down: the node is stopping
                     return
-            self._inflight[server] = future
+            self._inflight[server] = (future, now)
 
-    def _out(self, server):
-        """Whether ``server``'s previous probe is still out."""
-        previous = self._inflight.get(server)
-        return previous is not None and not previous.done()
+    def _out(self, server, now):
+        """Whether ``server``'s previous probe is still out (with ``now``: and not late
+        yet, so that this round leaves it out)."""
+        previous, sent = self._inflight.get(server, (None, 0.0))
+        if previous is None or previous.done():
+            return False
+        return now is None or not self.answer_times.late(server, now - sent)
 
     def _request(self, server, seq):
         stamp = rospy.Time.now()
@@ -197,6 +210,7 @@ class Prober(object):
                           % forged, batch)
             return
         self.answered.add(server)
+        self.answer_times.answered(server, rtt)
         wait = self.load_of(server, response, rtt) if self.load_of is not None else None
         self._publish(server, seq, stamp, rtt, '', batch, wait)
 
