@@ -281,18 +281,25 @@ def test_hot_cold_keeps_its_server_within_the_noise_and_leaves_beyond_it():
     assert 'faster' in rule.why
 
 
+def choice_after(answers):
+    """Where a robot whose last task went to server 1 sends its next after 16 answers of
+    each server, 0.1 s apart: ``answers(i)`` gives the i-th (server 1's, server 2's) Load."""
+    clock = Clock()
+    rule = hot_cold(clock)
+    rule.current = 1
+    for i in range(16):
+        for server, load in zip((1, 2), answers(i)):
+            rule.probed(server, 0.001, load)
+        clock.now += 0.1
+    return rule.order([1, 2], 'image')[0]
+
+
 def test_hot_cold_counts_answers_that_saw_one_queue_as_one():
+    # server 1 had another robot's task queued for the first 0.8 s of the window and
+    # none since; server 2 none
     def verdict(work):
-        clock = Clock()
-        rule = hot_cold(clock)
-        rule.current = 1
-        # server 1 had another robot's task queued for the first 0.8 s of the window and
-        # none since; server 2 none: 16 answers each, 0.1 s apart
-        for i in range(16):
-            rule.probed(1, 0.001, Load(int(i < 8), 0, 1, 0.0, {'image': work}, 0.0))
-            rule.probed(2, 0.001, Load(0, 0, 1, 0.0, {'image': work}, 0.0))
-            clock.now += 0.1
-        return rule.order([1, 2], 'image')[0]
+        return choice_after(lambda i: (Load(int(i < 8), 0, 1, 0.0, {'image': work}, 0.0),
+                                       Load(0, 0, 1, 0.0, {'image': work}, 0.0)))
     # with 0.5 s of work a frame the queue changed once in the window: one observation
     # that server 1 is busier, not 8: the robot stays; with 20 ms of work the queue was
     # seen queued and empty many times over: server 1 is slower, the robot leaves
@@ -301,16 +308,11 @@ def test_hot_cold_counts_answers_that_saw_one_queue_as_one():
 
 
 def test_hot_cold_counts_the_error_of_the_servers_reported_work():
+    # two idle servers whose medians of their recent frames differ by 30 ms in 450
     def verdict(error):
-        clock = Clock()
-        rule = hot_cold(clock)
-        rule.current = 1
-        # two idle servers whose medians of their recent frames differ by 30 ms in 450
-        for _ in range(16):
-            rule.probed(1, 0.001, Load(0, 0, 1, 0.0, {'image': 0.45}, 0.0, {'image': error}))
-            rule.probed(2, 0.001, Load(0, 0, 1, 0.0, {'image': 0.42}, 0.0, {'image': error}))
-            clock.now += 0.1
-        return rule.order([1, 2], 'image')[0]
+        return choice_after(lambda i: (
+            Load(0, 0, 1, 0.0, {'image': 0.45}, 0.0, {'image': error}),
+            Load(0, 0, 1, 0.0, {'image': 0.42}, 0.0, {'image': error})))
     # medians known to 15 ms each: 30 ms is within 3 errors of their difference (64 ms):
     # the robot stays; medians reported without error: 30 ms is a reason to move
     assert verdict(0.015) == 1
