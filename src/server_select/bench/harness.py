@@ -3,7 +3,6 @@
 import contextlib
 import json
 import os
-import signal
 import socket
 import subprocess
 import sys
@@ -13,7 +12,7 @@ import xmlrpc.client
 
 from server_select.core.config import names
 from server_select.core.flow.outcome import cut_off
-from server_select.core.util.procs import stop_group, wait_until
+from server_select.core.util.procs import kill_all, stop_group, wait_until
 from server_select.ros.graph import node_pid as graph_node_pid
 
 PY = [sys.executable, '-m']
@@ -59,10 +58,7 @@ class Roscore(object):
         rosout = pid_or_none('/rosout', self.uri)
         stop_group(self.proc)
         if rosout is not None:
-            try:
-                os.kill(rosout, signal.SIGTERM)
-            except ProcessLookupError:
-                pass
+            kill_all([rosout])
         return False
 
 
