@@ -120,3 +120,26 @@ def test_a_server_ejected_for_its_tasks_serves_its_time_whatever_its_probes_say(
     h2.probe_ok(2)
     h2.probe_ok(2)
     assert h2.state(2) == EJECTED
+
+
+def test_with_every_server_out_those_whose_probes_answer_are_used_anyway():
+    h, clock = make(base=1.0)
+    for server in (1, 2, 3):
+        h.failure(server, 'task late')              # a task late on each in turn
+    h.failure(3, 'probe failed', probe=True)        # and 3's link is down
+    assert not any(h.usable(s) for s in (1, 2, 3))
+    assert h.order([2, 3, 1]) == [2, 1]             # panic: the ranking's order, 3 out
+    assert h.state(1) == h.state(2) == EJECTED      # panic ejects and heals nothing
+    h.probe_ok(3)
+    assert h.order([3, 2, 1]) == [3, 2, 1]          # its probe answers again
+    clock.now = 1.0
+    h.probe_ok(1)
+    h.probe_ok(1)
+    assert h.usable(1) and h.order([3, 2, 1]) == [1]   # one usable again: panic over
+
+
+def test_servers_that_never_answered_are_no_panic_candidates():
+    h = ServerHealth([1, 2], clock=Clock(0.0))
+    h.failure(1, 'probe failed', probe=True)
+    h.failure(2, 'probe failed', probe=True)
+    assert h.order([1, 2]) == []

@@ -7,7 +7,7 @@ rule per
 task and the flags are for the record only; ``fixed`` always names one server (the paper's
 baseline); ``local`` keeps the work in the robot. In ``select`` mode the robot's own
 evidence comes first: servers its :class:`~server_select.core.selection.health.ServerHealth` has
-ejected are skipped.
+ejected are skipped (while one is usable: :meth:`ServerHealth.order`).
 """
 
 import threading
@@ -194,7 +194,7 @@ class Selection(object):
     def candidates(self, kind=None):
         """Where a ``kind`` task may go now, best first: ``[LOCAL]``, ``[fixed server]``,
         the balancer's order of the servers the robot's evidence has not ejected, or the
-        (manager's or own) ranking without them."""
+        (manager's or own) ranking without them (:meth:`ServerHealth.order`)."""
         if self.mode == 'local':
             return [LOCAL]
         if self.mode == 'fixed':
@@ -204,7 +204,7 @@ class Selection(object):
                 servers = [s for s in self.servers
                            if self._task_servers is None or s in self._task_servers]
             if self.health is not None:
-                servers = [s for s in servers if self.health.usable(s)]
+                servers = self.health.order(servers)
             return self.balancer.order(servers, kind)
         ranking = self.manager_ranking()
         if ranking is None:
@@ -225,7 +225,10 @@ class Selection(object):
             return self.target()
         if self.balancer is not None:
             last = self.balancer.last
-            usable = last is not None and (self.health is None or self.health.usable(last))
+            with self._lock:
+                servers = list(self.servers)
+            usable = last is not None and (self.health is None or
+                                           last in self.health.order(servers))
             return last if usable else NO_SERVER
         ranking = self.manager_ranking()
         if ranking is None:

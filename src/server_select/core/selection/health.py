@@ -21,6 +21,12 @@ eject it as above.
 A server that answers *busy* is working, not failing: it is not ejected, but goes behind
 every server that is not busy for ``seconds`` (what its load says it needs to catch up),
 and stays a candidate for when all of them are busy.
+
+When no server is usable, the ejected ones whose last probe was answered are used anyway
+(Envoy's *panic threshold*, at 0 %: a fleet that still answers some tasks when degraded
+serves more by trying than by failing every task at once). A task late on a host that is
+slow for a moment, on every server in turn, would otherwise leave the robot nothing to
+send to for an ejection time; a server whose probes fail stays out.
 """
 
 import collections
@@ -34,13 +40,14 @@ Ejection = collections.namedtuple('Ejection', 'server seconds why')
 
 class _Server(object):
     __slots__ = ('state', 'until', 'ejections', 'good_probes', 'busy_until', 'answered',
-                 'by_probe')
+                 'by_probe', 'reachable')
 
     def __init__(self):
         self.state, self.until, self.ejections, self.good_probes = HEALTHY, 0.0, 0, 0
         self.busy_until = 0.0
         self.answered = False
         self.by_probe = False   # the last ejection was for a failed probe
+        self.reachable = False  # its last probe was answered
 
 
 class ServerHealth(object):
@@ -78,6 +85,8 @@ class ServerHealth(object):
         answered *down*), else None (an unknown server, or one already ejected or down)."""
         with self._lock:
             entry = self._get(server, self._clock())
+            if entry is not None and probe:
+                entry.reachable = False
             if entry is not None and entry.state == EJECTED:
                 entry.good_probes = 0           # answers since must be in a row
                 entry.by_probe = entry.by_probe and probe
@@ -103,7 +112,7 @@ class ServerHealth(object):
         with self._lock:
             entry = self._get(server, self._clock())
             if entry is not None:
-                entry.answered = True
+                entry.answered = entry.reachable = True
                 if entry.state in (PROBATION, DOWN) or (entry.state == EJECTED and
                                                         entry.by_probe):
                     entry.good_probes += 1
@@ -136,9 +145,21 @@ class ServerHealth(object):
 
     def order(self, ranking):
         """``ranking`` without the servers tasks may not go to now, those that answered
-        busy lately last (order kept otherwise)."""
+        busy lately last (order kept otherwise); when none of them may, those ejected
+        whose last probe was answered (panic), in the ranking's order."""
         usable = [s for s in ranking if self.usable(s)]
+        if not usable:
+            return self.panic(ranking)
         now = self._clock()
         with self._lock:      # (a server may have left since usable() looked)
             busy = set(s for s in usable if getattr(self._servers.get(s), 'busy_until', 0) > now)
         return [s for s in usable if s not in busy] + [s for s in usable if s in busy]
+
+    def panic(self, ranking):
+        """The servers of ``ranking`` that are out (ejected, or on probation without its
+        probes yet) but answered their last probe: where tasks go when none is usable."""
+        with self._lock:
+            now = self._clock()
+            entries = [(s, self._get(s, now)) for s in ranking]
+            return [s for s, e in entries if e is not None and e.reachable and
+                    e.state in (EJECTED, PROBATION)]
