@@ -1,11 +1,11 @@
-"""A probe answer's arrival is the kernel's stamp, not when the robot read it: a robot
+"""A probe's round trip is the kernel's stamps, not when the robot wrote and read: a robot
 that reads 150 ms late (busy with its own work, or stalled by its CPU share) still
-measures when the answer came."""
+measures when the answer came, and its request's departure is when it left the stack."""
 
 import socket
 import time
 
-from server_select.ros.probe_client import arrival, stamp_arrivals
+from server_select.ros.probe_client import arrival, departures, stamp_packets
 
 
 def tcp_pair():
@@ -21,7 +21,7 @@ def tcp_pair():
 def test_the_kernel_stamps_an_answer_when_it_arrives_not_when_it_is_read():
     robot, server = tcp_pair()
     with robot, server:
-        assert stamp_arrivals(robot)
+        assert stamp_packets(robot) == (True, True)
         sent = time.time()
         server.sendall(b'answer')
         time.sleep(0.15)                      # the robot gets round to it late
@@ -40,3 +40,28 @@ def test_no_stamp_without_the_option():
         server.sendall(b'x')
         _, ancillary, _, _ = robot.recvmsg(64, socket.CMSG_SPACE(16))
     assert arrival(ancillary) is None
+
+
+def test_the_kernel_stamps_a_request_as_it_leaves_and_the_queue_is_emptied():
+    robot, server = tcp_pair()
+    with robot, server:
+        assert stamp_packets(robot) == (True, True)
+        before = time.time()
+        robot.sendall(b'request')
+        after = time.time()
+        stamps = departures(robot)
+        assert server.recv(64) == b'request'
+        assert departures(robot) == []          # read once: nothing left to poll ready
+        robot.sendall(b'again')
+        second = departures(robot)
+    print('\nrequest written within %.1f us, left by the kernel\'s stamp after %.1f us'
+          % (1e6 * (after - before), 1e6 * (stamps[-1] - before)))
+    assert len(stamps) == 1 and before <= stamps[0] <= after
+    assert len(second) == 1 and second[0] >= stamps[0]
+
+
+def test_no_send_stamp_without_the_option():
+    robot, server = tcp_pair()
+    with robot, server:
+        robot.sendall(b'x')
+        assert departures(robot) == []

@@ -25,18 +25,27 @@ from rospy.impl.tcpros_base import TCPROSTransport
 from server_select.core.util.pacer import Watchdog
 
 DEADLINES = Watchdog(name='probe deadlines')      # every proxy's calls, one thread
-SO_TIMESTAMPNS = 35     # Linux <asm-generic/socket.h>; Python's socket module lacks it
+SO_TIMESTAMPNS = 35     # Linux <asm-generic/socket.h>; Python's socket module lacks them
+SO_TIMESTAMPING = 37
+# <linux/net_tstamp.h>: a software stamp of each send as it leaves the stack, on the error
+# queue, without the packet
+TX_STAMPS = (1 << 1) | (1 << 4) | (1 << 11)     # TX_SOFTWARE | SOFTWARE | OPT_TSONLY
 
 
-def stamp_arrivals(sock):
-    """Ask the kernel to stamp each packet ``sock`` receives (SO_TIMESTAMPNS): a probe's
-    round trip then ends when its answer arrived, not when a busy robot got round to
-    reading it. False where the option is refused."""
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
-        return True
-    except OSError:
-        return False
+def stamp_packets(sock):
+    """Ask the kernel to stamp each packet ``sock`` receives (SO_TIMESTAMPNS) and sends
+    (SO_TIMESTAMPING): a probe's round trip then runs from when its request left to when
+    its answer arrived, not from when a busy robot got round to writing it to when it got
+    round to reading the answer. Returns ``(received, sent)``: whether each is stamped
+    (False where the option is refused)."""
+    stamped = []
+    for option, value in ((SO_TIMESTAMPNS, 1), (SO_TIMESTAMPING, TX_STAMPS)):
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, option, value)
+            stamped.append(True)
+        except OSError:
+            stamped.append(False)
+    return tuple(stamped)
 
 
 def arrival(ancillary):
@@ -46,6 +55,25 @@ def arrival(ancillary):
             seconds, nanoseconds = struct.unpack('qq', data[:16])
             return seconds + nanoseconds * 1e-9
     return None
+
+
+def departures(sock):
+    """The send stamps (epoch s) waiting on ``sock``'s error queue, oldest first; reading
+    them empties the queue (left there, they would make the socket poll ready and take
+    its receive buffer)."""
+    stamps = []
+    while True:
+        try:
+            _data, ancillary, _flags, _address = sock.recvmsg(
+                0, 512, socket.MSG_ERRQUEUE | socket.MSG_DONTWAIT)
+        except (BlockingIOError, InterruptedError):
+            return stamps
+        except OSError:
+            return stamps
+        for level, kind, data in ancillary:
+            if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPING and len(data) >= 16:
+                seconds, nanoseconds = struct.unpack('qq', data[:16])     # ts[0]: software
+                stamps.append(seconds + nanoseconds * 1e-9)
 
 
 class ProbeTimeout(rospy.ServiceException):
@@ -62,7 +90,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
         self.pinned, self.on_moved = pinned, on_moved
         self._abort_lock = threading.Lock()
         self._connecting = None
-        self._stamps = False        # the connection's answers carry the kernel's stamp
+        self._stamps = (False, False)   # the connection's packets carry the kernel's stamp
         self._aborted = False
 
     def call_within(self, request, timeout):
@@ -81,6 +109,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
             response = self.call(request)
             elapsed = time.perf_counter() - start
             DEADLINES.cancel(watchdog)
+            self.departed()                # this call's send stamps are of no use here
             with self._abort_lock:
                 if self._aborted:  # the answer raced the deadline: the transport is closed
                     raise ProbeTimeout('answer arrived at the deadline of %.3g s' % timeout)
@@ -103,8 +132,8 @@ class TimedServiceProxy(rospy.ServiceProxy):
 
     def send(self, request):
         """Send ``request`` on the open connection; returns its socket, to be polled for
-        the answer (:meth:`read_answer`). ServiceException (the connection dropped) if it
-        cannot be sent."""
+        the answer (:meth:`read_answer`; :meth:`departed` says when it left).
+        ServiceException (the connection dropped) if it cannot be sent."""
         transport = self.transport
         try:
             self.seq += 1
@@ -114,6 +143,15 @@ class TimedServiceProxy(rospy.ServiceProxy):
             self._drop()
             raise rospy.ServiceException(str(error) or type(error).__name__)
 
+    def departed(self, after=0.0):
+        """When the last request sent left this robot (the kernel's stamp, epoch s), if it
+        is known and not before ``after``; else None."""
+        transport = self.transport
+        if not self._stamps[1] or transport is None or transport.socket is None:
+            return None
+        stamps = [t for t in departures(transport.socket) if t >= after]
+        return stamps[-1] if stamps else None
+
     def read_answer(self):
         """After the socket polled readable: ``(response, arrived)`` once the response is
         whole (``arrived``: when the kernel received its last bytes, epoch s, or None where
@@ -121,14 +159,19 @@ class TimedServiceProxy(rospy.ServiceProxy):
         error answer or a closed connection."""
         transport = self.transport
         try:
+            if self._stamps[1]:
+                departures(transport.socket)    # a send stamp come late: polled ready too
             data, ancillary, _flags, _address = transport.socket.recvmsg(
-                transport.protocol.buff_size, socket.CMSG_SPACE(16) if self._stamps else 0)
+                transport.protocol.buff_size, socket.CMSG_SPACE(16) if self._stamps[0] else 0,
+                socket.MSG_DONTWAIT)
             if not data:
                 raise rospy.ServiceException('the server closed the connection')
             transport.read_buff.write(data)
             answers = []
             transport.protocol.read_messages(transport.read_buff, answers, transport.socket)
             return (answers[0], arrival(ancillary)) if answers else None
+        except (BlockingIOError, InterruptedError):
+            return None                         # ready for a send stamp only
         except (rospy.ServiceException, ROSException, OSError, AttributeError,
                 genpy.DeserializationError) as error:
             self._drop()
@@ -160,7 +203,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
         finally:
             with self._abort_lock:
                 self._connecting = None
-        self._stamps = stamp_arrivals(transport.socket)     # once per connection
+        self._stamps = stamp_packets(transport.socket)     # once per connection
         self.transport = transport
 
     def _abort(self):

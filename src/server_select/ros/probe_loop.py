@@ -5,10 +5,11 @@ it. :class:`ProbeLoop` waits on every socket with a probe out (``selectors``), o
 next round's time and on the earliest probe deadline at once, so a probe costs the robot
 one wake-up for its answer instead of a worker thread's hand-off, a watchdog and a
 blocked ``recv`` (bench-robot: on this host each wake-up of a thread costs about 0.1 ms).
-A round trip ends when the kernel received the answer (``SO_TIMESTAMPNS``: a robot busy
-with its own work, or a CPU share that stalls it for a few scheduler ticks, does not add
-the time it took to get round to reading it) and starts just before the request is
-written; where the kernel gives no stamp, it ends when ``select`` returned. A probe that
+A round trip runs from when the kernel sent the request to when it received the answer
+(``SO_TIMESTAMPING``, ``SO_TIMESTAMPNS``: a robot busy with its own work, or a CPU share
+that stalls it for a few scheduler ticks, does not add the time it took to get round to
+writing the request or reading the answer); where the kernel gives no stamp, it starts
+just before the request is written and ends when ``select`` returned. A probe that
 needs a connection first (a master lookup, a TCP handshake, maybe to a host behind a dead
 link) is not made here, where it would hold every other probe up: the prober hands those
 to its worker threads.
@@ -86,7 +87,7 @@ class ProbeLoop(object):
             flight = Flight(proxy, None, started, timeout, then)
             self._finish(flight, None, None, error)
             return flight
-        flight = Flight(proxy, sock, started, timeout, then, sent)
+        flight = Flight(proxy, sock, started, timeout, then, proxy.departed(sent) or sent)
         self._flights[sock] = flight
         self._selector.register(sock, selectors.EVENT_READ, flight)
         return flight
