@@ -41,7 +41,7 @@ step() {
 }
 step run_tests "catkin_make run_tests -j1 && catkin_test_results --verbose build/test_results"
 step catkin_make "catkin_make"
-port=$(( 20000 + RANDOM % 20000 ))
+port=$(( 20000 + RANDOM % 12000 ))   # below the kernel's ephemeral ports (32768-)
 step demo "source devel/setup.bash && (roscore -p $port > roscore.out 2>&1 &) \
   && within 30 'rosnode list' \
   && (rosbag record -a -O plain.bag __name:=recorder > rosbag.out 2>&1 &) \

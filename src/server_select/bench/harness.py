@@ -3,6 +3,7 @@
 import contextlib
 import json
 import os
+import random
 import socket
 import subprocess
 import sys
@@ -18,10 +19,34 @@ from server_select.ros.graph import node_pid as graph_node_pid
 PY = [sys.executable, '-m']
 
 
+def _ephemeral_ports():
+    """The kernel's range for ports it picks itself (outgoing connections, bind to 0)."""
+    try:
+        with open('/proc/sys/net/ipv4/ip_local_port_range') as f:
+            low, high = (int(x) for x in f.read().split())
+        return low, high
+    except (OSError, ValueError):
+        return 32768, 60999
+
+
 def free_port():
-    with contextlib.closing(socket.socket()) as s:
-        s.bind(('127.0.0.1', 0))
-        return s.getsockname()[1]
+    """A port free now and below the kernel's ephemeral range: a port the kernel picked
+    (bind to 0) and closed again could be taken by any process's next outgoing connection
+    before roscore binds it, or while a killed roscore's successor waits to bind it again
+    (nodes keep connecting to the master that went away)."""
+    low = _ephemeral_ports()[0]
+    ports = range(20000, low) if low > 21000 else range(1024, low)
+    for _ in range(100):
+        port = random.choice(ports)
+        if port == 11311:       # a user's own roscore
+            continue
+        with contextlib.closing(socket.socket()) as s:
+            try:
+                s.bind(('127.0.0.1', port))
+            except OSError:
+                continue
+        return port
+    raise RuntimeError('no free port below %d' % low)
 
 
 def _master_up(uri):
@@ -42,15 +67,19 @@ class Roscore(object):
         self.proc = None
 
     def __enter__(self):
-        os.environ['ROS_MASTER_URI'] = self.uri
         os.environ.setdefault('ROS_HOME', self.log_dir)
-        self.proc = subprocess.Popen(['roscore', '-p', str(self.port)],
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                     start_new_session=True)
-        if not wait_until(lambda: _master_up(self.uri), 30.0, period=0.2):
+        for _ in range(3):      # another process may bind the port first: another port
+            os.environ['ROS_MASTER_URI'] = self.uri
+            self.proc = subprocess.Popen(['roscore', '-p', str(self.port)],
+                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                         start_new_session=True)
+            if wait_until(lambda: _master_up(self.uri) or self.proc.poll() is not None,
+                          30.0, period=0.2) and self.proc.poll() is None:
+                return self
             stop_group(self.proc)
-            raise RuntimeError('roscore did not start on port %d' % self.port)
-        return self
+            self.port = free_port()
+            self.uri = 'http://127.0.0.1:%d' % self.port
+        raise RuntimeError('roscore did not start (last on port %d)' % self.port)
 
     def __exit__(self, *exc):
         # roslaunch starts rosout in a process group of its own: stopping roscore's group
