@@ -19,6 +19,18 @@ class _TimedTransport(xmlrpc.client.Transport):
         return connection
 
 
+def service_uri(name, caller_id, timeout):
+    """The URI the master lists for service ``name``, asked with a deadline of ``timeout``
+    s (rospy's own lookup has none); rosgraph.MasterError if it lists none, OSError or
+    xmlrpc.client.Error when the master does not answer in time."""
+    master = xmlrpc.client.ServerProxy(rosgraph.get_master_uri(),
+                                       transport=_TimedTransport(timeout))
+    code, message, uri = master.lookupService(caller_id, name)
+    if code != 1:
+        raise rosgraph.MasterError('service [%s] unavailable: %s' % (name, message))
+    return uri
+
+
 def node_pid(node_name, caller_id='/server_select_graph', master=None, timeout=5.0):
     """The pid of ``node_name`` (its XML-RPC ``getPid``); rosgraph.MasterError if unknown,
     OSError when the node does not answer within ``timeout`` s (stopped or hung)."""

@@ -5,7 +5,9 @@ overloaded, behind a dead link) blocks forever. :class:`TimedServiceProxy` keeps
 persistent connection of ``ServiceProxy(persistent=True)`` -- so a probe is one network
 round trip, not a master lookup plus a TCP handshake -- and bounds every call:
 
-- connecting (master lookup aside) uses the connect timeout rospy's transport offers;
+- connecting asks the master where the service is with a deadline of its own (rospy's
+  lookup has none: a starved master held a probe's worker thread past every deadline)
+  and uses the connect timeout rospy's transport offers;
 - a call in progress at the deadline is aborted by closing its transport from the
   node's one watchdog thread (``socket.shutdown`` wakes the blocked ``recv``), and the
   next call reconnects. (A ``threading.Timer`` per call started a thread per probe: 160 us
@@ -17,12 +19,17 @@ import struct
 import threading
 import time
 
+import xmlrpc.client
+
 import genpy
+import rosgraph
 import rospy
 from rospy.exceptions import ROSException, TransportInitError
+from rospy.impl.validators import ParameterInvalid
 from rospy.impl.tcpros_base import TCPROSTransport
 
 from server_select.core.util.pacer import Watchdog
+from server_select.ros import graph
 
 DEADLINES = Watchdog(name='probe deadlines')      # every proxy's calls, one thread
 SO_TIMESTAMPNS = 35     # Linux <asm-generic/socket.h>; Python's socket module lacks them
@@ -66,9 +73,7 @@ def departures(sock):
         try:
             _data, ancillary, _flags, _address = sock.recvmsg(
                 0, 512, socket.MSG_ERRQUEUE | socket.MSG_DONTWAIT)
-        except (BlockingIOError, InterruptedError):
-            return stamps
-        except OSError:
+        except OSError:           # BlockingIOError: the queue is empty
             return stamps
         for level, kind, data in ancillary:
             if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPING and len(data) >= 16:
@@ -78,6 +83,21 @@ def departures(sock):
 
 class ProbeTimeout(rospy.ServiceException):
     """The call did not complete before its deadline."""
+
+
+def lookup_service(name, timeout):
+    """The ``rosrpc://`` URI the master lists for service ``name``, asked with a deadline of
+    ``timeout`` s. ServiceException when it is not listed, ProbeTimeout when the master
+    does not answer in time."""
+    try:
+        uri = graph.service_uri(name, rospy.get_caller_id(), max(0.001, timeout))
+        rospy.core.parse_rosrpc_uri(uri)
+        return uri
+    except socket.timeout:
+        raise ProbeTimeout('the master did not say where %s is within %.3g s' % (name, timeout))
+    except (OSError, xmlrpc.client.Error, rosgraph.MasterError, ParameterInvalid) as error:
+        raise rospy.ServiceException('master lookup of %s: %s' % (
+            name, str(error) or type(error).__name__))
 
 
 class TimedServiceProxy(rospy.ServiceProxy):
@@ -180,7 +200,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
     def _connect(self, request, timeout):
         pinned = self.pinned() if self.pinned is not None else None
         try:
-            uri = self._get_service_uri(request)  # master lookup; ServiceException if none
+            uri = self.uri = lookup_service(self.resolved_name, timeout)
         except rospy.ServiceException:
             if pinned is None:
                 raise
