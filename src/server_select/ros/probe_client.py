@@ -37,6 +37,8 @@ SO_TIMESTAMPING = 37
 # <linux/net_tstamp.h>: a software stamp of each send as it leaves the stack, on the error
 # queue, without the packet
 TX_STAMPS = (1 << 1) | (1 << 4) | (1 << 11)     # TX_SOFTWARE | SOFTWARE | OPT_TSONLY
+# an answer's ancillary data: SO_TIMESTAMPNS's timespec, then SO_TIMESTAMPING's three
+STAMP_SPACE = socket.CMSG_SPACE(16) + socket.CMSG_SPACE(48)
 
 
 def stamp_packets(sock):
@@ -182,7 +184,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
             if self._stamps[1]:
                 departures(transport.socket)    # a send stamp come late: polled ready too
             data, ancillary, _flags, _address = transport.socket.recvmsg(
-                transport.protocol.buff_size, socket.CMSG_SPACE(16) if self._stamps[0] else 0,
+                transport.protocol.buff_size, STAMP_SPACE if self._stamps[0] else 0,
                 socket.MSG_DONTWAIT)
             if not data:
                 raise rospy.ServiceException('the server closed the connection')

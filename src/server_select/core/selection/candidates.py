@@ -200,9 +200,7 @@ class Selection(object):
         if self.mode == 'fixed':
             return [self.fixed_server]
         if self.balancer is not None:
-            with self._lock:
-                servers = [s for s in self.servers
-                           if self._task_servers is None or s in self._task_servers]
+            servers = self._servers()
             if self.health is not None:
                 servers = self.health.order(servers)
             return self.balancer.order(servers, kind)
@@ -210,6 +208,12 @@ class Selection(object):
         if ranking is None:
             ranking = self.own_ranking()
         return self.health.order(ranking) if self.health is not None else ranking
+
+    def _servers(self):
+        """The servers tasks may go to (grouped: the group's)."""
+        with self._lock:
+            return [s for s in self.servers
+                    if self._task_servers is None or s in self._task_servers]
 
     def target(self):
         """The first candidate, or NO_SERVER."""
@@ -225,10 +229,8 @@ class Selection(object):
             return self.target()
         if self.balancer is not None:
             last = self.balancer.last
-            with self._lock:
-                servers = list(self.servers)
-            usable = last is not None and (self.health is None or
-                                           last in self.health.order(servers))
+            usable = last is not None and (self.health is None or self.health.usable(last)
+                                           or last in self.health.order(self._servers()))
             return last if usable else NO_SERVER
         ranking = self.manager_ranking()
         if ranking is None:
