@@ -97,6 +97,28 @@ def test_a_server_ejected_for_its_probes_is_back_once_they_answer_again():
     assert h.task_ok(1) and h.state(1) == HEALTHY
 
 
+def test_an_outage_counts_as_one_ejection_when_a_task_fails_on_the_return():
+    h, clock = make(base=1.0, longest=30.0, probation_probes=2)
+    for _ in range(5):                              # a long outage: 1, 2, 4, 8, 16 s
+        ejection = h.failure(1, 'probe failed', probe=True)
+        clock.now += ejection.seconds
+    h.probe_ok(1)
+    h.probe_ok(1)                                   # back
+    assert h.usable(1)
+    # its first task was late (written into a connection the outage had stalled)
+    assert h.failure(1, 'no answer within 0.25 s').seconds == 2.0
+    clock.now += 1.0
+    h.probe_ok(1)
+    h.probe_ok(1)
+    assert h.state(1) == EJECTED            # a task's failure: it serves its time
+    clock.now += 1.0
+    h.probe_ok(1)
+    h.probe_ok(1)
+    assert h.state(1) == PROBATION and h.usable(1)
+    assert h.task_ok(1) and h.state(1) == HEALTHY
+    assert h.failure(1, 'no answer within 0.25 s').seconds == 1.0
+
+
 def test_a_server_ejected_for_its_tasks_serves_its_time_whatever_its_probes_say():
     h, clock = make(base=1.0, longest=30.0, probation_probes=2)
     assert h.failure(1, 'no answer within 2 s').seconds == 1.0

@@ -155,6 +155,8 @@ class RobotNode(object):
                                    % (self.robot_id, server, err))
         if ok:
             self.health.probe_ok(server)
+            for stream in self.streams:     # a connection that lived through an outage
+                stream.heard(server)
             if self.selection.balancer is not None and self.load is None:
                 self.selection.balancer.probed(server, rtt)   # (with a load: from RobotLoad)
         else:

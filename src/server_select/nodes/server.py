@@ -144,6 +144,8 @@ class ServerNode(object):
         if self.direct and req.robot_id and req.robot_id not in self._known_robots:
             self._known_robots.add(req.robot_id)   # its result publishers, off this path
             self._pool.submit(self._prepare, req.robot_id)
+        elif self.direct and any(h.endpoint.stalled(req.robot_id) for h in self.handlers):
+            self._pool.submit(self._renew, req.robot_id)   # it is back after an outage
         if req.task_kinds:
             self.work.announce(req.robot_id, zip(req.task_kinds, req.task_rates))
             for kind in self._unwarmed.intersection(req.task_kinds):   # before its 1st task
@@ -172,6 +174,14 @@ class ServerNode(object):
     def _prepare(self, robot):
         for handler in self.handlers:
             handler.endpoint.prepare(robot)
+
+    def _renew(self, robot):
+        for handler in self.handlers:
+            nodes = handler.endpoint.renew(robot)
+            if nodes:
+                rospy.logwarn('server %d: %s results to robot %d stalled in TCP '
+                              'retransmission back-off (%s): connecting anew', self.server_id,
+                              handler.plugin.kind, robot, ', '.join(nodes))
 
     def on_shutdown(self):
         self.announcer.leave()

@@ -7,6 +7,8 @@ import xmlrpc.client
 
 import rosgraph
 
+from server_select.core.util import tcp
+
 
 class _TimedTransport(xmlrpc.client.Transport):
     def __init__(self, timeout):
@@ -72,6 +74,15 @@ class Liveness(object):
 def hearing(pub):
     """The nodes connected to ``pub`` (rospy names a connection by its subscriber)."""
     return set(c.endpoint_id for c in list(pub.impl.connections))
+
+
+def stalled(pub):
+    """The nodes whose connection to ``pub`` holds data TCP retransmits only every second
+    or less often (:func:`server_select.core.util.tcp.stalled`: it lived through an
+    outage with a message in flight, and what is written to it waits for the next try)."""
+    impl = getattr(pub, 'impl', None)
+    return [c.endpoint_id for c in list(impl.connections if impl is not None else ())
+            if tcp.stalled(getattr(c, 'socket', None))]
 
 
 def unheard(nodes, first, others, caller_id):

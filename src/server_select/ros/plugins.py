@@ -18,7 +18,7 @@ import rospy
 from server_select.core.config.params import ParamError
 from server_select.ros.graph import publisher_of
 from server_select.ros import seal
-from server_select.ros.routing import ServerEndpoint
+from server_select.ros.endpoints import ServerEndpoint
 
 
 class TaskPlugin(object):

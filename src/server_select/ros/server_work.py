@@ -11,7 +11,7 @@ from server_select.core.load.work_queue import WorkQueue
 
 class ServerWork(object):
     """Takes the tasks addressed to this server from its endpoints
-    (:class:`~server_select.ros.routing.ServerEndpoint`), and answers each exactly once: a
+    (:class:`~server_select.ros.endpoints.ServerEndpoint`), and answers each exactly once: a
     result from a worker, or at once a *busy* result when the task cannot be finished by
     the deadline its robot gave (``budget``), or the queue is full; a task whose deadline
     passed while it waited is answered busy too, without doing the work."""

@@ -210,6 +210,15 @@ class TaskStream(object):
         if self.route is not None:
             self.route.remove(server)
 
+    def heard(self, server):
+        """``server`` answered a probe: a task connection to it stalled in TCP's
+        retransmission back-off is made anew (``DirectRoute.heard``), with a line."""
+        nodes = self.route.heard(server) if self.route is not None else []
+        if nodes:
+            rospy.logwarn('robot %d: %s tasks to server %d stalled in TCP retransmission '
+                          'back-off (%s): connecting anew', self.robot_id, self.flow.kind,
+                          server, ', '.join(nodes))
+
     def shutdown(self):
         """Stop sending; a task still out is reported failed (each task is reported once,
         also when the robot stops or a newer copy of it takes its name)."""

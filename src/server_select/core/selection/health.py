@@ -9,8 +9,10 @@ time starts from ``base`` again); a failure on probation ejects it for twice as 
 A server ejected because its *probes* failed (its link down, its host stopped) is on
 probation as soon as ``probation_probes`` probes in a row are answered again: the
 evidence that ejected it is gone (after a 20 s outage, the doubled time would otherwise
-keep a server that is back out for up to ``longest`` s more). One ejected because its
-tasks failed serves its time: its probes may answer while its tasks do not.
+keep a server that is back out for up to ``longest`` s more), and the outage counts as one
+ejection: a task that fails on its return (one sent into a connection the outage left
+stalled) ejects it for 2 x ``base`` s, not for the outage's doubled time. One ejected
+because its tasks failed serves its time: its probes may answer while its tasks do not.
 
 A server that has never answered is not failing but not up yet (a host still starting,
 a server launched later): its failures do not eject it with a growing time, which would
@@ -116,8 +118,9 @@ class ServerHealth(object):
                 if entry.state in (PROBATION, DOWN) or (entry.state == EJECTED and
                                                         entry.by_probe):
                     entry.good_probes += 1
-                if entry.state == EJECTED and entry.good_probes >= self.probation_probes:
-                    entry.state = PROBATION       # its probes are answered again
+                if entry.by_probe and entry.state in (EJECTED, PROBATION) and \
+                        entry.good_probes >= self.probation_probes:
+                    entry.state, entry.ejections = PROBATION, 1   # its probes answer again
 
     def task_ok(self, server):
         """A good answer; True when it ends ``server``'s probation."""
