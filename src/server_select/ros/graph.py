@@ -77,11 +77,12 @@ def hearing(pub):
 
 
 def stalled(pub):
-    """The nodes whose connection to ``pub`` holds data TCP retransmits only every second
-    or less often (:func:`server_select.core.util.tcp.stalled`: it lived through an
-    outage with a message in flight, and what is written to it waits for the next try)."""
+    """The connections of ``pub`` (rospy's, each naming its subscriber node in
+    ``endpoint_id``) holding data TCP retransmits only every second or less often
+    (:func:`server_select.core.util.tcp.stalled`: it lived through an outage with a
+    message in flight, and what is written to it waits for the next try)."""
     impl = getattr(pub, 'impl', None)
-    return [c.endpoint_id for c in list(impl.connections if impl is not None else ())
+    return [c for c in list(impl.connections if impl is not None else ())
             if tcp.stalled(getattr(c, 'socket', None))]
 
 

@@ -13,6 +13,7 @@ import threading
 import rospy
 
 from server_select.core.config import names
+from server_select.core.util import tcp
 from server_select.ros.graph import hearing, stalled
 from server_select.ros.node import fleet
 
@@ -126,16 +127,20 @@ ROUTES = {'broadcast': BroadcastRoute, 'direct': DirectRoute}
 
 
 def renew(pubs, key, make):
-    """Unregister ``pubs[key]`` and ``make()`` it again when a connection of it is stalled
-    (the master then tells its subscribers, which connect anew); the stalled subscribers,
-    or [] (the caller holds the lock that guards ``pubs``)."""
+    """Unregister ``pubs[key]`` and ``make()`` it again when a connection of it is stalled;
+    the stalled subscribers' nodes, or [] (the caller holds the lock guarding ``pubs``).
+    Its connections close with a reset, so that their subscribers drop them at once (one
+    that still held it would not connect again), and the new registration has the master
+    tell them to connect anew."""
     pub = pubs.get(key)
-    nodes = stalled(pub) if pub is not None else []
-    if nodes:
+    connections = stalled(pub) if pub is not None else []
+    if connections:
+        for connection in list(pub.impl.connections):
+            tcp.reset_on_close(getattr(connection, 'socket', None))
         del pubs[key]
         pub.unregister()
         make()
-    return nodes
+    return [c.endpoint_id for c in connections]
 
 
 def kind_name(kind):

@@ -49,3 +49,13 @@ def stalled(sock, rto=STALLED_RTO):
     often (a connection that lived through an outage with data in flight)."""
     state = retransmission(sock)
     return state is not None and state.unacked > 0 and state.rto >= rto
+
+
+def reset_on_close(sock):
+    """Make ``sock``'s close send a reset at once, dropping what it still holds (a stalled
+    connection's peer would otherwise see it open until its data got through, and a ROS
+    subscriber does not connect again to a publisher it believes it is connected to)."""
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack('ii', 1, 0))
+    except (OSError, AttributeError):
+        pass
