@@ -69,7 +69,7 @@ class ResultRoutes(object):
             while not pub.get_num_connections() and time.monotonic() < end \
                     and not rospy.is_shutdown():
                 time.sleep(0.005)
-        with self._lock:      # (the one heard() may have made since)
+        with self._lock:      # (the one renew() may have made since)
             pub = self._pub(robot)
             if pub is not None:
                 pub.publish(result)

@@ -60,6 +60,7 @@ import math
 import statistics
 
 from server_select.core.selection.balancer import Balancer, quantile
+from server_select.core.util.stats import mean_error
 
 MIN_ANSWERS = 3          # answers per server kept however old (a rarely probed server)
 KEEP = 64                # answers kept per server at most
@@ -71,14 +72,6 @@ MAX_ALIKE = 1000         # robots like this one a server is counted to have at m
 
 
 Answer = collections.namedtuple('Answer', 'rtt others utilization')
-
-
-def _mean_error(values, independent=None):
-    """``(mean, its standard error)`` of ``values`` (error 0.0 for one value), as if
-    ``independent`` of them (at most all) were independent."""
-    n = len(values) if independent is None else max(1.0, min(len(values), independent))
-    error = statistics.stdev(values) / math.sqrt(n) if len(values) > 1 else 0.0
-    return statistics.mean(values), error
 
 
 class HotCold(Balancer):
@@ -158,9 +151,9 @@ class HotCold(Balancer):
         # a task's work over their span is independent of the others
         span = entries[-1][0] - entries[0][0] if entries else 0.0
         independent = 1.0 + span * workers / work if work > 0 else None
-        mean, error = _mean_error(latencies, independent)
+        mean, error = mean_error(latencies, independent)
         # the work (a median of the server's recent tasks) has an error every answer shares
-        error = math.hypot(error, work_error * statistics.mean(per_work))
+        error = math.hypot(error, work_error * statistics.fmean(per_work))
         return mean, error, statistics.median(heat), work / workers
 
     def share(self, here, there, kind, fresh, rate, now):
@@ -172,7 +165,7 @@ class HotCold(Balancer):
             return 1.0                         # its own load unknown yet
         others = [a.utilization for a in
                   self._recent(self.answers[here], now, MIN_ANSWERS)] or [0.0]
-        alike = min(MAX_ALIKE, 1.0 + statistics.mean(others) / mine)
+        alike = min(MAX_ALIKE, 1.0 + statistics.fmean(others) / mine)
 
         def pays(k):
             return (self.estimate(fresh[there], kind, fresh, rate, k, now)[0] <=

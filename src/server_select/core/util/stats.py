@@ -1,4 +1,5 @@
-"""Summary statistics used by reports and benchmarks."""
+"""Summary statistics used by reports and benchmarks, and the mean and its error on a
+robot's hot path."""
 
 import math
 import statistics
@@ -11,6 +12,19 @@ def percentile(ordered, q):
     low = int(math.floor(position))
     high = min(low + 1, len(ordered) - 1)
     return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
+
+
+def mean_error(values, independent=None):
+    """``(mean, its standard error)`` of the non-empty ``values`` (error 0.0 for one), as
+    if ``independent`` of them (at most all) were independent. In floats: ``statistics``
+    computes exact fractions, two thirds of a fleet robot's choice per task (1.0 against
+    0.2 ms here), on robots that may have a Pi's CPU."""
+    mean, count = statistics.fmean(values), len(values)
+    if count < 2:
+        return mean, 0.0
+    variance = math.fsum((v - mean) ** 2 for v in values) / (count - 1)
+    n = count if independent is None else max(1.0, min(count, independent))
+    return mean, math.sqrt(variance / n)
 
 
 def summarize(values):
