@@ -27,7 +27,7 @@ from server_select.nodes.server import ServerNode
 from server_select.ros.camera import TopicSource
 from server_select.ros.membership import ServerRegistry
 from server_select.ros.plugins import PluginHandler
-from server_select.ros.routing import ResultRoutes
+from server_select.ros.endpoints import ResultRoutes
 from server_select.ros.server_work import ServerWork
 from server_select.tasks.orb import Orb
 from server_select.vision.image_codec import encode, from_array
