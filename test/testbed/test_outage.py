@@ -33,8 +33,8 @@ def test_tasks_return_to_the_near_server_when_its_link_is_back(tmp_path):
     back = next((r for r in reports if r.t > UP and r.ok and r.answered_by == 1), None)
     during = [r for r in reports if DOWN + 1.0 < r.t < UP]
     failed = [r for r in reports if not r.ok]
-    log = open(os.path.join(str(tmp_path), 'select', 'robot1.log')).read()
-    renewed = 'stalled in TCP retransmission back-off' in log
+    with open(os.path.join(str(tmp_path), 'select', 'robot1.log')) as stream:
+        renewed = 'stalled in TCP retransmission back-off' in stream.read()
     print('tasks %d, failed %d, answered during the outage %d (by server 2: %d); back on '
           'server 1 %s after the link; stalled connection made anew: %s' % (
               len(reports), len(failed), sum(1 for r in during if r.ok),
