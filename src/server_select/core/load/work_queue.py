@@ -32,6 +32,7 @@ import threading
 import time
 
 from server_select.core.load.demand import Demand
+from server_select.core.util.stats import mean_error
 
 Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization '
                               'service_error')
@@ -65,8 +66,7 @@ class ServiceTimes(object):
                 times = self._times[kind] = collections.deque(maxlen=self.keep)
             times.append(float(seconds))
             self._medians[kind] = statistics.median(times)
-            self._errors[kind] = MEDIAN_ERROR * statistics.stdev(times) / len(times) ** 0.5 \
-                if len(times) > 1 else 0.0
+            self._errors[kind] = MEDIAN_ERROR * mean_error(times)[1]
 
     def get(self, kind):
         """Seconds of work per task of ``kind`` (0.0 while none was done: optimistic)."""
