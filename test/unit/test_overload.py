@@ -164,4 +164,24 @@ def test_no_hedge_for_a_delay_the_servers_load_explains():
     clock.add(3, 0.2)
     assert clock.hedge_seconds(3, 0.95) == pytest.approx(1.0)   # 2 x what the load says
     expected[3] = None
-    assert clock.hedge_seconds(3, 0.95) == pytest.approx(0.2)   # else the quantile
+    assert clock.hedge_seconds(3, 0.95) == pytest.approx(0.4)   # else quantile + median
+
+
+def test_a_hedge_waits_past_the_usual_spread_by_one_round_trip():
+    clock = AttemptClock(5.0, min_samples=5)
+    for rtt in [0.010] * 50 + [0.016] * 45 + [0.230] * 3:   # 3 % retransmissions
+        clock.add(1, rtt)
+    assert clock.hedge_seconds(1, 0.95) == pytest.approx(0.016 + 0.010)
+    jitter = [0.010 + 0.0001 * i for i in range(100)]        # 10-20 ms, no tail
+    for rtt in jitter:
+        clock.add(2, rtt)
+    assert not [r for r in jitter if r > clock.hedge_seconds(2, 0.95)]   # no copy could win
+
+
+def test_a_server_with_few_round_trips_is_hedged_by_what_its_load_says():
+    expected = {3: 0.012}
+    clock = AttemptClock(5.0, min_samples=5, expected=expected.get)
+    clock.add(3, 0.011)
+    assert clock.hedge_seconds(3, 0.95) == pytest.approx(0.024)
+    expected[3] = None
+    assert clock.hedge_seconds(3, 0.95) is None        # nothing known: no hedge yet

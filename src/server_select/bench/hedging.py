@@ -4,10 +4,11 @@ Two robots send sort tasks at ``--rate`` each to two servers over links of ``--d
 one way with ``--loss`` packet loss (a lost packet costs a TCP retransmission, 200 ms or
 more: the tail "The Tail at Scale" hedges against), the manager selecting: robot 1 with
 ``hedge:=false``, robot 2 with ``hedge:=true`` (a copy to the next server once a task is
-past its server's p95 round trip), side by side on links alike, ``--runs`` times. Printed
-per setting: tasks, failed (counted at the task timeout), round trip p50 / p99 / p99.9 /
-max, the share of tasks answered by a second server, and the extra requests per task
-(every attempt after the first: hedges and re-sends). Median of the runs, (min-max).
+past its server's p95 round trip by a median one), side by side on links alike,
+``--runs`` times. Printed per setting: tasks, failed (counted at the task timeout), round
+trip p50 / p99 / p99.9 / max, the share of tasks answered by a second server, and the
+extra requests per task (every attempt after the first: hedges and re-sends). Median of
+the runs, (min-max).
 """
 
 import sys

@@ -162,9 +162,10 @@ PARAMS = {
     'retry_factor': Param(5.0, parse_positive, "an attempt's deadline: this x the server's "
                           'recent p99 task round trip'),
     'hedge': Param(False, parse_bool, 'also send a task still unanswered after its '
-                   "server's ~hedge_quantile round trip to the next server (first answer wins)"),
-    'hedge_quantile': Param(0.95, parse_quantile, 'when a hedged copy goes (quantile of the '
-                            "server's recent task round trips)"),
+                   "server's ~hedge_quantile round trip plus its median to the next server "
+                   '(first answer wins)'),
+    'hedge_quantile': Param(0.95, parse_quantile, 'when a hedged copy goes: this quantile of '
+                            "the server's recent task round trips, plus their median"),
     'retry_floor': Param(0.25, parse_positive, "shortest attempt deadline (s)"),
     'manager_node': Param('/manager', parse_publisher, 'flags count only from this node '
                           '(*: from any)'),

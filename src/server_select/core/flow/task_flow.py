@@ -12,10 +12,10 @@ clock), so it is tested without a master. It goes forward only::
 Tasks are idempotent and carry their id: a task without an answer by its attempt deadline
 (a multiple of that server's recent round trips) is sent again to the next candidate it
 has not tried, and the first answer from any server it was sent to wins; later ones are
-counted as duplicates. With ``hedge`` (a quantile, e.g. 0.95), a task still unanswered
-after that quantile of its server's recent round trips is also sent to the next candidate
-without blaming the first ("The Tail at Scale"'s hedged request). Every task yields
-exactly one :class:`Outcome`.
+counted as duplicates. With ``hedge`` (a quantile, e.g. 0.95), a task still
+unanswered a median round trip after that quantile of its server's recent round trips is
+also sent to the next candidate without blaming the first ("The Tail at Scale"'s hedged
+request). Every task yields exactly one :class:`Outcome`.
 
 Under overload (docs/design.md, "Capacity and overload") a *busy* answer blames nobody; extra
 sends are paid from a ``budget``; at most ``max_in_flight`` tasks are out at once, and with
@@ -53,8 +53,8 @@ class TaskFlow(Timing):
         task is not one: only the faster of two servers answers it).
     :param deadlines: an :class:`~server_select.core.flow.attempts.AttemptClock`.
     :param ids: iterator of task ids (shared by the robot's streams: ids are per robot).
-    :param hedge: None, or the quantile of a server's round trips after which an
-        unanswered task is also sent to the next candidate.
+    :param hedge: None, or the quantile of a server's round trips after which (plus
+        their median) an unanswered task is also sent to the next candidate.
     :param budget: a :class:`~server_select.core.flow.budget.RetryBudget` (None: no limit).
     :param max_in_flight: at most this many tasks out at once (0: no limit); a send that
         finds them all out is held back (no task is made) until one ends (:meth:`due`).
