@@ -176,12 +176,3 @@ def test_a_hedge_waits_past_the_usual_spread_by_one_round_trip():
     for rtt in jitter:
         clock.add(2, rtt)
     assert not [r for r in jitter if r > clock.hedge_seconds(2, 0.95)]   # no copy could win
-
-
-def test_a_server_with_few_round_trips_is_hedged_by_what_its_load_says():
-    expected = {3: 0.012}
-    clock = AttemptClock(5.0, min_samples=5, expected=expected.get)
-    clock.add(3, 0.011)
-    assert clock.hedge_seconds(3, 0.95) == pytest.approx(0.024)
-    expected[3] = None
-    assert clock.hedge_seconds(3, 0.95) is None        # nothing known: no hedge yet

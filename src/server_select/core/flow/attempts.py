@@ -47,22 +47,20 @@ class AttemptClock(object):
 
     def hedge_seconds(self, server, quantile):
         """How long to wait before a hedged copy of a task on ``server`` goes elsewhere:
-        the ``quantile`` of the server's recent round trips plus their median. A copy
-        takes a round trip itself, so one sent as a task passes the quantile rarely beats
-        it: such a task is in the tail of the server's usual spread, and hedging it only
-        spent the retry budget that a task stuck behind a lost packet (a TCP
-        retransmission, 200 ms or more) then lacked. Never less than what the server's
-        load says a task takes there (a delay the load explains is no tail, and a copy is
-        twice the work); while it has fewer than ``min_samples`` round trips, that (None:
-        unknown, no hedge)."""
+        the ``quantile`` of the server's recent round trips plus their median (None while
+        it has fewer than ``min_samples``). A copy takes a round trip itself, so one sent
+        as a task passes the quantile seldom beats it: such a task is in the tail of the
+        server's usual spread, and hedging it only spent the retry budget that a task
+        stuck behind a lost packet (a TCP retransmission, 200 ms or more) then lacked.
+        Never less than what the server's load says a task takes there (a delay the load
+        explains is no tail, and a copy is twice the work)."""
         with self._lock:
             rtts = sorted(self._rtts.get(server, ()))
-        expected = self.expected(server) if self.expected is not None else None
-        by_load = None if expected is None else self.load_factor * expected
         if len(rtts) < self.min_samples:
-            return by_load
+            return None
         seconds = rtts[min(len(rtts) - 1, int(quantile * len(rtts)))] + rtts[len(rtts) // 2]
-        return seconds if by_load is None else max(seconds, by_load)
+        expected = self.expected(server) if self.expected is not None else None
+        return seconds if expected is None else max(seconds, self.load_factor * expected)
 
     def budget(self, server, remaining, elapsed=0.0):
         """The deadline (s from now) an attempt on ``server`` gives it: the ``remaining``
