@@ -176,3 +176,10 @@ def test_a_hedge_waits_past_the_usual_spread_by_one_round_trip():
     for rtt in jitter:
         clock.add(2, rtt)
     assert not [r for r in jitter if r > clock.hedge_seconds(2, 0.95)]   # no copy could win
+
+
+def test_one_retransmission_among_few_round_trips_does_not_stop_hedging():
+    clock = AttemptClock(5.0, min_samples=5)
+    for rtt in [0.018] * 12 + [0.247]:           # a new server's first 13 answers
+        clock.add(4, rtt)
+    assert clock.hedge_seconds(4, 0.95) == pytest.approx(0.018 + 0.018)

@@ -207,7 +207,7 @@ def _learn(w, server, rtts):
 
 def test_a_hedged_task_goes_to_the_next_server_a_round_trip_past_the_p95_first_wins():
     w = World(candidates=(3, 4), hedge=0.95)
-    _learn(w, 3, [0.010] * 19 + [0.020])          # server 3: p95 20 ms, median 10 ms
+    _learn(w, 3, [0.010] * 18 + [0.020] * 2)      # server 3: p95 20 ms, median 10 ms
     del w.published[:]
     task = w.flow.send_next('s')
     w.clock.now += 0.025
