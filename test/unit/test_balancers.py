@@ -7,7 +7,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from server_select.core.selection import balancers
-from server_select.core.selection.balancers import PeakEwma, Prequal, quantile
+from server_select.core.selection.balancers import PeakEwma, Prequal
+from server_select.core.util.stats import percentile
 from server_select.core.load.work_queue import Load
 from server_select.core.flow.task_flow import TaskFlow
 
@@ -118,7 +119,7 @@ def test_prequal_never_picks_a_hot_server_while_a_cold_one_exists(answers, seed)
     for server, rif, rtt in answers:
         b.probed(server, rtt, load(rif))
     pool = [e[0] for e in b.pool]
-    limit = quantile([a.rif for a in pool], b.q)
+    limit = percentile(sorted(a.rif for a in pool), 100 * b.q)
     cold = [a for a in pool if a.rif <= limit]
     first = b.order([1, 2, 3, 4, 5], 'sort')[0]
     best_cold = min(cold, key=lambda a: (b.latency(a, 'sort'), a.rif))

@@ -1,11 +1,10 @@
 """What every per-task rule keeps (no rospy): :class:`Balancer`, the state a robot's rule
-is told (its attempts out per server, each server's newest probe answer, a random source),
-and :func:`quantile`. The rules build on it: the league's peers (:mod:`balancers`) and the
-fleet profile's ``hot_cold`` (:mod:`hot_cold`).
+is told (its attempts out per server, each server's newest probe answer, a random source).
+The rules build on it: the league's peers (:mod:`balancers`) and the fleet profile's
+``hot_cold`` (:mod:`hot_cold`).
 """
 
 import collections
-import math
 import random
 import threading
 import time
@@ -81,12 +80,3 @@ class Balancer(object):
     def _two(self, servers):
         """Two distinct servers drawn at random (one when there is one)."""
         return self.rng.sample(servers, min(2, len(servers)))
-
-
-def quantile(values, q):
-    """The ``q`` quantile of ``values`` by linear interpolation (numpy's default)."""
-    ordered = sorted(values)
-    position = q * (len(ordered) - 1)
-    low = int(math.floor(position))
-    high = min(low + 1, len(ordered) - 1)
-    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)

@@ -41,8 +41,9 @@ selection applies to them.
 import collections
 import math
 
-from server_select.core.selection.balancer import Balancer, quantile
+from server_select.core.selection.balancer import Balancer
 from server_select.core.selection.hot_cold import HotCold
+from server_select.core.util.stats import percentile
 
 PEERS = ('p2c_peak_ewma', 'least_request', 'prequal', 'round_robin', 'replicate')
 
@@ -169,7 +170,7 @@ class Prequal(Balancer):
 
     def hot(self, entries):
         """The answers of ``entries`` that are hot (RIF above the pool's quantile)."""
-        limit = quantile([e[0].rif for e in entries], self.q)
+        limit = percentile(sorted(e[0].rif for e in entries), 100 * self.q)
         return [e for e in entries if e[0].rif > limit]
 
     def _order(self, servers, kind, now):

@@ -59,8 +59,8 @@ import collections
 import math
 import statistics
 
-from server_select.core.selection.balancer import Balancer, quantile
-from server_select.core.util.stats import mean_error
+from server_select.core.selection.balancer import Balancer
+from server_select.core.util.stats import mean_error, percentile
 
 MIN_ANSWERS = 3          # answers per server kept however old (a rarely probed server)
 KEEP = 64                # answers kept per server at most
@@ -192,7 +192,7 @@ class HotCold(Balancer):
         latency = dict((s, e[0]) for s, e in estimates.items())
         self.errors = dict((s, e[1]) for s, e in estimates.items())
         rifs = dict((s, e[2]) for s, e in estimates.items())       # work in flight
-        limit = quantile(list(rifs.values()), HOT_QUANTILE)
+        limit = percentile(sorted(rifs.values()), 100 * HOT_QUANTILE)
         # the robot's own server is hot only by one more task than that: a single answer
         # that caught another robot's task is not a reason to move
         cold = [s for s in fresh if rifs[s] <= limit +
