@@ -50,5 +50,15 @@ step demo "source devel/setup.bash && (roscore -p $port > roscore.out 2>&1 &) \
   rosnode kill /recorder; within 30 '[ -f plain.bag ]'; pkill -INT -f 'roscore -p $port'; \
   grep -q '| R1 | S' demo.out && grep -q '| R2 | S' demo.out \
   && rosrun server_select analyze plain.bag | tee analyze.out && grep -q '^| plain | [1-9]' analyze.out"
+# what failed, last (CI shows the end of the output): each failed test case, its first line
+/usr/bin/python3 - "$ws/build/test_results" <<'PY'
+import glob, sys, xml.etree.ElementTree as ET
+for path in sorted(glob.glob(sys.argv[1] + '/*/*.xml')):
+    for case in ET.parse(path).getroot().iter('testcase'):
+        for bad in list(case.iter('failure')) + list(case.iter('error')):
+            text = (bad.get('message') or bad.text or '').strip().splitlines() or ['']
+            print('catkin: FAILED %s %s: %s' % (path.rsplit('/', 1)[-1], case.get('name'),
+                                                text[0][:300]))
+PY
 echo "catkin: $passed passed, $failed failed"
 [ $failed -eq 0 ]
