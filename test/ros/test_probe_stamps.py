@@ -5,7 +5,9 @@ measures when the answer came, and its request's departure is when it left the s
 import socket
 import time
 
+from server_select.core.util.procs import wait_until
 from server_select.ros.probe_client import arrival, departures, stamp_packets
+from server_select.ros.probe_loop import Flight
 
 
 def tcp_pair():
@@ -65,3 +67,18 @@ def test_no_send_stamp_without_the_option():
     with robot, server:
         robot.sendall(b'x')
         assert departures(robot) == []
+
+
+def test_a_probe_is_out_by_its_send_stamp_and_not_while_its_answer_waits_unread():
+    """The still-out rule's clock (``Flight.out_for``): from the request's departure, as
+    its round trip is; an answer in the socket that the robot has not read yet is not
+    the server's delay."""
+    robot, server = tcp_pair()
+    with robot, server:
+        departed = time.time() - 0.080          # the kernel sent it 80 ms ago
+        flight = Flight(None, robot, time.perf_counter(), 0.5, None, sent=departed)
+        out_for = flight.out_for()
+        assert 0.080 <= out_for < 0.080 + 0.05
+        server.sendall(b'answer')
+        assert wait_until(lambda: flight.out_for() == 0.0, 2.0)
+        assert Flight(None, None, 0.0, 0.5, None).out_for() is None   # no socket: unknown

@@ -15,6 +15,7 @@ link) is not made here, where it would hold every other probe up: the prober han
 to its worker threads.
 """
 
+import select
 import selectors
 import socket
 import threading
@@ -39,6 +40,19 @@ class Flight(object):
 
     def done(self):
         return self.finished
+
+    def out_for(self):
+        """Seconds the request has been out by the clock its round trip is measured with
+        (from the kernel's send stamp, where there is one); 0.0 while its answer waits
+        unread in the socket (the robot, not the link or the server, is behind)."""
+        if self.sock is None or self.sent is None:
+            return None
+        try:
+            if select.select([self.sock], [], [], 0)[0]:
+                return 0.0
+        except (OSError, ValueError):       # closed meanwhile
+            return None
+        return time.time() - self.sent
 
 
 class ProbeLoop(object):

@@ -155,7 +155,12 @@ class Prober(object):
         previous, sent = self._inflight.get(server, (None, 0.0))
         if previous is None or previous.done():
             return False
-        return now is None or not self.answer_times.late(server, now - sent)
+        if now is None:
+            return True
+        # by the clock of its round trips: from the kernel's send stamp, and not late
+        # while its answer waits unread (a busy robot's own delay is not the server's)
+        out_for = getattr(previous, 'out_for', lambda: None)()
+        return not self.answer_times.late(server, now - sent if out_for is None else out_for)
 
     def _request(self, server, seq):
         stamp = rospy.Time.now()

@@ -10,7 +10,9 @@ working: counted as failed at 0.1 s, such probes ejected the capped servers of a
 overload 39 times a run.
 
 So a probe still out is *late* once older than :data:`FACTOR` x the longest round trip among
-the server's last :data:`KEEP` answers: a server that answered in 10-25 ms is late after
+the server's last :data:`KEEP` answers (its age by the clock of the round trips: the robot
+gives it from the kernel's send stamp, and gives none while the answer waits unread, so a
+busy robot's own delay is not counted): a server that answered in 10-25 ms is late after
 50 ms, one that has taken up to 330 ms is not late before 0.66 s (its probe's own timeout
 comes first). A server that has not answered yet has no history: its probe still out is
 late (it is down until it answers). Tried first, and measured too low: TCP's retransmission
