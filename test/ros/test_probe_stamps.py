@@ -79,6 +79,10 @@ def test_a_probe_is_out_by_its_send_stamp_and_not_while_its_answer_waits_unread(
         flight = Flight(None, robot, time.perf_counter(), 0.5, None, sent=departed)
         out_for = flight.out_for()
         assert 0.080 <= out_for < 0.080 + 0.05
+        assert stamp_packets(robot) == (True, True)
+        robot.sendall(b'request')         # its send stamp left on the error queue: polls
+        assert server.recv(64) == b'request'            # ready, and is no answer
+        assert flight.out_for() >= 0.080
         server.sendall(b'answer')
         assert wait_until(lambda: flight.out_for() == 0.0, 2.0)
         assert Flight(None, None, 0.0, 0.5, None).out_for() is None   # no socket: unknown

@@ -15,7 +15,6 @@ link) is not made here, where it would hold every other probe up: the prober han
 to its worker threads.
 """
 
-import select
 import selectors
 import socket
 import threading
@@ -47,12 +46,13 @@ class Flight(object):
         unread in the socket (the robot, not the link or the server, is behind)."""
         if self.sock is None or self.sent is None:
             return None
-        try:
-            if select.select([self.sock], [], [], 0)[0]:
-                return 0.0
-        except (OSError, ValueError):       # closed meanwhile
+        try:    # bytes, not readiness: a send stamp come late polls ready too
+            self.sock.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+            return 0.0              # answer bytes (or the server's close) wait unread
+        except BlockingIOError:
+            return time.time() - self.sent
+        except OSError:             # closed meanwhile
             return None
-        return time.time() - self.sent
 
 
 class ProbeLoop(object):
