@@ -77,8 +77,7 @@ def test_a_probe_is_out_by_its_send_stamp_and_not_while_its_answer_waits_unread(
     with robot, server:
         departed = time.time() - 0.080          # the kernel sent it 80 ms ago
         flight = Flight(None, robot, time.perf_counter(), 0.5, None, sent=departed)
-        out_for = flight.out_for()
-        assert 0.080 <= out_for < 0.080 + 0.05
+        assert 0.080 <= flight.out_for() < 1.0   # (a loaded host may stall the test)
         assert stamp_packets(robot) == (True, True)
         robot.sendall(b'request')         # its send stamp left on the error queue: polls
         assert server.recv(64) == b'request'            # ready, and is no answer
