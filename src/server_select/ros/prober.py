@@ -13,7 +13,7 @@ from server_select.core.selection.answer_time import AnswerTimes
 from server_select.core.selection.probing import ProbeRound
 from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
-from server_select.ros.probe_loop import ProbeLoop
+from server_select.ros.probe_loop import Flight, ProbeLoop
 from server_select.ros.probe_samples import ProbeSamples
 from server_select.ros.probe_seal import ProbeSeal
 from server_select.ros.seal import enabled as keyed
@@ -158,8 +158,8 @@ class Prober(object):
         if now is None:
             return True
         # by the clock of its round trips: from the kernel's send stamp, and not late
-        # while its answer waits unread (a busy robot's own delay is not the server's)
-        out_for = getattr(previous, 'out_for', lambda: None)()
+        # while its answer waits unread (a probe connecting first: from the round's time)
+        out_for = previous.out_for() if isinstance(previous, Flight) else None
         return not self.answer_times.late(server, now - sent if out_for is None else out_for)
 
     def _request(self, server, seq):
