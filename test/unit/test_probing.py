@@ -107,6 +107,26 @@ def test_many_contenders_share_the_budget_but_never_fall_below_the_background_ra
     assert many.interval(1) == 2.0 and many.rate() == pytest.approx(50.0)
 
 
+def test_contenders_are_probed_together_in_one_round_a_beat():
+    """Whenever they were promoted, contenders come due together: one round of all of them
+    each beat (their round trips compared under one load), none between."""
+    plan = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0, hold=1.5)
+    for server in range(1, 7):
+        plan.add(server, 0.0)
+    run(plan, 3.0, contenders={1})
+    rounds = []
+    for i in range(60):
+        now = 3.0 + i * plan.tick
+        plan.update({1, 2, 3, 4} | ({5} if i > 7 else set()) if i >= 3 else {1, 2}, now)
+        if i == 7:
+            plan.promote(5, now)                 # a fast re-check: at once, then on the beat
+        rounds.append(set(plan.due(now)))
+    assert 5 in rounds[7]
+    steady = [r for r in rounds[10:] if r & {1, 2, 3, 4, 5}]
+    assert all(r == {1, 2, 3, 4, 5} for r in steady), steady
+    assert 19 <= len(steady) <= 21, len(steady)     # 20 probes a second over 5: 4 Hz each
+
+
 def test_probes_per_second_stay_within_20_plus_half_the_servers():
     for servers in (10, 30, 50, 100):
         plan = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0, hold=1.5)

@@ -14,7 +14,11 @@ server 40 ms away needs a probe every few seconds only to notice that it came ne
   server's per-sample spread.
 - :class:`ProbePlan`: each server's next probe time. Contenders are probed at
   ``contender_rate`` each, together at most ``budget`` probes a second (a near-equal fleet
-  has many contenders), never below ``background_rate``; the others at
+  has many contenders), never below ``background_rate``, all of them in one round: their
+  round trips are compared under one load of the robot's host and network (a busy robot
+  took its median to one server from 6.5 to 18.5 ms), and a round costs the robot a
+  ranking and a batch whatever its size (one round a beat, not one per contender and
+  phase: 4 equally near servers made 15 rounds a second of 1.3 probes); the others at
   ``background_rate``, their phases spread over the period so that they do not come in one
   burst. A server stays a contender for ``hold`` s after it last was one (so that its
   window fills with fast samples before it can be demoted) and a server promoted by a
@@ -97,6 +101,7 @@ class ProbePlan(object):
         self.tick = 1.0 / (contender_rate if self.adaptive else rate)
         self._next = {}          # server -> when it is due
         self._until = {}         # contender -> until when it stays one
+        self._beat = None        # when the contenders' next round is due
 
     @property
     def servers(self):
@@ -161,7 +166,13 @@ class ProbePlan(object):
         if at_once and not was:
             self._next[server] = now
         elif not was:
-            self._next[server] = min(self._next[server], now + self.interval(server))
+            self._next[server] = min(self._next[server], self._beat_after(now))
+
+    def _beat_after(self, now):
+        """The contenders' next round: their beat, started now when there is none."""
+        if self._beat is None or self._beat < now - self.tick / 2.0:
+            self._beat = now + self.interval(next(iter(self._until)))
+        return self._beat
 
     def next_time(self):
         """When :meth:`due` next has a server to return (None: no server)."""
@@ -177,10 +188,16 @@ class ProbePlan(object):
             for server in servers:
                 self._next[server] = now + self.tick
             return servers
-        due = []
+        due, soon = [], now + self.tick / 2.0
+        if self._beat is not None and self._beat <= soon:     # the contenders' round
+            step = self.interval(next(iter(self._until))) if self._until else self.tick
+            self._beat = self._beat + step if self._beat + step > now else now + step
         for server, when in self._next.items():
-            if when <= now + self.tick / 2.0:
+            if when <= soon:
                 due.append(server)
+                if server in self._until:       # on the beat from now on
+                    self._next[server] = self._beat_after(now)
+                    continue
                 step = self.interval(server)
                 self._next[server] = when + step if when + step > now else now + step
         return sorted(due)
