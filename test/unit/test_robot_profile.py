@@ -1,5 +1,12 @@
-"""bench-robot's profile: each sampled stack goes to the part of the robot it is in."""
+"""bench-robot: each sampled stack goes to the part of the robot it is in; the launch
+file it runs."""
 
+import argparse
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from server_select.bench.robot_cost import cells, launch_args, launch_file
 from server_select.bench.robot_profile import part_of, parts, table
 
 PROBE = ('_run (server_select/ros/probe_loop.py:116)',
@@ -30,3 +37,19 @@ def test_parts_add_up_the_samples_and_the_table_gives_shares():
     assert counted == {'probes': 30, 'rospy timers': 10}
     text = table({'fleet': counted, 'paper': {'probes': 5}})
     assert '| probes | 75.0 | 100.0 |' in text and '| samples on a CPU | 40 | 5 |' in text
+
+
+def test_the_robot_bench_passes_more_robot_arguments_to_both_robots(tmp_path):
+    extra = launch_args('contender_budget:=6 window:=2.0')
+    assert extra == {'contender_budget': '6', 'window': '2.0'}
+    for bad in ('contender_budget=6', ':=6'):
+        with pytest.raises(argparse.ArgumentTypeError):
+            launch_args(bad)
+    for profile in ('paper', 'fleet'):
+        path = tmp_path / ('%s.launch' % profile)
+        launch_file(str(path), profile, cells('here:sort:4')[0], extra)
+        robot = [node for node in ET.parse(str(path)).getroot().iter('include')
+                 if node.get('file').endswith('/robot.launch')][0]
+        args = dict((arg.get('name'), arg.get('value')) for arg in robot.iter('arg'))
+        assert args['contender_budget'] == '6' and args['window'] == '2.0', args
+        assert args['profile'] == profile and args['task_rate'] == '2'

@@ -53,12 +53,13 @@ def cells(text):
     return parsed
 
 
-def launch_file(path, profile, cell):
-    """A launch file: the manager, ``cell.servers`` servers, one robot."""
+def launch_file(path, profile, cell, extra=None):
+    """A launch file: the manager, ``cell.servers`` servers, one robot (with ``extra``
+    robot.launch arguments, ``{name: value}``)."""
     ids = ','.join(str(s) for s in range(1, cell.servers + 1))
     listed = '' if profile == 'fleet' else ids
     robot = dict(WORKLOADS[cell.workload], robot_id='1', servers=listed or ids,
-                 profile=profile, output='log', summary_period='3600')
+                 profile=profile, output='log', summary_period='3600', **(extra or {}))
     arg = '<arg name="%s" value="%s"/>'
     text = ['<launch>',   # servers.launch passes what it is given on to each server
             '<arg name="profile" default="%s"/>' % profile,
@@ -72,6 +73,14 @@ def launch_file(path, profile, cell):
     text += [arg % item for item in sorted(robot.items())] + ['</include>']
     with open(path, 'w') as stream:
         stream.write('\n'.join(text + ['</launch>']) + '\n')
+
+
+def launch_args(text):
+    """``{name: value}`` of ``name:=value`` words."""
+    pairs = [word.split(':=', 1) for word in text.split()]
+    if any(len(pair) != 2 or not pair[0] for pair in pairs):
+        raise argparse.ArgumentTypeError('expected name:=value ..., got %r' % text)
+    return dict(pairs)
 
 
 def answered(master):
@@ -100,10 +109,10 @@ def context_switches(pid):
     return total
 
 
-def start(cell, profile, master, work, tag, procs, logs):
+def start(cell, profile, master, work, tag, procs, logs, extra=None):
     """The fleet of ``profile`` under ``master`` (and the bench's camera), into ``procs``."""
     path = os.path.join(work, '%s_%s.launch' % (tag, profile))
-    launch_file(path, profile, cell)
+    launch_file(path, profile, cell, extra)
     logs.append(open(path[:-len('.launch')] + '.log', 'w'))
     env = dict(os.environ, ROS_MASTER_URI=master)
     procs[profile] = subprocess.Popen(['roslaunch', path], stdout=logs[-1],
@@ -123,7 +132,7 @@ def one_cell(cell, options, work, tag):
         masters = dict(zip(PROFILES, (first.uri, second.uri)))
         try:
             for profile, master in masters.items():
-                start(cell, profile, master, work, tag, procs, logs)
+                start(cell, profile, master, work, tag, procs, logs, options.robot_args)
             pids = {}
             for profile, master in masters.items():
                 if not wait_until(lambda: pid_or_none('/robot1', master) is not None,
@@ -198,6 +207,8 @@ def main(argv=None):
                         help='of this host\'s core that stands for a Pi 3 core')
     parser.add_argument('--profile', type=float, default=0.0,
                         help='s of py-spy sampling of each robot of the first cell (0: none)')
+    parser.add_argument('--robot-args', default='', type=launch_args,
+                        help='more robot.launch arguments for both robots (name:=value ...)')
     parser.add_argument('--camera', help=argparse.SUPPRESS)
     parser.add_argument('--rate', type=float, default=5.0, help=argparse.SUPPRESS)
     options, _ros = parser.parse_known_args(argv)

@@ -76,6 +76,8 @@ VARIANTS = collections.OrderedDict([
     ('fleet_window1', Variant('select', 'fleet', {'window': 1.0})),
     ('fleet_20hz', Variant('select', 'fleet', {'contender_rate': 20.0,
                                                'contender_budget': 40.0})),
+    # Prequal's 3 probes per query at the suite's 2 tasks a second: contenders share 6 Hz
+    ('fleet_6hz', Variant('select', 'fleet', {'contender_budget': 6.0})),
     # the fleet profile's rule before hot_cold: the manager's hysteresis over the robots'
     # windows, answered tasks as samples
     ('fleet_hysteresis', Variant('select', 'fleet', PREVIOUS_FLEET)),
@@ -88,7 +90,7 @@ VARIANTS = collections.OrderedDict([
     ('paper_pi3_busy', Variant('select', 'paper', {}, PI3_BUSY)),
     ('fleet_pi3_busy', Variant('select', 'fleet', {}, PI3_BUSY)),
 ] + [(name, Variant('select', 'fleet', peer_params(name))) for name in RULES])
-ON_REQUEST = ('fleet_2hz', 'fleet_window1', 'fleet_20hz', 'fleet_samples',
+ON_REQUEST = ('fleet_2hz', 'fleet_window1', 'fleet_20hz', 'fleet_6hz', 'fleet_samples',
               'fleet_hysteresis', 'oracle_pi3_busy', 'oracle_fleet_pi3_busy', 'paper_pi3_busy',
               'fleet_pi3_busy') + RULES
 DEFAULT_VARIANTS = tuple(v for v in VARIANTS if v not in ON_REQUEST)
