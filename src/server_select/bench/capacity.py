@@ -14,7 +14,9 @@ variants cannot share servers as the scenario suite's do):
   their CPU shares (D'Hondt): the best static assignment when links are equal;
 - the league's peers (``p2c_peak_ewma``, ``least_request``, ``prequal``, ``round_robin``,
   ``replicate``): the fleet profile with that rule choosing per task
-  (:func:`server_select.testbed.suite.peer_params`).
+  (:func:`server_select.testbed.suite.peer_params`);
+- on request, any other variant of the scenario suite whose robots select on hosts of their
+  own (``fleet_6hz``, ``fleet_uniform``, ...): its profile and parameters.
 
 Capacity (tasks/s) is the servers' shares over the CPU seconds one task takes on one core
 of this machine, measured here before the runs. Per variant and load the benchmark prints
@@ -34,10 +36,12 @@ from server_select.bench import capacity_report, cli
 from server_select.bench.capacity_report import static_assignment
 from server_select.bench.capacity_work import SORT_SIZE, cpu_per_task, write_frame
 from server_select.bench.harness import scenario_run
-from server_select.testbed.suite import PREVIOUS_FLEET, RULES, peer_params
-from server_select.testbed import bag_analysis
+from server_select.testbed import bag_analysis, suite
 
-VARIANTS = ('paper', 'fleet', 'static', 'fleet_hysteresis') + RULES
+VARIANTS = ('paper', 'fleet', 'static', 'fleet_hysteresis') + suite.RULES
+# besides static, any suite variant whose robots select, on hosts of their own
+ACCEPTED = ('static',) + tuple(name for name, v in suite.VARIANTS.items()
+                               if v.mode == 'select' and not v.host)
 # The cases of the capacity work, as defaults of the options (an option given wins):
 SCENARIOS = {
     # offered load stepping from half to twice the capacity of 3 equal servers
@@ -83,9 +87,8 @@ def run_once(variant, kind, rate, args, work, name):
     servers = ','.join(str(s) for s in range(1, len(shares) + 1))
     late = WARMUP + args.seconds / 3.0 if args.late else None
     data = scenario(shares, args.robots, args.seconds, args.delays, late)
-    profile = 'paper' if variant in ('paper', 'static') else 'fleet'
-    given = PREVIOUS_FLEET if variant == 'fleet_hysteresis' else \
-        peer_params(variant) if variant in RULES else {}
+    profile = 'paper' if variant == 'static' else suite.VARIANTS[variant].profile
+    given = {} if variant == 'static' else suite.VARIANTS[variant].params
     peer = ['%s:=%s' % (k, str(v).lower()) for k, v in sorted(given.items())]
     fixed = static_assignment(shares, args.robots)
     # the flags and probe samples too: what a robot's moves can be read from
@@ -166,7 +169,7 @@ def parse(argv):
     except ValueError:
         parser.error('--capacity takes KIND=RATE, e.g. sort=40')
     bad = [k for k in args.kinds if k not in ('image', 'sort')] + \
-        [v for v in args.variants if v not in VARIANTS]
+        [v for v in args.variants if v not in ACCEPTED]
     if bad or args.robots < 1 or not args.shares or len(args.delays) != len(args.shares):
         parser.error('unknown kinds or variants %s, no robots or servers, or not one delay '
                      'per server' % bad)
