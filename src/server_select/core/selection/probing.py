@@ -168,10 +168,14 @@ class ProbePlan(object):
         elif not was:
             self._next[server] = min(self._next[server], self._beat_after(now))
 
+    def _beat_step(self):
+        """Seconds between two of the contenders' rounds (one tick while there is none)."""
+        return self.interval(next(iter(self._until))) if self._until else self.tick
+
     def _beat_after(self, now):
         """The contenders' next round: their beat, started now when there is none."""
         if self._beat is None or self._beat < now - self.tick / 2.0:
-            self._beat = now + self.interval(next(iter(self._until)))
+            self._beat = now + self._beat_step()
         return self._beat
 
     def next_time(self):
@@ -190,7 +194,7 @@ class ProbePlan(object):
             return servers
         due, soon = [], now + self.tick / 2.0
         if self._beat is not None and self._beat <= soon:     # the contenders' round
-            step = self.interval(next(iter(self._until))) if self._until else self.tick
+            step = self._beat_step()
             self._beat = self._beat + step if self._beat + step > now else now + step
         for server, when in self._next.items():
             if when <= soon:
