@@ -6,6 +6,7 @@ the reason, never as passed.
 
 import os
 import signal
+import statistics
 import subprocess
 import sys
 
@@ -116,7 +117,7 @@ def test_rtt_follows_the_emulated_delay(runs):
 
 def median(values):
     assert len(values) >= 5, values
-    return values[len(values) // 2]
+    return statistics.median(values)
 
 
 CRASHER = r'''
