@@ -50,15 +50,31 @@ step demo "source devel/setup.bash && (roscore -p $port > roscore.out 2>&1 &) \
   rosnode kill /recorder; within 30 '[ -f plain.bag ]'; pkill -INT -f 'roscore -p $port'; \
   grep -q '| R1 | S' demo.out && grep -q '| R2 | S' demo.out \
   && rosrun server_select analyze plain.bag | tee analyze.out && grep -q '^| plain | [1-9]' analyze.out"
-# what failed, last (CI shows the end of the output): each failed test case, its first line
-/usr/bin/python3 - "$ws/build/test_results" <<'PY'
-import glob, sys, xml.etree.ElementTree as ET
+# what failed, last (CI shows the end of the output): each failed test case, its first line,
+# and what the nodes launched beside that test logged (its launch's log directory)
+/usr/bin/python3 - "$ws/build/test_results" "$ws/ros_home/log" <<'PY'
+import glob, os, re, sys, xml.etree.ElementTree as ET
+failed, ROSOUT = set(), re.compile(r'\[rosout\]\[(\w+)\] (\S+ \S+): (.*)')
 for path in sorted(glob.glob(sys.argv[1] + '/*/*.xml')):
     for case in ET.parse(path).getroot().iter('testcase'):
         for bad in list(case.iter('failure')) + list(case.iter('error')):
             text = (bad.get('message') or bad.text or '').strip().splitlines() or ['']
             print('catkin: FAILED %s %s: %s' % (path.rsplit('/', 1)[-1], case.get('name'),
                                                 text[0][:300]))
+            failed.add(re.sub(r'^rosunit-|\.xml$', '', os.path.basename(path)))
+for name in sorted(failed):   # rospy's own log of each node: every rosout line, by time
+    for run in set(os.path.dirname(p) for p in glob.glob(
+            '%s/*/%s-*.log' % (sys.argv[2], glob.escape(name)))):
+        lines = []
+        for log in glob.glob(os.path.join(run, '*.log')):
+            node = re.sub(r'-[0-9]+$', '', os.path.basename(log)[:-4])
+            if not node.endswith(('-stdout', '-stderr')) and not node.startswith('ros'):
+                with open(log, errors='replace') as f:
+                    lines += [m.group(2, 1, 3) + (node,) for m in map(ROSOUT.match, f) if m]
+        print('catkin: %s, the nodes launched with it logged (%d lines, the first 80):'
+              % (name, len(lines)))
+        print('\n'.join('%s %s %s: %s' % (when, level, node, text)
+                        for when, level, text, node in sorted(lines)[:80]))
 PY
 echo "catkin: $passed passed, $failed failed"
 [ $failed -eq 0 ]

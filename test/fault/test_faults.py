@@ -6,6 +6,7 @@ equally near, and without it the selection flaps between them by itself, which w
 whether the robot moved because of the fault.
 """
 
+import collections
 import json
 import os
 import signal
@@ -17,6 +18,7 @@ import xmlrpc.client
 import pytest
 import rosgraph
 
+from server_select.core.selection.rank import NO_SERVER
 from server_select.core.util.procs import stop_group, wait_until
 
 from support.fleet import NODES, Fleet, kill
@@ -105,6 +107,41 @@ def test_selected_server_fails_three_times(ros, how):
             robot, outcome, rec.failures(robot), cycles)
     assert all(c['first answer elsewhere after s'] != 'never' for c in cycles), cycles
     assert max(float(c['first answer elsewhere after s']) for c in cycles) <= 1.0, cycles
+
+
+def test_a_robot_stalled_longer_than_the_window_goes_on_with_its_server(ros):
+    # robot 1 stopped (SIGSTOP) until the manager, with no sample of it in its 5 s window,
+    # flags it no server: when it runs again its own window is empty as well, and its
+    # next tasks go out before its next probe is answered. Its server did nothing wrong:
+    # they go to it (before: each failed, "no server selected").
+    rec = ros['rec']
+    rec.clear()
+    with Fleet(ros['log'], **STABLE) as fleet:
+        warm_up(rec)
+        before = current_server(rec, 1)
+        pid, t_stop = fleet.pid('/robot1'), time.monotonic()
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            emptied = wait_until(lambda: any(r.msg.server_id == NO_SERVER for r in rec.of(
+                rec.flags, 1, t_stop) if r.sender == '/manager'), 20.0)
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        t_cont = time.monotonic()
+        resumed = wait_until(lambda: answered(rec, 1, t_cont, 10), 20.0)
+        after = [r.msg for r in rec.of(rec.reports, 1, t_cont)]
+        outcomes = rec.outcomes((1, 2), TASK_TIMEOUT)
+    woke = {'robot 1 after it resumed: reports': len(after),
+            'answered': sum(1 for m in after if m.ok), 'by server': sorted(set(
+                m.answered_by for m in after if m.ok)), 'server before': before,
+            'errors': collections.Counter(m.error.split(' (')[0] for m in after if not m.ok)}
+    show('robot 1 stopped until the manager flagged it no server (%.1f s), then resumed:'
+         % (t_cont - t_stop), [dict(robot=r, **o) for r, o in outcomes.items()] + [woke])
+    assert emptied and resumed, (emptied, resumed)
+    assert woke['errors']['no server selected'] == 0, woke
+    # (tasks out when it stopped may have timed out by the time it runs again)
+    for robot, outcome in outcomes.items():
+        assert (outcome['never answered'], outcome['duplicates']) == (0, 0), outcome
+    assert outcomes[2]['failed'] == 0, outcomes[2]
 
 
 def test_manager_gone_then_the_selected_server_dies(ros):

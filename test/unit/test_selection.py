@@ -151,9 +151,9 @@ def test_heading_names_where_the_next_task_goes_without_deciding_anew():
     s.health.failure(2, 'task timeout')               # ejected: the next candidate
     assert s.heading() == 3
     clock.now += 3.5                                  # the flag is stale: the robot's own
-    for server, rtt in ((1, 0.004), (3, 0.009)):      # choice, once it has made one
-        s.on_sample(server, True, rtt)
-    assert s.heading() == NO_SERVER
+    for server, rtt in ((1, 0.004), (3, 0.009)):      # choice, once it has made one;
+        s.on_sample(server, True, rtt)                # until then the last one's
+    assert s.heading() == 3
     assert s.target() == 1 and s.heading() == 1
     s.on_sample(3, True, 0.001)                       # no new decision until it sends
     assert s.heading() == 1
@@ -162,3 +162,21 @@ def test_heading_names_where_the_next_task_goes_without_deciding_anew():
 def test_heading_in_fixed_mode_is_the_fixed_server():
     s = Selection(1, [1, 2], 'fixed', fixed_server=2)
     assert s.heading() == 2
+
+
+def test_an_empty_window_keeps_the_server_tasks_went_to_while_nothing_speaks_against_it():
+    s, clock = select(manager_timeout=3.0)
+    assert s.candidates() == []                       # nothing known yet
+    s.on_sample(2, True, 0.004)
+    s.health.probe_ok(2)
+    s.on_flag(1, 2, [2])
+    assert s.candidates() == [2]
+    clock.now += 6.0            # the robot stalled: its window and the flag are empty, old
+    s.on_flag(1, NO_SERVER, [])
+    assert s.candidates() == [2] and s.heading() == 2
+    s.health.failure(2, 'probe timeout', probe=True)  # evidence against it: no candidate
+    assert s.candidates() == [] and s.heading() == NO_SERVER
+    s.health.probe_ok(2)                              # answers again: on probation, until
+    assert s.candidates() == [2]                      # (1 probe here) it may have tasks
+    s.remove_server(2)                                # gone from the fleet: forgotten
+    assert s.candidates() == []

@@ -235,7 +235,7 @@ class Selection(object):
         ranking = self.manager_ranking()
         if ranking is None:
             with self._lock:
-                ranking = [self._chooser.current] if self._chooser.current is not None else []
+                ranking = [s for s in [self._chooser.current] if s not in (None, NO_SERVER)]
         if self.health is not None:
             ranking = self.health.order(ranking)
         return ranking[0] if ranking else NO_SERVER

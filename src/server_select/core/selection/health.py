@@ -29,6 +29,11 @@ When no server is usable, the ejected ones whose last probe was answered are use
 serves more by trying than by failing every task at once). A task late on a host that is
 slow for a moment, on every server in turn, would otherwise leave the robot nothing to
 send to for an ejection time; a server whose probes fail stays out.
+
+No news is not bad news: when the ranking names no server (no sample in the window, as
+after the robot, or its manager, stalled for longer than the window), tasks go on to the
+server they went to, as far as this evidence allows. A robot on a busy host would
+otherwise fail every task between waking and its next probe's answer.
 """
 
 import collections
@@ -64,6 +69,7 @@ class ServerHealth(object):
         self._clock = clock
         self._lock = threading.Lock()
         self._servers = dict((s, _Server()) for s in servers)
+        self._first = None     # the server order() put first last time it named one
 
     def add(self, server):
         """A new server: healthy."""
@@ -149,14 +155,21 @@ class ServerHealth(object):
     def order(self, ranking):
         """``ranking`` without the servers tasks may not go to now, those that answered
         busy lately last (order kept otherwise); when none of them may, those ejected
-        whose last probe was answered (panic), in the ranking's order."""
+        whose last probe was answered (panic), in the ranking's order. An empty
+        ``ranking`` (no sample in the window: the robot, or its manager, stalled for
+        longer) stands for the server that came first last time: no news of a server is
+        not news against it."""
+        with self._lock:
+            ranking = ranking or [s for s in [self._first] if s is not None]
         usable = [s for s in ranking if self.usable(s)]
-        if not usable:
-            return self.panic(ranking)
         now = self._clock()
         with self._lock:      # (a server may have left since usable() looked)
             busy = set(s for s in usable if getattr(self._servers.get(s), 'busy_until', 0) > now)
-        return [s for s in usable if s not in busy] + [s for s in usable if s in busy]
+        ordered = [s for s in usable if s not in busy] + [s for s in usable if s in busy] \
+            if usable else self.panic(ranking)
+        with self._lock:
+            self._first = ordered[0] if ordered else self._first
+        return ordered
 
     def panic(self, ranking):
         """The servers of ``ranking`` that are out (ejected, or on probation without its
