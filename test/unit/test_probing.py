@@ -8,8 +8,12 @@ import pytest
 
 from server_select.core.selection.policy import Policy
 from server_select.core.selection.probing import ContenderRule, ProbePlan, from_params
+from server_select.core.selection.candidates import Selection
 from server_select.core.selection.fleet_rankings import FleetRankings
+from server_select.core.selection.health import ServerHealth
 from server_select.core.selection.window import EMPTY, LatencyWindow, PairStats
+
+from support.clock import Clock
 
 MS = 1e-3
 
@@ -58,6 +62,25 @@ def test_one_sample_has_the_reference_spread_and_lands_near_or_not():
     stats = {1: pair(5.0 * MS, 0.1 * MS, n=16), 2: PairStats(6.0 * MS, 1, 0, 6.0 * MS, 0.0, 0)}
     assert rule.select(stats, 1) == {1, 2}              # 1 ms < 0.3 + 3 x 0.5
     assert rule.near(stats, 1, 6.7 * MS) and not rule.near(stats, 1, 6.9 * MS)
+
+
+def test_a_few_late_answers_do_not_make_every_server_a_contender():
+    """Six servers 2.0-5.5 ms away, two answers in sixteen of each 10 ms late (a busy
+    host): the plain standard errors would call all six contenders; the robot's window
+    gives the rule robust ones, and the far four stay in the background."""
+    clock = Clock()
+    view = Selection(1, range(1, 7), 'select', health=ServerHealth(range(1, 7), clock=clock),
+                     clock=clock)
+    for i in range(16):
+        for server, base in zip(range(1, 7), (2.0, 2.3, 4.0, 4.5, 5.0, 5.5)):
+            late = 10.0 if (i + server) % 8 == 0 else 0.0
+            view.on_sample(server, True, (base + 0.05 * (i % 3) + late) * MS, wait=0.0)
+        clock.now += 0.3
+    rule = ContenderRule()
+    plain = view.window.robot_stats(1, range(1, 7), clock.now, errors=False)
+    assert rule.select(plain) == {1, 2, 3, 4, 5, 6}
+    assert 1 in view.contenders(rule) <= {1, 2}
+    assert not view.near(rule, 4.0 * MS) and view.near(rule, 2.1 * MS)
 
 
 # -- probe plans --------------------------------------------------------------------------

@@ -124,19 +124,19 @@ class Selection(object):
         now = self._clock()
         with self._lock:
             servers = list(self.servers)
-        return rule.select(self.window.robot_stats(self.robot_id, servers, now, errors=False),
+        return rule.select(self.window.robot_stats(self.robot_id, servers, now, errors='robust'),
                            self.heading())
 
     def near(self, rule, value):
         """Whether a sample of ``value`` lands near the contenders (``rule.near``; by the
         window of the server the next task goes to alone, when it has one)."""
         now, heading = self._clock(), self.heading()
-        stats = self.window.stats(self.robot_id, heading, now, errors=False)
+        stats = self.window.stats(self.robot_id, heading, now, errors='robust')
         if stats.ok_count:
             return rule.near({heading: stats}, heading, value)
         with self._lock:
             servers = list(self.servers)
-        return rule.near(self.window.robot_stats(self.robot_id, servers, now, errors=False),
+        return rule.near(self.window.robot_stats(self.robot_id, servers, now, errors='robust'),
                          heading, value)
 
     def viewed(self, pick):

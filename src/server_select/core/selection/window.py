@@ -192,7 +192,8 @@ class LatencyWindow(object):
 
     def stats(self, robot_id, server_id, now, errors=True):
         """The pair's :class:`PairStats` over the window now (``errors`` False: plain
-        standard errors even if the window's are robust, at no cost)."""
+        standard errors even if the window's are robust, at no cost; ``'robust'``: robust
+        ones even if the window's are plain)."""
         with self._lock:
             pair = self._pairs.get((robot_id, server_id))
             if pair is None:
@@ -200,7 +201,7 @@ class LatencyWindow(object):
             self._prune(pair, now)
             if not pair.samples:       # nothing left: forget the pair
                 del self._pairs[(robot_id, server_id)]
-            return pair.stats(self.statistic, self.robust and errors)
+            return pair.stats(self.statistic, errors == 'robust' or (self.robust and errors))
 
     def _prune(self, pair, now):
         pair.prune(now - self.window, self.keep, now - self.horizon)
