@@ -165,3 +165,22 @@ def test_servers_that_never_answered_are_no_panic_candidates():
     h.failure(1, 'probe failed', probe=True)
     h.failure(2, 'probe failed', probe=True)
     assert h.order([1, 2]) == []
+
+
+def test_a_probe_still_out_ejects_but_leaves_a_lone_server_to_panic():
+    # a busy server on a loaded host answers a probe late: the next is not sent and the
+    # robot counts it failed (still out). That ejects the server as a failed probe does,
+    # and other servers take the tasks; but no answer has said it is unreachable, so
+    # when none is usable tasks still go to it (camera.test's only server, in CI: its
+    # frames failed "no server selected"). The probe's own failure, later, does say so.
+    h, clock = make(base=1.0)
+    h.failure(1, 'previous probe still in progress', late=True)
+    assert h.state(1) == EJECTED and h.order([1, 2]) == [2]
+    h.failure(2, 'task late')
+    h.failure(3, 'task late')
+    assert h.order([1, 2, 3]) == [1, 2, 3]             # none usable: panic keeps 1
+    h.failure(1, 'probe timed out', probe=True)        # its probe failed: unreachable
+    assert h.order([1, 2, 3]) == [2, 3]
+    h.probe_ok(1)
+    h.probe_ok(1)                                      # answers again, two in a row:
+    assert h.state(1) == PROBATION                     # back as a late probe's ejection

@@ -19,6 +19,7 @@ from server_select.ros.robot_parts import Joining, robot_prober, robot_selection
 from server_select.ros.node import fleet, param
 from server_select.ros.runner import run
 from server_select.ros.passive import TaskSamples
+from server_select.ros.prober import STILL_OUT
 from server_select.ros.senders import SenderGate
 from server_select.tasks.kinds import stream_kinds
 from server_select.ros.view import RankingSender
@@ -160,7 +161,8 @@ class RobotNode(object):
             if self.selection.balancer is not None and self.load is None:
                 self.selection.balancer.probed(server, rtt)   # (with a load: from RobotLoad)
         else:
-            self.on_failure(server, 'probe failed: %s' % error, probe=True)
+            self.on_failure(server, 'probe failed: %s' % error, probe=True,
+                            late=error == STILL_OUT)
 
     def on_servers(self, added, removed):
         """Servers joined (candidates once their task topics connect) or left the fleet."""
@@ -185,8 +187,8 @@ class RobotNode(object):
         self.flag_senders.expect(self.manager_node)
         self.selection.restrict(servers)
 
-    def on_failure(self, server, why, probe=False):
-        ejection = self.health.failure(server, why, probe)
+    def on_failure(self, server, why, probe=False, late=False):
+        ejection = self.health.failure(server, why, probe, late)
         if ejection is not None and ejection.seconds:
             rospy.logwarn('robot %d: server %d ejected for %.3g s: %s', self.robot_id,
                           server, ejection.seconds, why)

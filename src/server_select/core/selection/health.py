@@ -87,13 +87,17 @@ class ServerHealth(object):
             entry.state, entry.good_probes = PROBATION, 0
         return entry
 
-    def failure(self, server, why='', probe=False):
-        """Evidence that ``server`` failed (``probe``: a probe of it did): an
+    def failure(self, server, why='', probe=False, late=False):
+        """Evidence that ``server`` failed (``probe``: a probe of it did; ``late``: a
+        probe of it is still out past its time, which ejects it as a failed probe does
+        but says nothing yet of whether it is reachable: on a loaded host a busy server
+        answers late, and when it is the only one the panic rule keeps sending to it): an
         :class:`Ejection` if this ejects it (of 0 s when it makes a server that never
         answered *down*), else None (an unknown server, or one already ejected or down)."""
+        probe = probe or late
         with self._lock:
             entry = self._get(server, self._clock())
-            if entry is not None and probe:
+            if entry is not None and probe and not late:
                 entry.reachable = False
             if entry is not None and entry.state == EJECTED:
                 entry.good_probes = 0           # answers since must be in a row
