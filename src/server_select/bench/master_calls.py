@@ -25,6 +25,7 @@ import rosgraph
 
 from server_select.bench import cli
 from server_select.bench.harness import Roscore
+from server_select.core.config import names
 from server_select.core.util.procs import stop_group, wait_until
 from server_select.core.util.tables import markdown_table
 
@@ -82,14 +83,19 @@ class CountingProxy(object):
         self.server.server_close()
 
 
-def registered(master, nodes):
-    """Whether every one of ``nodes`` is registered with ``master``."""
+def started(master, nodes):
+    """Whether every one of ``nodes`` has finished starting: its last step is to publish
+    (the manager) or hear ``/master_pid`` (every other node), so until then a node's
+    start-up calls would count as steady state."""
     try:
-        for node in nodes:
-            master.lookupNode(node)
-        return True
+        publishers, subscribers, _ = master.getSystemState()
     except (rosgraph.MasterError, OSError):
         return False
+    on_topic = set()
+    for topic, members in publishers + subscribers:
+        if topic == '/' + names.MASTER_PID_TOPIC:
+            on_topic.update(members)
+    return set(nodes) <= on_topic
 
 
 def measure(profile, robots, servers, warmup, seconds, work):
@@ -107,9 +113,9 @@ def measure(profile, robots, servers, warmup, seconds, work):
             ['/robot%d' % r for r in range(1, robots + 1)]
         try:
             master = rosgraph.Master('/bench_master', master_uri=core.uri)
-            if not wait_until(lambda: registered(master, fleet_nodes), 120.0, period=0.5):
+            if not wait_until(lambda: started(master, fleet_nodes), 120.0, period=0.5):
                 raise RuntimeError('the fleet did not come up (see %s)' % log.name)
-            time.sleep(warmup)          # then its start-up look-ups settle
+            time.sleep(warmup)          # then its first look-ups settle
             proxy.take()
             time.sleep(seconds)
             counts = proxy.take()
