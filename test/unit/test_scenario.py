@@ -136,13 +136,15 @@ def test_suite_scenarios_load():
         assert Scenario.load(os.path.join(folder, name)).duration <= 110
 
 
-def test_a_hung_server_is_not_ranked_its_work_is_not_seen_by_the_oracle():
+def test_a_hung_server_is_not_ranked_and_its_work_counts_half_each_way():
     hosts = dict(HOSTS, s2={'role': 'server', 'id': 2, 'hang': [[10, 20]],
                             'work': [{'at': 5, 'delay': 25}, {'at': 30, 'delay': 0}]})
     s = scenario({'r1 s2': [{'at': 0, 'delay': 0.5}]}, hosts=hosts)
     assert s.hosts['s2'].hang == ((10.0, 20.0),)
     assert s.hosts['s2'].work == ((5.0, 0.025), (30.0, 0.0))
-    assert [s.nearest_server(1, t) for t in (5, 10, 19.9, 20)] == [2, 1, 1, 2]
+    # s2 is 0.5 ms away, s1 1 ms: 25 ms of work on s2 from 5 s to 30 s sends the oracle to s1
+    assert [s.nearest_server(1, t) for t in (4.9, 5, 10, 19.9, 20, 30)] == [2, 1, 1, 1, 1, 2]
+    assert s.ranking(1, 5) == ([(1.0, 1), (13.0, 2)], [])
 
 
 @pytest.mark.parametrize('spec, message', [

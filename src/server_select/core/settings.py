@@ -16,7 +16,7 @@ from server_select.core.config.params import (one_of, parse_bool, parse_count, p
                                               parse_node_names, parse_non_negative,
                                               parse_node_pattern, parse_number,
                                               parse_plugins, parse_positive, parse_positive_int,
-                                              parse_publisher, parse_quantile, parse_text)
+                                              parse_publisher, parse_text)
 
 REQUIRED = object()
 
@@ -157,15 +157,11 @@ PARAMS = {
     'eject_time': Param(1.0, parse_positive, 'first ejection of a failing server (s); doubles '
                         'with each ejection in a row'),
     'eject_max': Param(30.0, parse_positive, 'longest ejection (s)'),
-    'probation_probes': Param(2, parse_count, 'good probes before an ejected server takes a '
-                              'task again'),
     'retry_factor': Param(5.0, parse_positive, "an attempt's deadline: this x the server's "
                           'recent p99 task round trip'),
     'hedge': Param(False, parse_bool, 'also send a task still unanswered after its '
-                   "server's ~hedge_quantile round trip plus its median to the next server "
+                   "server's p95 plus its median task round trip to the next server "
                    '(first answer wins)'),
-    'hedge_quantile': Param(0.95, parse_quantile, 'when a hedged copy goes: this quantile of '
-                            "the server's recent task round trips, plus their median"),
     'retry_floor': Param(0.25, parse_positive, "shortest attempt deadline (s)"),
     'manager_node': Param('/manager', parse_publisher, 'flags count only from this node '
                           '(*: from any)'),

@@ -9,6 +9,7 @@ import rospy
 
 from server_select.core.config.params import ParamError, parse_fixed_server
 from server_select.core.flow.attempts import AttemptClock
+from server_select.core.flow.task_flow import HEDGE_QUANTILE
 from server_select.core.selection import probing
 from server_select.core.selection.candidates import Selection
 from server_select.core.selection.health import ServerHealth
@@ -29,7 +30,7 @@ def robot_selection(robot_id, servers, mode):
     if eject_time > eject_max:
         raise ParamError('~eject_time %g is longer than ~eject_max %g'
                          % (eject_time, eject_max))
-    health = ServerHealth(servers, eject_time, eject_max, param('probation_probes'))
+    health = ServerHealth(servers, eject_time, eject_max)
     policy, statistic = from_params(param)
     selection = Selection(robot_id, servers, mode, fixed, health, param('window'), policy,
                           param('manager_timeout'), statistic=statistic,
@@ -60,7 +61,7 @@ def task_stream(robot, kind, rate, mode):
         attempts=robot.selection.balancer, on_failure=robot.on_failure,
         on_success=robot.health.task_ok, ids=robot._task_ids,
         on_busy=functools.partial(robot.on_busy, kind.kind),
-        hedge=param('hedge_quantile') if param('hedge') else None, budget=robot.budget,
+        hedge=HEDGE_QUANTILE if param('hedge') else None, budget=robot.budget,
         copies=robot.selection.balancer.copies if robot.selection.balancer else 1,
         max_in_flight=param('max_in_flight'),
         newest_wins=kind.newest_wins,

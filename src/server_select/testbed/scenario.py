@@ -219,9 +219,10 @@ class Scenario(object):
         return profile.value_at(t) if profile else self.default_state
 
     def ranking(self, robot_id, t):
-        """The robot's servers whose links are up at ``t``, nearest first, and those down
-        (or not running: a host's ``start`` / ``stop`` times, or hung). A server's ``work``
-        is not counted: the oracle knows the network, not the servers' load.
+        """The robot's servers whose links are up at ``t``, best first, and those down (or
+        not running: a host's ``start`` / ``stop`` times, or hung). A server's ``work`` (each
+        task takes that much longer) counts as half of it each way: the oracle knows what a
+        task there takes beyond the servers' common work, not only the network.
 
         Returns ``([(one-way delay ms, server id), ...], [down server ids])``: lowest delay
         first, ties to the lower server id (the choice of an oracle that knows the scenario).
@@ -232,7 +233,9 @@ class Scenario(object):
             state = self.link(robot.name, server.name, t)
             running = server.start <= t and (server.stop is None or t < server.stop) and \
                 not any(a <= t < b for a, b in server.hang)
-            (down if state.down or not running else up).append((state.delay, server.id))
+            extra = [delay for at, delay in server.work if at <= t]
+            delay = state.delay + (500.0 * extra[-1] if extra else 0.0)
+            (down if state.down or not running else up).append((delay, server.id))
         return sorted(up, key=lambda pair: pair[0]), [s for _, s in down]
 
     def nearest_server(self, robot_id, t):

@@ -135,14 +135,6 @@ def parse_number(name, value):
     return number
 
 
-def parse_quantile(name, value):
-    """A number strictly between 0 and 1."""
-    number = parse_number(name, value)
-    if not 0 < number < 1:
-        raise ParamError('%s: expected a number between 0 and 1, got %r' % (name, value))
-    return number
-
-
 def parse_bool(name, value):
     """``true``/``false`` (YAML booleans or the strings a launch file passes)."""
     if isinstance(value, bool):

@@ -12,7 +12,7 @@ clock), so it is tested without a master. It goes forward only::
 Tasks are idempotent and carry their id: a task without an answer by its attempt deadline
 (a multiple of that server's recent round trips) is sent again to the next candidate it
 has not tried, and the first answer from any server it was sent to wins; later ones are
-counted as duplicates. With ``hedge`` (a quantile, e.g. 0.95), a task still
+counted as duplicates. With ``hedge`` (a quantile, :data:`HEDGE_QUANTILE`), a task still
 unanswered a median round trip after that quantile of its server's recent round trips is
 also sent to the next candidate without blaming the first ("The Tail at Scale"'s hedged
 request). Every task yields exactly one :class:`Outcome`.
@@ -32,6 +32,10 @@ from server_select.core.flow.timing import Timing
 from server_select.core.flow.outcome import (DUPLICATE, ENDED, FOREIGN, LATE,  # noqa: F401
                                              LOCAL, NO_SERVER, RETRIED, UNKNOWN, EndedTasks,
                                              Outcome, Pending, Resolution)
+
+# a hedged copy goes after this quantile of a server's round trips, plus their median
+# ("The Tail at Scale": the p95)
+HEDGE_QUANTILE = 0.95
 
 
 class TaskFlow(Timing):
