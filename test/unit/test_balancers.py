@@ -464,3 +464,22 @@ def test_hot_cold_share_of_robots_alike_that_move():
     alike = 1 + 5 * 1.2 * 0.625 / (rate * 0.625)
     assert 1 / alike / (rate * 1.5) <= share <= 3 / alike / (rate * 1.5), share
     assert rule.share(3, 2, 'image', fresh, 0.0, clock.now) == 1.0   # own load unknown
+
+
+def test_hot_cold_a_task_sent_again_at_once_does_not_make_the_robot_move_for_certain():
+    """A robot's second attempt right after its first (a busy answer, sent on): its rate
+    is counted over the horizon, not from the gap between the two (10 ms: 100 tasks/s,
+    whose own load dwarfed the others' and made every robot like it on server 3 move)."""
+    works = {1: 1.25, 2: 0.833, 3: 0.625}
+    moved = 0
+    for seed in range(200):
+        clock = Clock()
+        rule = hot_cold(clock, seed)
+        rule.current = 3
+        for s, u in ((1, 0.0), (2, 0.0), (3, 5 * 1.2 * 0.625)):   # five others on 3
+            rule.probed(s, 0.001, Load(0, 0, 1, 0.0, {'image': works[s]}, u))
+        rule.sends['image'].append(clock.now - 0.01)
+        assert rule.rate('image', clock.now) == pytest.approx(1 / 5.0)
+        moved += rule.order([1, 2, 3], 'image')[0] != 3
+    # one to three of six alike make servers 2 and 3 meet: about a third of them moves
+    assert 20 <= moved <= 120, moved

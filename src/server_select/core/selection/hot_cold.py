@@ -113,12 +113,14 @@ class HotCold(Balancer):
         return statistics.median(known) if known else 0.0
 
     def rate(self, kind, now):
-        """The robot's ``kind`` tasks per second over the last :data:`RATE_HORIZON` s."""
+        """The robot's ``kind`` tasks per second over the last :data:`RATE_HORIZON` s:
+        their count over the horizon. From its first task on, never 0: a robot that has
+        just started does not take its own load for unknown (with which it would move
+        for certain, and robots that start together would leave one server together)."""
         times = self.sends[kind]
         while times and now - times[0] > RATE_HORIZON:
             times.popleft()
-        span = now - times[0] if len(times) > 1 else 0.0
-        return (len(times) - 1) / span if span > 0 else 0.0
+        return len(times) / RATE_HORIZON
 
     def estimate(self, newest, kind, fresh, rate=0.0, alike=1, now=None):
         """``(latency, its standard error, work in flight per worker, a task's work per
