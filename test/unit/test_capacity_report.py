@@ -5,7 +5,7 @@ import collections
 
 import pytest
 
-from server_select.bench.capacity_report import figures, overloaded, static_assignment
+from server_select.bench.capacity_report import figures, overloaded, placed, static_assignment
 from server_select.testbed.bag_analysis import Report, Run
 
 
@@ -27,6 +27,13 @@ def test_a_server_sent_more_than_it_can_do_is_overloaded_for_as_long_as_that_las
     longest = overloaded(reports, {1: 2.0, 2: 2.0}, 5.0, 10.0, 26.0)
     assert 6.0 <= longest <= 8.0          # 6 s, measured in windows of 2 s
     assert overloaded(reports[24:], {1: 2.0}, 5.0, 10.0, 26.0) == 0.0
+
+
+def test_robots_are_placed_once_the_last_one_has_its_first_task_reported():
+    reports = [report(14.0, 1, robot=1), report(16.5, 2, robot=2), report(15.0, 1, robot=1),
+               report(17.0, 3, robot=3), report(18.0, 3, robot=2)]
+    assert placed(Run({}, [], reports, [], [])) == 17.0
+    assert placed(Run({}, [], [], [], [])) == 0.0
 
 
 def test_failed_tasks_count_at_the_timeout_and_extra_sends_per_task():

@@ -53,7 +53,9 @@ SCENARIOS = {
 }
 TIMEOUT = 5.0        # the task timeout: an answer later than this is not wanted
 WARMUP = 15.0        # s of scenario time before the measured part (nodes up, first tasks)
-SETTLE = 10.0        # s after the late server came up that "settled switches" start
+# s after the late server came up (herd), or after every robot's first task report
+# (the others), that "settled switches" start
+SETTLE = 10.0
 
 
 def scenario(shares, robots, seconds, delays, late=None):
@@ -122,9 +124,10 @@ def run_once(variant, kind, rate, args, work, name):
     # task's is mostly message handling, which is not modelled: no overload figure)
     capacities = dict((s, share / args.cpu) for s, share in enumerate(shares, start=1)) \
         if kind == 'image' else None
-    row = capacity_report.figures(bag_analysis.load(bag), done, rate * args.robots, WARMUP,
-                                  WARMUP + args.seconds, TIMEOUT, capacities,
-                                  None if late is None else late + SETTLE)
+    run = bag_analysis.load(bag)
+    settled = late + SETTLE if late is not None else capacity_report.placed(run) + SETTLE
+    row = capacity_report.figures(run, done, rate * args.robots, WARMUP,
+                                  WARMUP + args.seconds, TIMEOUT, capacities, settled)
     row['work'] = capacity_report.work_rate(os.path.join(work, name), t0, WARMUP,
                                             WARMUP + args.seconds)
     return row

@@ -87,6 +87,14 @@ def overloaded(reports, capacities, timeout, start, end, span=2.0, slack=1.25):
     return longest
 
 
+def placed(run):
+    """Scenario time of the last robot's first task report (robots placed by then)."""
+    first = {}
+    for r in run.reports:
+        first[r.robot] = min(r.t, first.get(r.robot, r.t))
+    return max(first.values()) if first else 0.0
+
+
 def figures(run, done, offered, start, end, timeout, capacities=None, settled=None):
     """The figures of one run: ``run`` a bag_analysis Run, ``done`` its detections (None:
     not frames), ``offered`` tasks/s the robots were asked to send, ``capacities`` each
