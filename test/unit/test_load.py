@@ -36,6 +36,27 @@ def test_service_times_are_the_median_of_the_recent_ones():
     assert times.errors()['image'] == 0.0     # one task: no spread known
 
 
+def test_service_times_follow_a_step_in_the_work_within_the_last_second():
+    clock = Clock()
+    times = ServiceTimes(clock=clock)
+    for _ in range(20):                      # 4 tasks a second of 1 ms each
+        times.add('sort', 0.001)
+        clock.now += 0.25
+    tasks = 0
+    while times.get('sort') < 0.026:         # each now 25 ms longer (a busy machine)
+        times.add('sort', 0.026)
+        clock.now += 0.25
+        tasks += 1
+    # the median of the last second's five: the third slow task shows it (0.75 s; of the
+    # last 20 tasks, the eleventh would: 2.75 s)
+    assert tasks == 3
+    for _ in range(3):                       # rare tasks: the newest three still count
+        clock.now += 10.0
+        times.add('image', 0.5)
+    times.add('image', 0.8)
+    assert times.get('image') == pytest.approx(0.5) and times.errors()['image'] > 0
+
+
 def test_an_idle_server_takes_what_it_can_finish_in_time_and_refuses_the_rest():
     q, clock = queue_with(0.5)
     assert q.offer('image', 'a', deadline=clock.now + 0.6) is None
