@@ -15,11 +15,8 @@ link) is not made here, where it would hold every other probe up: the prober han
 to its worker threads.
 """
 
-import fcntl
 import selectors
 import socket
-import struct
-import termios
 import threading
 import time
 
@@ -44,32 +41,18 @@ class Flight(object):
         return self.finished
 
     def out_for(self):
-        """Seconds the request has been out *on the network*, by the clock its round trip
-        is measured with (from the kernel's send stamp, where there is one); 0.0 while its
-        answer waits unread in the socket (the robot, not the link or the server, is
-        behind) and once the server's host has acknowledged the request (:func:`delivered`:
-        the link is up and the server has it; whether it answers in time, the probe's own
-        timeout says)."""
+        """Seconds the request has been out by the clock its round trip is measured with
+        (from the kernel's send stamp, where there is one); 0.0 while its answer waits
+        unread in the socket (the robot, not the link or the server, is behind)."""
         if self.sock is None or self.sent is None:
             return None
         try:    # bytes, not readiness: a send stamp come late polls ready too
             self.sock.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT)
             return 0.0              # answer bytes (or the server's close) wait unread
         except BlockingIOError:
-            return 0.0 if delivered(self.sock) else time.time() - self.sent
+            return time.time() - self.sent
         except OSError:             # closed meanwhile
             return None
-
-
-def delivered(sock):
-    """Whether every byte written to TCP socket ``sock`` has been acknowledged by the peer's
-    kernel (Linux ``SIOCOUTQ``: written and not yet acknowledged, 0); False where that is
-    not known."""
-    try:
-        return struct.unpack('i', fcntl.ioctl(sock.fileno(), termios.TIOCOUTQ,
-                                              b'\0' * 4))[0] == 0
-    except (OSError, ValueError):     # not a socket this can ask, or closed
-        return False
 
 
 class ProbeLoop(object):

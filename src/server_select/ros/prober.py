@@ -32,10 +32,9 @@ class Prober(object):
     Probes go out on one loop thread over persistent connections (a probe that must
     connect first, on a worker thread), each bounded by ``timeout``; a server whose
     previous probe is still out is not probed again, and once that probe is late for this
-    server (``AnswerTimes``: its request unacknowledged for twice its longest recent
-    answer) it gets a failed sample (:data:`STILL_OUT`): a link down is known by the next
-    probe; a server whose host has the request, busy on a small CPU share, is given the
-    probe's timeout. Samples go out as
+    server (``AnswerTimes``: twice its longest recent answer) it gets a failed sample
+    (:data:`STILL_OUT`): a link down is known by the next probe, a busy server on a small
+    CPU share is given the time its answers take. Samples go out as
     ``stream`` says (``ProbeSamples``; ``view``: for recorders, the manager hears the
     robot's own ranking). Servers can be added and removed at run time. ``answered``:
     the servers that have answered at least once; ``on_sample(server, ok, rtt, error,
