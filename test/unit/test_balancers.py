@@ -469,7 +469,7 @@ def test_hot_cold_share_of_robots_alike_that_move():
 def test_hot_cold_a_task_sent_again_at_once_does_not_make_the_robot_move_for_certain():
     """A robot's second attempt right after its first (a busy answer, sent on): its rate
     is counted over the horizon, not from the gap between the two (10 ms: 100 tasks/s,
-    whose own load dwarfed the others' and made every robot like it on server 3 move)."""
+    an own load that swamped every server alike: it stayed beside two idle servers)."""
     works = {1: 1.25, 2: 0.833, 3: 0.625}
     moved = 0
     for seed in range(200):

@@ -49,10 +49,10 @@ MEDIAN_ERROR = 1.2533
 class ServiceTimes(object):
     """The recent work per task of each kind: the median of the tasks of the last
     ``horizon`` s, at least the newest ``least`` and at most ``keep``, and its standard
-    error (thread-safe). A step in the work shows once half of those are new: after a
-    second and a half at 4 tasks a second, where the last 20 tasks had taken 2.5 s
-    (loaded_server: the robots' reaction); fewer tasks make a wider error, which the
-    robots count as noise."""
+    error (thread-safe). A step in the work shows once half of those are new: at 4 tasks
+    a second with the third slow one (0.75 s), where the last 20 had needed eleven (2.75
+    s: loaded_server's reaction); fewer tasks make a wider error, which the robots count
+    as noise."""
 
     def __init__(self, keep=20, horizon=1.0, least=3, clock=time.monotonic):
         if keep < 1 or not 1 <= least <= keep:

@@ -114,9 +114,10 @@ class HotCold(Balancer):
 
     def rate(self, kind, now):
         """The robot's ``kind`` tasks per second over the last :data:`RATE_HORIZON` s:
-        their count over the horizon. From its first task on, never 0: a robot that has
-        just started does not take its own load for unknown (with which it would move
-        for certain, and robots that start together would leave one server together)."""
+        their count over the horizon. Bounded: two sends 10 ms apart (an attempt sent on
+        after a busy answer) do not make it 100 a second, an own load that swamped every
+        server alike and kept the robot where it was; and from its first send on never 0
+        (its own load unknown: it would move for certain)."""
         times = self.sends[kind]
         while times and now - times[0] > RATE_HORIZON:
             times.popleft()
