@@ -479,7 +479,22 @@ def test_hot_cold_a_task_sent_again_at_once_does_not_make_the_robot_move_for_cer
         for s, u in ((1, 0.0), (2, 0.0), (3, 5 * 1.2 * 0.625)):   # five others on 3
             rule.probed(s, 0.001, Load(0, 0, 1, 0.0, {'image': works[s]}, u))
         rule.sends['image'].append(clock.now - 0.01)
-        assert rule.rate('image', clock.now) == pytest.approx(1 / 5.0)
+        assert rule.rate('image', clock.now) == pytest.approx(2 / 5.0)    # and this one
         moved += rule.order([1, 2, 3], 'image')[0] != 3
     # one to three of six alike make servers 2 and 3 meet: about a third of them moves
     assert 20 <= moved <= 120, moved
+
+
+def test_hot_cold_counts_its_own_rate_from_the_attempts_sent_not_from_being_asked():
+    clock = Clock()
+    rule = hot_cold(clock)
+    for s in (1, 2):
+        rule.probed(s, 0.001, Load(0, 0, 1, 0.0, {'sort': 0.002}, 0.0))
+    for _ in range(5):                                  # asked, nothing sent
+        rule.order([1, 2], 'sort')
+    assert rule.rate('sort', clock.now) == pytest.approx(1 / 5.0)   # the one it decides
+    for _ in range(3):
+        rule.started(rule.order([1, 2], 'sort')[0], 'sort')
+        clock.now += 0.5
+    assert rule.rate('sort', clock.now) == pytest.approx(4 / 5.0)
+    assert rule.rate('image', clock.now) == pytest.approx(1 / 5.0)

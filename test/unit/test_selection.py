@@ -180,3 +180,20 @@ def test_an_empty_window_keeps_the_server_tasks_went_to_while_nothing_speaks_aga
     assert s.candidates() == [2]                      # (1 probe here) it may have tasks
     s.remove_server(2)                                # gone from the fleet: forgotten
     assert s.candidates() == []
+
+
+def test_asking_whether_a_per_task_rule_is_ready_or_where_it_heads_decides_nothing():
+    """A robot's summary line and its start-up check ask where tasks go; with the fleet's
+    rule that must not be a decision (one made for no kind of task moved robots on a
+    loaded server to a near one between two tasks) nor count as a send."""
+    clock = Clock()
+    health = ServerHealth([1, 2], clock=clock, probation_probes=1)
+    s = Selection(1, [1, 2], 'select', health=health, clock=clock, policy=Policy('hot_cold'))
+    rule = s.balancer
+    assert s.ready(set()) and s.heading() == NO_SERVER
+    assert rule.current is None and not rule.moves and not rule.sends
+    first = s.candidates('sort')[0]                   # a send asks with its kind
+    assert rule.current == first and s.heading() == first
+    for _ in range(3):
+        assert s.ready(set()) and s.heading() == first
+    assert sum(rule.moves.values()) == 1 and not any(rule.sends.values())

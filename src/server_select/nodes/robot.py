@@ -228,7 +228,7 @@ class RobotNode(object):
                 rospy.loginfo('robot %d: following the manager again', self.robot_id)
 
     def summary(self):
-        target = self.selection.target()
+        target = self.selection.heading()     # (not target(): a decision, with no kind)
         moves = getattr(self.selection.balancer, 'moves', None)
         return 'robot %d: %s; server %s%s, %d switches%s' % (
             self.robot_id, '; '.join(s.summary() for s in self.streams),

@@ -65,12 +65,12 @@ class Pending(object):
         self.hedged = False
         self.open = set()       # servers of attempts not ended yet (no answer, no deadline)
 
-    def attempt(self, server, now, observer=None):
-        """An attempt at ``server`` starts ``now`` (``observer.started(server)``)."""
+    def attempt(self, server, now, observer=None, kind=None):
+        """An attempt at ``server`` starts ``now`` (``observer.started(server, kind)``)."""
         self.attempts.append((server, now))
         self.open.add(server)
         if observer is not None:
-            observer.started(server)
+            observer.started(server, kind)
 
     def end(self, server, rtt=None, observer=None):
         """The attempt at ``server`` ended, once: ``observer.ended(server, rtt)``; None

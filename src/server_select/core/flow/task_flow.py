@@ -160,7 +160,7 @@ class TaskFlow(Timing):
 
     def _attempt(self, pending, server):
         now = self._clock()
-        pending.attempt(server, now, self._attempts)
+        pending.attempt(server, now, self._attempts, self.kind)
         pending.deadline = min(pending.started + self.timeout,
                                now + self.deadlines.seconds(server))
         self._publish(pending.request, server, self.deadlines.budget(

@@ -48,9 +48,15 @@ class Balancer(object):
     def _probed(self, answer):
         """Subclasses: a probe answer arrived (lock held)."""
 
-    def started(self, server):
+    def started(self, server, kind=None):
+        """An attempt of a ``kind`` task is sent to ``server`` (asking :meth:`order` is
+        not sending: a robot may ask where a task would go)."""
         with self._lock:
             self.out[server] += 1
+            self._started(server, kind, self._clock())
+
+    def _started(self, server, kind, now):
+        """Subclasses: an attempt was sent (lock held)."""
 
     def ended(self, server, rtt=None):
         """An attempt at ``server`` ended: ``rtt`` its round trip (answered, or failed

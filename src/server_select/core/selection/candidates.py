@@ -2,12 +2,11 @@
 
 ``select`` follows the manager's ranking while its flags are fresh, and ranks the servers
 itself from its own probe samples, with the manager's policy, when they are stale or name
-no server; with a peer's policy (:mod:`~server_select.core.selection.balancers`) it asks that
-rule per
-task and the flags are for the record only; ``fixed`` always names one server (the paper's
-baseline); ``local`` keeps the work in the robot. In ``select`` mode the robot's own
-evidence comes first: servers its :class:`~server_select.core.selection.health.ServerHealth` has
-ejected are skipped (while one is usable: :meth:`ServerHealth.order`).
+no server; with a per-task rule (:mod:`~server_select.core.selection.balancers`) it asks
+that rule when it sends a task and the flags are for the record only; ``fixed`` always
+names one server (the paper's baseline); ``local`` keeps the work in the robot. In
+``select`` mode servers the robot's :class:`~server_select.core.selection.health.ServerHealth`
+has ejected are skipped (while one is usable: :meth:`ServerHealth.order`).
 """
 
 import threading
@@ -200,14 +199,15 @@ class Selection(object):
         if self.mode == 'fixed':
             return [self.fixed_server]
         if self.balancer is not None:
-            servers = self._servers()
-            if self.health is not None:
-                servers = self.health.order(servers)
-            return self.balancer.order(servers, kind)
+            return self.balancer.order(self._usable(), kind)
         ranking = self.manager_ranking()
         if ranking is None:
             ranking = self.own_ranking()
         return self.health.order(ranking) if self.health is not None else ranking
+
+    def _usable(self):      # the servers tasks may go to, the ejected ones left out
+        servers = self._servers()
+        return self.health.order(servers) if self.health is not None else servers
 
     def _servers(self):
         """The servers tasks may go to (grouped: the group's)."""
@@ -216,7 +216,7 @@ class Selection(object):
                     if self._task_servers is None or s in self._task_servers]
 
     def target(self):
-        """The first candidate, or NO_SERVER."""
+        """The first candidate, or NO_SERVER (a decision: :meth:`heading` makes none)."""
         candidates = self.candidates()
         return candidates[0] if candidates else NO_SERVER
 
@@ -230,7 +230,7 @@ class Selection(object):
         if self.balancer is not None:
             last = self.balancer.last
             usable = last is not None and (self.health is None or self.health.usable(last)
-                                           or last in self.health.order(self._servers()))
+                                           or last in self._usable())
             return last if usable else NO_SERVER
         ranking = self.manager_ranking()
         if ranking is None:
@@ -242,7 +242,9 @@ class Selection(object):
 
     def ready(self, answered):
         """Whether tasks may start: ``answered`` is the set of servers that have answered a
-        probe (what fixed mode waits for)."""
+        probe (what fixed mode waits for). A per-task rule is not asked (it decides)."""
         if self.mode == 'fixed':
             return self.fixed_server in answered
+        if self.mode == 'select' and self.balancer is not None:
+            return bool(self._usable())
         return self.mode == 'local' or bool(self.candidates())

@@ -112,16 +112,20 @@ class HotCold(Balancer):
         known = [a.service[kind] for a in fresh.values() if kind in a.service]
         return statistics.median(known) if known else 0.0
 
+    def _started(self, server, kind, now):
+        self.sends[kind].append(now)
+
     def rate(self, kind, now):
-        """The robot's ``kind`` tasks per second over the last :data:`RATE_HORIZON` s:
-        their count over the horizon. Bounded: two sends 10 ms apart (an attempt sent on
-        after a busy answer) do not make it 100 a second, an own load that swamped every
-        server alike and kept the robot where it was; and from its first send on never 0
-        (its own load unknown: it would move for certain)."""
+        """The robot's ``kind`` tasks per second over the last :data:`RATE_HORIZON` s,
+        the one it decides for included: their count over the horizon. Bounded: two
+        attempts 10 ms apart (one sent on after a busy answer) do not make it 100 a
+        second, an own load that swamped every server alike and kept the robot where it
+        was; and never 0 (its own load unknown: it would move for certain). Attempts
+        count when sent (:meth:`started`), not when the robot asks where one would go."""
         times = self.sends[kind]
         while times and now - times[0] > RATE_HORIZON:
             times.popleft()
-        return len(times) / RATE_HORIZON
+        return (len(times) + 1) / RATE_HORIZON
 
     def estimate(self, newest, kind, fresh, rate=0.0, alike=1, now=None):
         """``(latency, its standard error, work in flight per worker, a task's work per
@@ -182,7 +186,6 @@ class HotCold(Balancer):
         return low / alike / max(1.0, rate * self.window)
 
     def _order(self, servers, kind, now):
-        self.sends[kind].append(now)
         fresh = dict((s, self.probes[s]) for s in servers
                      if s in self.probes and now - self.probes[s].at <= MAX_AGE)
         if not fresh:
