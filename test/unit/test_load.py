@@ -118,6 +118,32 @@ def test_a_task_whose_deadline_passed_in_the_queue_is_shed_not_done():
     assert q.stale(job) is None and job.item == 'fresh'
 
 
+def test_a_kind_not_timed_yet_needs_as_long_as_its_task_in_service_has_taken():
+    """Six robots' first frames at one idle server: while none has been timed, the one in
+    service says how long a frame takes at least; the others wait behind that, frames
+    that cannot make their deadline behind it are refused, and the report says so."""
+    clock = Clock()
+    q = WorkQueue(1, 10, ServiceTimes(), clock)
+    for robot in range(6):
+        assert q.offer('image', robot, deadline=clock.now + 2.5, owner=robot) is None
+    first = q.take()
+    assert q.load().service == {'image': 0.0} and q.load().backlog == 0.0
+    clock.now += 0.8                                  # the first frame still in service
+    load = q.load()
+    assert load.service == {'image': pytest.approx(0.8)}
+    assert load.backlog == pytest.approx(5 * 0.8)     # five frames of at least 0.8 s
+    assert q.offer('image', 'late', deadline=clock.now + 1.0).startswith('busy: would')
+    q.done(first, None)                               # not timed (the kind's first)
+    second = q.take()
+    assert q.stale(second) is None
+    clock.now += 1.0
+    assert q.load().service == {'image': pytest.approx(1.0)}
+    q.done(second, 1.0)                               # timed: the median from now on
+    assert q.load().service == {'image': 1.0}
+    third = q.take()                                  # at 1.8 s: done at 2.8, too late
+    assert q.stale(third).startswith('busy: waited 1.8 s') and q.shed == 1
+
+
 def test_close_wakes_the_workers_and_returns_what_was_queued():
     q, _ = queue_with(0.1)
     taken = []

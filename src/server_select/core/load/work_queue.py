@@ -77,9 +77,9 @@ class ServiceTimes(object):
             self._medians[kind] = statistics.median(values)
             self._errors[kind] = MEDIAN_ERROR * mean_error(values)[1]
 
-    def get(self, kind):
-        """Seconds of work per task of ``kind`` (0.0 while none was done: optimistic)."""
-        return self._medians.get(kind, 0.0)
+    def get(self, kind, default=0.0):
+        """Seconds of work per task of ``kind`` (``default`` while none was done)."""
+        return self._medians.get(kind, default)
 
     def snapshot(self):
         """``{kind: seconds}`` of every kind done so far."""
@@ -137,9 +137,20 @@ class WorkQueue(object):
         running = [job for job in self._running if excluding is None or job.owner != excluding]
         if len(running) + len(queued) < self.workers:
             return 0.0
-        work = sum(self.times.get(job.kind) for job in queued)
-        work += sum(max(0.0, self.times.get(job.kind) - (now - job.started)) for job in running)
+        work = sum(self._work(job.kind, now) for job in queued)
+        work += sum(max(0.0, self._work(job.kind, now) - (now - job.started)) for job in running)
         return work / self.workers
+
+    def _work(self, kind, now):
+        """Seconds of work per ``kind`` task (lock held): the recent median; while none is
+        known, as long as the longest-running task of the kind has taken so far. (A
+        server's first frames, which also load what the kind needs, were taken for no
+        work: every robot sent its frames to the first idle server, and gave them up
+        there together.)"""
+        known = self.times.get(kind, None)
+        if known is not None:
+            return known
+        return max([now - job.started for job in self._running if job.kind == kind] or [0.0])
 
     def offer(self, kind, item, deadline=None, owner=None):
         """Queue ``item`` (a task of ``kind`` wanted by ``deadline``, None: whenever, sent
@@ -153,7 +164,7 @@ class WorkQueue(object):
             else:
                 why = None
                 if deadline is not None:
-                    finish = self._backlog(now) + self.times.get(kind)
+                    finish = self._backlog(now) + self._work(kind, now)
                     if now + finish > deadline:
                         why = 'busy: would finish in %.3g s, its deadline is in %.3g s' % (
                             finish, max(0.0, deadline - now))
@@ -182,10 +193,10 @@ class WorkQueue(object):
         before its work is done), or None; a stale job counts as shed and is done."""
         if job.deadline is None:
             return None
-        work = self.times.get(job.kind)
-        if job.started + work <= job.deadline:
-            return None
         with self._cond:
+            work = self._work(job.kind, job.started)
+            if job.started + work <= job.deadline:
+                return None
             self._running.discard(job)
             self.shed += 1
         return 'busy: waited %.3g s in the queue; its deadline passed' % (
@@ -207,7 +218,7 @@ class WorkQueue(object):
 
     def _utilization(self, now, excluding):
         """The others' work per second over the workers (call with the lock held)."""
-        return sum(rate * self.times.get(kind)
+        return sum(rate * self._work(kind, now)
                    for kind, rate in self.demand.rates(now, excluding).items()) / self.workers
 
     def load(self, excluding=None):
@@ -219,8 +230,12 @@ class WorkQueue(object):
         another's)."""
         with self._cond:
             now = self._clock()
+            service = self.times.snapshot()
+            for job in self._running:         # a kind not timed yet: its bound so far
+                if job.kind not in service:
+                    service[job.kind] = self._work(job.kind, now)
             return Load(len(self._queue), len(self._running), self.workers,
-                        self._backlog(now, excluding), self.times.snapshot(),
+                        self._backlog(now, excluding), service,
                         self._utilization(now, excluding), self.times.errors())
 
     def close(self):
