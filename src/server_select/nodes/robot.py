@@ -9,17 +9,17 @@ from server_select.core.config import names
 from server_select.core.flow.budget import RetryBudget
 from server_select.core.config.params import ParamError
 from server_select.core.flow.task_flow import LOCAL, NO_SERVER
+from server_select.core.load.robot_load import RobotLoad
 from server_select.msg import SelectionFlag
 from server_select.ros.camera import TopicSource
 from server_select.ros.flags import flag_topic
 from server_select.ros.graph import ServiceProviders, publisher_of
-from server_select.ros.load import RobotLoad
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
 from server_select.ros.robot_parts import Joining, robot_prober, robot_selection, task_stream
 from server_select.ros.node import fleet, param
 from server_select.ros.runner import run
 from server_select.ros.passive import TaskSamples
-from server_select.ros.prober import STILL_OUT
+from server_select.core.selection.answer_time import STILL_OUT
 from server_select.ros.senders import SenderGate
 from server_select.tasks.kinds import stream_kinds
 from server_select.ros.view import RankingSender

@@ -9,7 +9,7 @@ import time
 import rospy
 
 from server_select.core.config import names
-from server_select.core.selection.answer_time import AnswerTimes
+from server_select.core.selection.answer_time import STILL_OUT, AnswerTimes
 from server_select.core.selection.probing import ProbeRound
 from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
@@ -18,8 +18,6 @@ from server_select.ros.probe_samples import ProbeSamples
 from server_select.ros.probe_seal import ProbeSeal
 from server_select.ros.seal import enabled as keyed
 from server_select.srv import LatencyProbe, LatencyProbeRequest
-
-STILL_OUT = 'previous probe still in progress'   # a probe not sent: the last one is still out
 
 
 class Prober(object):

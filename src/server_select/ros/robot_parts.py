@@ -8,13 +8,12 @@ import threading
 import rospy
 
 from server_select.core.config.params import ParamError, parse_fixed_server
-from server_select.core.flow.attempts import AttemptClock
+from server_select.core.flow import attempts
 from server_select.core.flow.task_flow import HEDGE_QUANTILE
 from server_select.core.selection import probing
-from server_select.core.selection.candidates import Selection
-from server_select.core.selection.health import ServerHealth
-from server_select.core.selection.policy import from_params
+from server_select.core.selection import robot_parts
 from server_select.ros import seal
+from server_select.ros.load import load_of
 from server_select.ros.membership import ProbeAddresses
 from server_select.ros.node import param
 from server_select.ros.prober import Prober
@@ -26,18 +25,10 @@ def robot_selection(robot_id, servers, mode):
     """``(Selection, ServerHealth, Policy)`` of a robot from its parameters."""
     fixed = param('fixed_server', default=servers[0] if servers else None,
                   parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
-    eject_time, eject_max = param('eject_time'), param('eject_max')
-    if eject_time > eject_max:
-        raise ParamError('~eject_time %g is longer than ~eject_max %g'
-                         % (eject_time, eject_max))
-    health = ServerHealth(servers, eject_time, eject_max)
-    policy, statistic = from_params(param)
-    selection = Selection(robot_id, servers, mode, fixed, health, param('window'), policy,
-                          param('manager_timeout'), statistic=statistic,
-                          passive=param('passive') and mode == 'select',
-                          task_memory=param('task_memory'), keep=param('window_samples'),
-                          horizon=param('window_max'), fail_fast=param('fail_fast'))
-    return selection, health, policy
+    try:
+        return robot_parts.robot_selection(robot_id, servers, mode, fixed, param)
+    except ValueError as error:
+        raise ParamError(str(error))
 
 
 def robot_prober(robot, servers):
@@ -47,7 +38,8 @@ def robot_prober(robot, servers):
     addresses = ProbeAddresses('robot %d' % robot.robot_id) if seal.enabled() else None
     return addresses, Prober(robot.robot_id, servers, plan, param('probe_timeout'),
                              on_sample=robot.on_sample, stream=param('sample_stream'),
-                             load_of=robot.load.on_answer if robot.load else None,
+                             load_of=(lambda server, response, rtt: robot.load.on_answer(
+                                 server, load_of(response), rtt)) if robot.load else None,
                              announce=robot.load.announcement if robot.load else None,
                              contenders=(rule, robot.selection) if rule else None,
                              node_of=robot.server_node, addresses=addresses)
@@ -55,9 +47,9 @@ def robot_prober(robot, servers):
 
 def task_stream(robot, kind, rate, mode):
     """The TaskStream of ``robot`` (a RobotNode) for ``kind`` at ``rate``."""
-    timeout, fresh = param('task_timeout'), param('fresh_factor')
     return TaskStream(robot.robot_id, kind, rate, param('tasks'), robot.ready, dict(
-        timeout=timeout, candidates=functools.partial(robot.selection.candidates, kind.kind),
+        timeout=param('task_timeout'),
+        candidates=functools.partial(robot.selection.candidates, kind.kind),
         attempts=robot.selection.balancer, on_failure=robot.on_failure,
         on_success=robot.health.task_ok, ids=robot._task_ids,
         on_busy=functools.partial(robot.on_busy, kind.kind),
@@ -65,15 +57,7 @@ def task_stream(robot, kind, rate, mode):
         copies=robot.selection.balancer.copies if robot.selection.balancer else 1,
         max_in_flight=param('max_in_flight'),
         newest_wins=kind.newest_wins,
-        # load-aware: a server's first answers may take half the timeout (its work is
-        # not known yet; its probes say whether it is up)
-        deadlines=AttemptClock(timeout, factor=param('retry_factor'),
-                               floor=param('retry_floor'),
-                               first=timeout / 2.0 if robot.load else 1.0,
-                               expected=robot.load.expected(kind.kind) if robot.load
-                               else None,
-                               fresh=robot.load.fresh_for(kind.kind, fresh, 1.0 / rate)
-                               if robot.load and kind.newest_wins and fresh > 0 else None),
+        deadlines=attempts.from_params(param, kind.kind, rate, kind.newest_wins, robot.load),
         on_answer=functools.partial(robot.passive.on_answer, kind.kind)
         if robot.passive else None), local=mode == 'local',
         expected_publisher=robot.server_node, route=ROUTES[param('routing')], load=robot.load,

@@ -33,7 +33,8 @@ class TaskStream(object):
     limit) and publishes one ``task_report`` per task. A result counts only if the node
     ``expected_publisher(server, refresh)`` names published it (a
     :class:`~server_select.ros.senders.SenderGate`).
-    With ``load`` (a :class:`~server_select.ros.load.RobotLoad`: load-aware), each attempt
+    With ``load`` (a :class:`~server_select.core.load.robot_load.RobotLoad`: load-aware),
+    each attempt
     tells its server the seconds its robot still waits (``budget``), and the load board
     hears where tasks went. A send that ``max_in_flight`` held back goes as soon as a task
     ends.

@@ -131,6 +131,10 @@ class Scenario(object):
         self.name = str(data.get('name', 'scenario'))
         self.duration = _number(data.get('duration', 60), 'duration', minimum=1.0)
         self.hosts = self._hosts(data.get('hosts'))
+        # what the suite and the simulator run on it (robot_args, variants, measure_from)
+        self.suite = data.get('suite') or {}
+        if not isinstance(self.suite, dict):
+            raise ScenarioError('suite: expected a mapping')
         default = data.get('default', {}) or {}
         if not isinstance(default, dict):
             raise ScenarioError('default: expected a mapping')

@@ -80,3 +80,18 @@ class AttemptClock(object):
             return False
         expected = self.expected(server) if self.expected is not None else None
         return fresh - elapsed <= (expected or 0.0)
+
+
+def from_params(get, kind, rate, newest_wins, load=None):
+    """The :class:`AttemptClock` of a robot's ``kind`` stream at ``rate`` tasks a second
+    from its parameters (``get(name)``), with ``load`` (a load-aware robot's
+    :class:`~server_select.core.load.robot_load.RobotLoad`, or None): a load-aware robot's
+    first answers from a server may take half the timeout (its work is not known yet; its
+    probes say whether it is up), and a frame (``newest_wins``) is fresh for
+    ``~fresh_factor`` x its unqueued time there."""
+    timeout, fresh = get('task_timeout'), get('fresh_factor')
+    return AttemptClock(timeout, factor=get('retry_factor'), floor=get('retry_floor'),
+                        first=timeout / 2.0 if load else 1.0,
+                        expected=load.expected(kind) if load else None,
+                        fresh=load.fresh_for(kind, fresh, 1.0 / rate)
+                        if load and newest_wins and fresh > 0 else None)

@@ -24,6 +24,8 @@ import collections
 import threading
 
 FACTOR = 2.0     # a probe later than twice the longest recent answer is late
+# the error of a probe not sent because the last one is still out, and late
+STILL_OUT = 'previous probe still in progress'
 KEEP = 64        # answers per server remembered (6.4 s of a contender's, at 10 Hz)
 
 

@@ -26,7 +26,8 @@ class Selection(object):
 
     def __init__(self, robot_id, servers, mode, fixed_server=None, health=None, window=5.0,
                  policy=None, manager_timeout=3.0, clock=time.monotonic, statistic=None,
-                 passive=False, task_memory=0.0, keep=0, horizon=None, fail_fast=0):
+                 passive=False, task_memory=0.0, keep=0, horizon=None, fail_fast=0,
+                 rng=None):
         if mode not in MODES:
             raise ValueError('unknown mode %r' % (mode,))
         self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
@@ -45,10 +46,10 @@ class Selection(object):
         self.probes = LatencyWindow(window, keep=keep, horizon=horizon) if passive \
             else self.window
         self._chooser = Chooser(policy)
-        # a peer's rule, asked per task (None: the ranking decides)
-        self.balancer = balancers.make(
-            policy.kind, clock=clock, **({'window': window} if policy.kind == 'hot_cold'
-                                         else {})) if policy.per_task else None
+        # a peer's rule, asked per task, drawing from ``rng`` (None: the ranking decides)
+        rule_args = {'window': window} if policy.kind == 'hot_cold' else {}
+        self.balancer = balancers.make(policy.kind, clock=clock, rng=rng, **rule_args) \
+            if policy.per_task else None
         self.on_change = None      # on_change(): a sample may have changed view()
         self._clock = clock
         self._lock = threading.Lock()
@@ -181,8 +182,7 @@ class Selection(object):
 
     def flagged(self):
         """Whether a flag has ever been taken."""
-        with self._lock:
-            return self._flag is not None
+        return self._flag is not None
 
     def deciding_locally(self):
         """Whether a robot that follows the manager has no fresh flag (one that chooses

@@ -1,0 +1,68 @@
+"""A load-aware robot's view of its servers' load, fed by its probe answers
+(:class:`~server_select.core.load.board.LoadBoard`), and what its probes announce (no
+rospy: the node and the simulator hand it :class:`Load` reports and their clock)."""
+
+import threading
+import time
+
+from server_select.core.load.demand import Arrivals
+from server_select.core.load.board import LoadBoard
+
+
+class RobotLoad(object):
+    """What the robot's tasks would wait for at each server: ``mix`` is ``{kind: tasks
+    per second}`` of the robot's streams. ``target()`` names the server the robot's next
+    task goes to: a probe of it announces the rate the robot sends tasks at (measured from
+    its sends, :class:`~server_select.core.load.demand.Arrivals`; a kind's rate in ``mix``
+    until its first task is sent), a probe of any other announces none, so that servers
+    count the robot where its tasks go now. Thread-safe."""
+
+    def __init__(self, mix, target=None, balancer=None, clock=time.monotonic):
+        self.board = LoadBoard(mix, clock=clock)
+        self.balancer = balancer     # a peer's rule hears every answer's load too
+        self.mix = dict(mix)
+        self.kinds = sorted(mix)
+        self.target = target
+        self._sends = Arrivals()
+        self._clock = clock
+        self._lock = threading.Lock()      # sends from task threads, probes from others
+
+    def on_answer(self, server, load, rtt=None):
+        """A probe answer of ``server`` reporting ``load`` (a
+        :class:`~server_select.core.load.work_queue.Load`) that took ``rtt`` s: its wait
+        (s)."""
+        self.board.update(server, load, rtt)
+        if self.balancer is not None and rtt is not None:
+            self.balancer.probed(server, rtt, load)
+        return self.board.wait(server)
+
+    def sent(self, server, kind):
+        self.board.sent(server, kind)
+        with self._lock:
+            self._sends.add(None, kind, self._clock())
+
+    def announcement(self, server):
+        """``(kinds, tasks per second of each)`` for a probe of ``server``."""
+        if self.target is None or self.target() != server:
+            return self.kinds, [0.0] * len(self.kinds)
+        with self._lock:
+            rates = self._sends.rates(self._clock())
+            return self.kinds, [rates.get((None, kind), 0.0 if self._sends.seen(None, kind)
+                                          else self.mix[kind]) for kind in self.kinds]
+
+    def expected(self, kind):
+        """``(server) -> seconds``: backlog + work of a ``kind`` task there (None: unknown),
+        what an attempt's deadline follows."""
+        return lambda server: self.board.expected(server, kind)
+
+    def fresh_for(self, kind, factor, period):
+        """``(server) -> seconds``: how long a ``kind`` task (a camera frame, one every
+        ``period`` s) is worth waiting for at a server: until the next frame is due, and at
+        least ``factor`` x (round trip + work) there with no queue (None: unknown)."""
+        def seconds(server):
+            unqueued = self.board.unqueued(server, kind)
+            return None if unqueued is None else max(period, factor * unqueued)
+        return seconds
+
+    def forget(self, server):
+        self.board.forget(server)

@@ -1,0 +1,101 @@
+"""What the simulator takes from the testbed, measured (no rospy): ``config/sim/model.yaml``.
+
+- ``kinds``: each task kind's CPU seconds on one core of this machine, a log-normal
+  (``median_ms``, ``sigma``) fitted to real tasks run here (``--measure``: a sort task's
+  message in, sorted, out; a camera frame's decoding and Haar detection); a sort task of
+  another size scales with its values (``per`` values).
+- ``hop_ms``: the middleware's delay per message on the testbed beyond the link's own
+  (rospy's serialising and threads, the link emulator): calibrated so that the oracle's
+  mean round trip matches the testbed's (docs/league.md, "Calibration").
+- ``probe_ms``: a probe answer's CPU at the server (the LatencyProbe handler and its load
+  report).
+
+``python3 -m server_select.sim.model --measure`` times the kinds here and rewrites
+``kinds`` (the constants it keeps).
+"""
+
+import argparse
+import math
+import statistics
+import sys
+import time
+
+import yaml
+
+from server_select.ros.paths import package_file
+
+PATH = ('config', 'sim', 'model.yaml')
+
+
+class Model(object):
+    """The model's constants, and a task's work drawn from its kind's distribution."""
+
+    def __init__(self, data):
+        self.hop = float(data['hop_ms']) * 1e-3
+        self.probe_cpu = float(data['probe_ms']) * 1e-3
+        self.kinds = dict((name, (float(k['median_ms']) * 1e-3, float(k['sigma']),
+                                  int(k.get('per', 0))))
+                          for name, k in data['kinds'].items())
+
+    @classmethod
+    def load(cls, path=None):
+        with open(path or package_file(*PATH)) as stream:
+            return cls(yaml.safe_load(stream))
+
+    def work(self, kind, rng, size=0):
+        """CPU seconds of one ``kind`` task (``size`` values for a sort task)."""
+        median, sigma, per = self.kinds[kind]
+        if per and size:
+            median *= size / float(per)
+        return median * math.exp(rng.gauss(0.0, sigma)) if sigma > 0 else median
+
+
+def _fit(seconds):
+    logs = [math.log(s) for s in seconds]
+    return {'median_ms': round(1e3 * statistics.median(seconds), 4),
+            'sigma': round(statistics.pstdev(logs), 3)}
+
+
+def measure(repeats=200):
+    """``{kind: {median_ms, sigma, ...}}`` timed here (needs the built messages, OpenCV)."""
+    import random
+    from server_select.bench.capacity_work import cpu_per_task, sort_message
+    from server_select.core.flow.sort_kernel import make_values
+    from server_select.msg import SortTask
+    import io
+    values = make_values(random.Random(1), 1000)
+    buff = io.BytesIO()
+    SortTask(data=values).serialize(buff)
+    raw = buff.getvalue()
+    times = []
+    for _ in range(repeats):
+        start = time.process_time()
+        sort_message(raw)
+        times.append(max(1e-7, time.process_time() - start))
+    kinds = {'sort': dict(_fit(times), per=1000)}
+    frames = [cpu_per_task('image', repeats=1) for _ in range(max(10, repeats // 10))]
+    kinds['image'] = _fit(frames)
+    return kinds
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--measure', action='store_true', help='time the kinds here and '
+                        'rewrite their lines of the model file')
+    parser.add_argument('--repeats', type=int, default=200)
+    args = parser.parse_args(argv)
+    path = package_file(*PATH)
+    with open(path) as stream:
+        text = stream.read()
+    if args.measure:
+        data = yaml.safe_load(text)
+        data['kinds'] = measure(args.repeats)
+        head = ''.join(line for line in text.splitlines(True) if line.startswith('#'))
+        with open(path, 'w') as stream:
+            stream.write(head + yaml.safe_dump(data, sort_keys=False))
+    print(open(path).read())
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

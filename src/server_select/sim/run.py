@@ -1,0 +1,108 @@
+"""One simulated run: a scenario, one or more variants, one seed (no rospy).
+
+Variants are the scenario suite's (``testbed/suite.py``: a mode, a profile, parameters)
+and ``static`` (every robot fixed to its server of the best static assignment). Each
+variant's robots are the scenario's robots with the variant's parameters. By default a
+run simulates one variant alone on the scenario's servers (:func:`simulate`), and the
+league runs each variant with the same seed: paired runs. ``together`` runs every variant
+side by side on shared servers, as the testbed's suite does (its calibration).
+
+A scenario file's ``suite: robot_args`` say what the robots send (``task_rate``,
+``task_size``, ``sort_tasks``, ``frame_rate`` with ``image_source`` or ``image_topic``,
+``task_timeout``, ``start_delay``), as they do on the testbed; ``suite: measure_from``
+where the measured part starts (35 s, the suite's, by default).
+"""
+
+import collections
+
+from server_select.core.settings import default
+from server_select.sim.events import EventLoop, Streams
+from server_select.sim.network import Network
+from server_select.sim.robot import SimRobot
+from server_select.sim.server import SimServer
+from server_select.sim.stream import Kind
+from server_select.testbed.suite import MEASURE_FROM, VARIANTS, Variant
+from server_select.testbed.suite_scenario import REPLICA
+
+STATIC = Variant('fixed', 'paper', {})
+SORT_BYTES_PER_VALUE = 4
+FRAME_BYTES = 40000          # a 640x480 JPEG frame at quality 80, and its annotated answer
+
+Record = collections.namedtuple('Record', 'robot variant ended outcome')
+
+
+def variant(name):
+    return STATIC if name == 'static' else VARIANTS[name]
+
+
+def kinds_of(args):
+    """The task streams that a scenario's ``robot_args`` ask for (robot.launch's names)."""
+    kinds = []
+    if str(args.get('sort_tasks', True)).lower() not in ('false', '0'):
+        size = int(args.get('task_size', default('task_size')))
+        kinds.append(Kind('sort', float(args.get('task_rate', default('task_rate'))), False,
+                          SORT_BYTES_PER_VALUE * size, size))
+    if args.get('image_source') or args.get('image_topic'):
+        kinds.append(Kind('image', float(args.get('frame_rate', default('frame_rate'))), True,
+                          FRAME_BYTES, 0))
+    return kinds
+
+
+class Simulation(object):
+    """The loop, network, servers and robots of one run."""
+
+    def __init__(self, scenario, model, seed, variants, fixed=None, together=False):
+        self.scenario, self.model, self.seed = scenario, model, seed
+        self.loop = EventLoop()
+        self.streams = Streams(seed)
+        self.network = Network(scenario, self.streams, model.hop)
+        self.servers = dict((h.id, SimServer(self.loop, h, model, self.streams))
+                            for h in scenario.of_role('server'))
+        suite = scenario.suite
+        args = dict(suite.get('robot_args') or {})
+        self.measure_from = float(suite.get('measure_from', MEASURE_FROM))
+        self.timeout = float(args.get('task_timeout', default('task_timeout')))
+        kinds = kinds_of(args)
+        self.records, self.robots = [], []
+        self.answered_work = self.unwanted_work = 0
+        self.variant_of = {}
+        for index, name in enumerate(variants, start=1):
+            spec = variant(name)
+            params = dict(spec.params, mode='select' if spec.mode == 'oracle' else spec.mode)
+            params.update((k, v) for k, v in args.items()
+                          if k in ('task_timeout', 'start_delay'))
+            for host in scenario.of_role('robot'):
+                rid = REPLICA * index + host.id if together else host.id
+                self.variant_of[rid] = name
+                get = _getter(params, spec.profile)
+                robot = SimRobot(self, host._replace(id=rid), sorted(self.servers), get,
+                                 kinds, fixed=(fixed or {}).get(host.id),
+                                 oracle=spec.mode == 'oracle', scenario_id=host.id)
+                self.robots.append(robot)
+
+    def report(self, robot, outcome):
+        self.records.append(Record(robot, self.variant_of[robot], self.loop.now(), outcome))
+
+    def work_answered(self, wanted):
+        """A server's finished task reached its robot: still wanted, or not."""
+        if wanted:
+            self.answered_work += 1
+        else:
+            self.unwanted_work += 1
+
+    def run(self):
+        for robot in self.robots:     # nodes come up within the first two seconds
+            start = robot.host.start + self.streams.rng('start', robot.scenario_id).uniform(
+                0.0, 2.0)
+            self.loop.at(start, robot.start)
+        self.loop.run(self.scenario.duration)
+        return self
+
+
+def _getter(params, profile):
+    return lambda name: params[name] if name in params else default(name, profile)
+
+
+def simulate(scenario, model, seed, variants, fixed=None, together=False):
+    """The finished :class:`Simulation` of ``variants`` on ``scenario`` with ``seed``."""
+    return Simulation(scenario, model, seed, variants, fixed, together).run()

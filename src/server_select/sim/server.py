@@ -1,0 +1,132 @@
+"""A simulated compute server: the package's :class:`WorkQueue` on a host of finite CPU
+(no rospy).
+
+Tasks are offered to the queue as the node offers them (a deadline from the robot's
+budget, the robot as owner) and answered busy at once when refused; ``workers`` take them
+in order. A task's duration is its work (CPU seconds on one core, drawn per task, so that
+every variant of a seed meets the same task sizes) over the host's CPU share per busy
+worker, plus the scenario's extra ``work`` delay; a worker's first task of a kind is not
+timed, as the node's is not. While the host hangs (SIGSTOP) nothing runs and nothing is
+answered: work and answers resume when it goes on. A probe is answered after its CPU,
+which on a capped host with a busy worker waits for the next quota period
+(``cpu_period``), as a cgroup throttles it.
+"""
+
+import math
+
+from server_select.core.load.work_queue import WorkQueue
+
+
+class SimServer(object):
+    """Server ``host`` (a scenario Host) on ``loop``; ``reply(task, result)`` sends a
+    result back."""
+
+    def __init__(self, loop, host, model, streams, max_queue=100, cores=2):
+        self.loop, self.host, self.model = loop, host, model
+        self.id = host.id
+        self.cpu = host.cpu
+        self.workers = int(math.ceil(self.cpu)) if self.cpu else cores
+        self.queue = WorkQueue(self.workers, max_queue, clock=loop.now)
+        self.rng = streams.rng('server', self.id)
+        self.idle = self.workers
+        self.waiting = 0          # accepted, not yet taken
+        self.timed = set()        # kinds a worker has done once (the first is not timed)
+        self.completed = 0        # tasks whose work was done
+        self.busy_answers = 0
+
+    # -- state of the host ----------------------------------------------------------------
+    def running(self, t):
+        """Whether the server's process exists at ``t`` (its host's start and stop)."""
+        return self.host.start <= t and (self.host.stop is None or t < self.host.stop)
+
+    def resumed(self, t):
+        """``t``, or when a hang that covers ``t`` ends."""
+        for start, end in self.host.hang:
+            if start <= t < end:
+                return end
+        return t
+
+    def _after_hangs(self, start, seconds):
+        """When ``seconds`` of running time from ``start`` end, hangs skipped."""
+        t = self.resumed(start)
+        for a, b in self.host.hang:
+            if b <= t:
+                continue
+            if a < t + seconds:
+                seconds -= max(0.0, a - t)
+                t = b
+            else:
+                break
+        return t + seconds
+
+    def _extra_delay(self, t):
+        extra = [delay for at, delay in self.host.work if at <= t]
+        return extra[-1] if extra else 0.0
+
+    def _speed(self):
+        return min(1.0, self.cpu / self.workers) if self.cpu else 1.0
+
+    # -- probes ---------------------------------------------------------------------------
+    def probe_done(self, t):
+        """When a probe that arrived at ``t`` is answered (None: not running: refused)."""
+        if not self.running(t):
+            return None
+        t = self.resumed(t)
+        seconds = self.model.probe_cpu / (self.cpu if self.cpu else 1.0)
+        if self.cpu and self.cpu < 1.0 and self.idle < self.workers:
+            # the worker used the quota: the probe waits for the next period's
+            period = self.host.cpu_period * 1e-3
+            seconds += self.rng.uniform(0.0, period * (1.0 - self.cpu))
+        return self._after_hangs(t, seconds)
+
+    def probe(self, robot, rates):
+        """The Load a probe of ``robot`` announcing ``rates`` gets (at its answer)."""
+        self.queue.announce(robot, rates)
+        return self.queue.load(excluding=robot)
+
+    # -- tasks ----------------------------------------------------------------------------
+    def submit(self, task, budget, reply):
+        """A task arrives: queued, or answered busy at once; ``reply(task, ok, error,
+        busy)`` at its answer."""
+        now = self.loop.now()
+        if not self.running(now):
+            return                    # no subscriber: the message reaches nobody
+        resume = self.resumed(now)
+        if resume > now:
+            self.loop.at(resume, self.submit, task, budget, reply)
+            return
+        deadline = now + budget if budget > 0 else None
+        why = self.queue.offer(task.kind, (task, reply), deadline, owner=task.robot)
+        if why is not None:
+            self.busy_answers += 1
+            reply(task, False, why, True)
+            return
+        self.waiting += 1
+        self._start_workers()
+
+    def _start_workers(self):
+        while self.idle and self.waiting:
+            job = self.queue.take()
+            self.waiting -= 1
+            task, reply = job.item
+            why = self.queue.stale(job)
+            if why is not None:
+                self.busy_answers += 1
+                reply(task, False, why, True)
+                continue
+            self.idle -= 1
+            now = self.loop.now()
+            seconds = task.work / self._speed() + self._extra_delay(now)
+            self.loop.at(self._after_hangs(now, seconds), self._finished, job, seconds)
+
+    def _finished(self, job, seconds):
+        task, reply = job.item
+        first = job.kind not in self.timed
+        self.timed.add(job.kind)
+        self.queue.done(job, None if first else seconds)
+        self.idle += 1
+        if not self.running(self.loop.now()):
+            return                    # the process was stopped: no answer, no more work
+        self.completed += 1
+        reply(task, True, '', False)
+        self._start_workers()
