@@ -289,3 +289,19 @@ def test_next_wake_is_the_earliest_deadline_timeout_or_hedge():
     w.clock.now += 3.0
     w.flow.tick()
     assert w.flow.next_wake() is None and len(w.flow) == 0
+
+
+def test_at_its_next_wake_a_task_out_of_time_ends():
+    """What next_wake names, tick acts on: a task sent at 11.12 s with a 5 s timeout
+    ends at 16.12 s, although 16.12 - 11.12 is 4.999999999999998 in floats (a driver on a
+    virtual clock, the simulator, would otherwise wake at that time for ever)."""
+    w = World(candidates=[], timeout=5.0)
+    w.candidates = [3]
+    w.clock.now = 11.12
+    w.flow.send_next(0)
+    w.flow.deadlines = AttemptClock(5.0, first=5.0, floor=5.0)
+    list(w.flow._pending.values())[0].deadline = 11.12 + 5.0
+    w.clock.now = w.flow.next_wake()
+    assert w.clock.now - 11.12 < 5.0
+    ended = w.flow.tick()
+    assert [o.ok for o in ended] == [False] and len(w.flow) == 0

@@ -90,6 +90,12 @@ class Simulation(object):
         else:
             self.unwanted_work += 1
 
+    def completed_work(self):
+        """Tasks a second the servers finished in the measured part."""
+        done = sum(1 for server in self.servers.values() for t in server.completions
+                   if t >= self.measure_from)
+        return done / (self.scenario.duration - self.measure_from)
+
     def run(self):
         for robot in self.robots:     # nodes come up within the first two seconds
             start = robot.host.start + self.streams.rng('start', robot.scenario_id).uniform(

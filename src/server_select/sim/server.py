@@ -31,8 +31,9 @@ class SimServer(object):
         self.idle = self.workers
         self.waiting = 0          # accepted, not yet taken
         self.timed = set()        # kinds a worker has done once (the first is not timed)
-        self.completed = 0        # tasks whose work was done
+        self.completions = []     # when each task's work was done
         self.busy_answers = 0
+        self.stolen = 0.0         # CPU s probes took from the workers' quota
 
     # -- state of the host ----------------------------------------------------------------
     def running(self, t):
@@ -80,8 +81,12 @@ class SimServer(object):
         return self._after_hangs(t, seconds)
 
     def probe(self, robot, rates):
-        """The Load a probe of ``robot`` announcing ``rates`` gets (at its answer)."""
+        """The Load a probe of ``robot`` announcing ``rates`` gets (at its answer). On a
+        capped host its CPU comes out of the quota the workers use: the task in service
+        finishes that much later."""
         self.queue.announce(robot, rates)
+        if self.cpu and self.idle < self.workers:
+            self.stolen += self.model.probe_cpu
         return self.queue.load(excluding=robot)
 
     # -- tasks ----------------------------------------------------------------------------
@@ -120,6 +125,11 @@ class SimServer(object):
             self.loop.at(self._after_hangs(now, seconds), self._finished, job, seconds)
 
     def _finished(self, job, seconds):
+        if self.stolen > 0:               # probes used some of the quota meanwhile
+            delay, self.stolen = self.stolen / self.cpu, 0.0
+            self.loop.at(self._after_hangs(self.loop.now(), delay), self._finished, job,
+                         seconds + delay)
+            return
         task, reply = job.item
         first = job.kind not in self.timed
         self.timed.add(job.kind)
@@ -127,6 +137,6 @@ class SimServer(object):
         self.idle += 1
         if not self.running(self.loop.now()):
             return                    # the process was stopped: no answer, no more work
-        self.completed += 1
+        self.completions.append(self.loop.now())
         reply(task, True, '', False)
         self._start_workers()

@@ -52,9 +52,10 @@ class TaskStream(object):
         return Task(self.robot.id, task_id, self.kind.name, work, self.kind.bytes), None
 
     def _publish(self, task, server, budget):
+        # the node gives a task its budget (the server's deadline) when load-aware only
         if self.robot.load is not None:
             self.robot.load.sent(server, self.kind.name)
-        self.robot.send(task, server, budget, self)
+        self.robot.send(task, server, budget if self.robot.load is not None else 0.0, self)
 
     def _report(self, outcome):
         self.robot.sim.report(self.robot.id, outcome)

@@ -17,7 +17,7 @@ class Timing(object):
         ended = []
         with self._lock:
             for pending in list(self._pending.values()):
-                if now - pending.started >= self.timeout:
+                if now >= pending.started + self.timeout:     # as next_wake has it
                     self._drop(pending)
                     ended.append((pending, 'no result within task_timeout %.3g s'
                                   % self.timeout))

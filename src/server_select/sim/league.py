@@ -1,0 +1,148 @@
+"""The simulated league (``make league``): every scenario, every variant, paired seeds.
+
+Network scenarios are the suite's files (``testbed/suite.py``); capacity cases are the
+capacity benchmark's (``bench/capacity_cases.py``: camera frames to servers of finite
+CPU, the offered load a multiple of what the servers can do by the model's CPU per
+frame). Each (scenario, variant, seed) is one run of that variant alone on the scenario's
+servers; every variant runs every seed, so each sees the same arrivals, links and task
+sizes: the report compares them per seed (:mod:`server_select.sim.report`).
+
+``python3 -m server_select.sim.league --seeds 30 --out DIR`` writes ``league.json`` (every
+run's figures), ``league.md`` and ``league.png``; ``--scenarios``, ``--variants``,
+``--cases``, ``--capacity-variants`` choose cells (a scenario may be a file of yours).
+"""
+
+import argparse
+import functools
+import multiprocessing
+import os
+import sys
+import time
+
+from server_select.bench.capacity_cases import SCENARIOS as CAPACITY_SCENARIOS
+from server_select.bench.capacity_cases import TIMEOUT, WARMUP, scenario as capacity_scenario
+from server_select.bench.capacity_report import static_assignment
+from server_select.core.selection.balancers import PEERS
+from server_select.sim import report
+from server_select.sim.figures import figures
+from server_select.sim.model import Model
+from server_select.sim.run import simulate
+from server_select.testbed.scenario import Scenario
+from server_select.testbed.suite_scenario import scenario_path, short_name
+
+NETWORK = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
+           'hung_server')
+NETWORK_VARIANTS = ('oracle_fleet', 'fleet') + PEERS
+# the league's capacity cases: (the capacity benchmark's case, offered load, its options)
+CASES = {
+    'overload_unequal': ('overload', 2.0, {'shares': '0.10,0.15,0.20'}),
+    'herd': ('herd', 0.5, {}),
+}
+CAPACITY_VARIANTS = ('static', 'fleet') + PEERS
+SECONDS = 30.0         # measured s of a capacity run (the testbed league's)
+
+
+@functools.lru_cache(maxsize=None)
+def _model():
+    return Model.load()
+
+
+@functools.lru_cache(maxsize=None)
+def network_scenario(name):
+    return Scenario.load(scenario_path(name))
+
+
+@functools.lru_cache(maxsize=None)
+def capacity_case(case):
+    """``(Scenario, {robot: static server}, frames/s the servers can do)`` of a case."""
+    base, load, options = CASES[case]
+    spec = dict(CAPACITY_SCENARIOS[base], **options)
+    shares = [float(s) for s in spec['shares'].split(',')]
+    robots = spec['robots']
+    capacity = sum(shares) / _model().kinds['image'][0]
+    late = WARMUP + SECONDS / 3.0 if spec.get('late') else None
+    data = capacity_scenario(shares, robots, SECONDS, [0.5] * len(shares), late)
+    data['name'] = case
+    data['suite'] = {'measure_from': WARMUP, 'robot_args': {
+        'sort_tasks': False, 'image_source': 'frames', 'frame_rate': load * capacity / robots,
+        'task_timeout': TIMEOUT, 'start_delay': 5}}
+    return Scenario(data, case), static_assignment(shares, robots), capacity
+
+
+def run_cell(job):
+    """``(part, scenario, variant, seed, figures dict, CPU s)`` of one run."""
+    part, name, variant, seed = job
+    start = time.process_time()
+    if part == 'network':
+        sim = simulate(network_scenario(name), _model(), seed, [variant])
+        row = figures(sim, variant)._asdict()
+    else:
+        scenario, fixed, capacity = capacity_case(name)
+        sim = simulate(scenario, _model(), seed, [variant], fixed=fixed)
+        row = figures(sim, variant)._asdict()
+        row.update(capacity=capacity, work=sim.completed_work())
+    return part, name, variant, seed, row, time.process_time() - start
+
+
+def jobs(args):
+    for seed in args.seeds:
+        for name in args.scenarios:
+            for variant in args.variants:
+                yield 'network', name, variant, seed
+        for case in args.cases:
+            for variant in args.capacity_variants:
+                yield 'capacity', case, variant, seed
+
+
+def run(args, log=print):
+    """Every job of ``args``, on ``args.processes`` processes: ``{part: {scenario:
+    {variant: {seed: figures}}}}`` and the CPU seconds spent."""
+    results, cpu = {'network': {}, 'capacity': {}}, 0.0
+    work = list(jobs(args))
+    with multiprocessing.Pool(args.processes) as pool:
+        for done, (part, name, variant, seed, row, seconds) in enumerate(
+                pool.imap_unordered(run_cell, work, chunksize=4), start=1):
+            results[part].setdefault(short_name(name), {}).setdefault(variant, {})[seed] = row
+            cpu += seconds
+            if done % 200 == 0:
+                log('%d of %d runs' % (done, len(work)))
+    return results, cpu
+
+
+def _names(text):
+    return [x for x in text.split(',') if x]
+
+
+def parse(argv):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--seeds', type=int, default=30, help='seeds per cell (%(default)s)')
+    parser.add_argument('--first-seed', type=int, default=1)
+    parser.add_argument('--scenarios', type=_names, default=list(NETWORK))
+    parser.add_argument('--variants', type=_names, default=list(NETWORK_VARIANTS))
+    parser.add_argument('--cases', type=_names, default=list(CASES))
+    parser.add_argument('--capacity-variants', type=_names, default=list(CAPACITY_VARIANTS))
+    parser.add_argument('--processes', type=int, default=os.cpu_count() or 1)
+    parser.add_argument('--out', default='results/league')
+    args = parser.parse_args(argv)
+    args.seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    unknown = [c for c in args.cases if c not in CASES]
+    if unknown:
+        parser.error('unknown capacity cases %s (of %s)' % (unknown, ', '.join(CASES)))
+    return args
+
+
+def main(argv=None):
+    args = parse(sys.argv[1:] if argv is None else argv)
+    start = time.monotonic()
+    results, cpu = run(args, lambda text: print(text, file=sys.stderr, flush=True))
+    results['seeds'] = args.seeds
+    text = report.write(results, args.out)
+    print(text)
+    print('%d seeds, %.0f s (%.0f CPU s on %d processes); %s' % (
+        len(args.seeds), time.monotonic() - start, cpu, args.processes,
+        os.path.join(args.out, 'league.md')))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

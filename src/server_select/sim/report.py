@@ -1,0 +1,159 @@
+"""The simulated league's report (no rospy): tables of medians with 95 % intervals over
+the seeds, the fleet's paired differences, ``league.json``, ``league.md``, ``league.png``.
+
+Every cell is ``median [low-high]``: the median over the seeds and its distribution-free
+95 % interval (:func:`~server_select.sim.stats.median_interval`). ``mean / oracle`` is per
+seed, to the oracle's run of the same seed. The paired table gives, per other variant,
+the fleet's mean and p99 minus that variant's, per seed and in per cent of the oracle's
+mean of that seed: the mean over the seeds and its 95 % t-interval (an interval wholly
+below 0: the fleet is better beyond the noise).
+"""
+
+import json
+import os
+
+from server_select.core.util.tables import markdown_table
+from server_select.sim.stats import median_interval, paired
+
+ORACLE, FLEET = 'oracle_fleet', 'fleet'
+NETWORK_COLUMNS = (('mean', 'mean ms', '%.2f', 1e3), ('p99', 'p99 ms', '%.1f', 1e3),
+                   ('ratio', 'mean / oracle', '%.3f', 1), ('failed', 'failed', '%.0f', 1),
+                   ('switches', 'switches /min /robot', '%.2f', 1),
+                   ('reaction', 'reaction s', '%.2f', 1), ('extra', 'extra sends %', '%.1f', 100),
+                   ('probes', 'probes /s /robot', '%.1f', 1))
+CAPACITY_COLUMNS = (('share', 'goodput % of capacity', '%.0f', 100),
+                    ('of_static', "goodput % of static's work", '%.0f', 100),
+                    ('wanted', 'work still wanted %', '%.0f', 100),
+                    ('failed', 'failed', '%.0f', 1), ('mean', 'mean ms', '%.0f', 1e3),
+                    ('p99', 'p99 ms', '%.0f', 1e3), ('switches', 'switches /min /robot',
+                                                      '%.1f', 1),
+                    ('extra', 'extra sends %', '%.0f', 100), ('probes', 'probes /s /robot',
+                                                              '%.1f', 1))
+
+
+def cell(values, spec, scale=1.0):
+    median, low, high = median_interval(values)
+    if median is None:
+        return '-'
+    return (spec + ' [' + spec + '-' + spec + ']') % (scale * median, scale * low,
+                                                     scale * high)
+
+
+def _series(runs, seeds, key):
+    return [runs[s].get(key) if s in runs else None for s in seeds]
+
+
+def with_ratios(variants, seeds):
+    """Each run's ``ratio``: its mean over the oracle's of the same seed (None: no oracle)."""
+    oracle = variants.get(ORACLE, {})
+    for runs in variants.values():
+        for seed, row in runs.items():
+            base = oracle.get(seed, {}).get('mean')
+            row['ratio'] = row['mean'] / base if base and row.get('mean') else None
+    return variants
+
+
+def network_tables(name, variants, seeds):
+    with_ratios(variants, seeds)
+    rows = [[v] + [cell(_series(runs, seeds, key), spec, scale)
+                   for key, _, spec, scale in NETWORK_COLUMNS]
+            for v, runs in variants.items()]
+    text = '### %s\n\n%s\n' % (name, markdown_table(
+        ['variant'] + [title for _, title, _, _ in NETWORK_COLUMNS], rows))
+    if FLEET in variants and ORACLE in variants:
+        text += '\n' + paired_table(variants, seeds) + '\n'
+    return text
+
+
+def _relative(variants, seeds, variant, key):
+    oracle = variants[ORACLE]
+    return [variants[variant][s][key] / oracle[s]['mean']
+            if s in variants[variant] and s in oracle and oracle[s]['mean'] else None
+            for s in seeds]
+
+
+def differences(variants, seeds, other, key):
+    """``(mean, low, high)`` of the fleet's ``key`` minus ``other``'s, in per cent of the
+    oracle's mean, per seed."""
+    mean, low, high = paired(_relative(variants, seeds, FLEET, key),
+                             _relative(variants, seeds, other, key))
+    return None if mean is None else (100 * mean, 100 * low, 100 * high)
+
+
+def paired_table(variants, seeds):
+    rows = []
+    for other in [v for v in variants if v != FLEET]:
+        cells = []
+        for key in ('mean', 'p99'):
+            d = differences(variants, seeds, other, key)
+            cells.append('-' if d is None else '%+.2f [%+.2f, %+.2f]' % d)
+        rows.append(['fleet - %s' % other] + cells)
+    return markdown_table(["paired, % of the oracle's mean", 'mean', 'p99'], rows)
+
+
+def capacity_tables(name, variants, seeds):
+    static = variants.get('static', {})
+    for runs in variants.values():
+        for seed, row in runs.items():
+            row['share'] = row['goodput'] / row['capacity']
+            base = static.get(seed, {}).get('work')
+            row['of_static'] = row['goodput'] / base if base else None
+    rows = [[v] + [cell(_series(runs, seeds, key), spec, scale)
+                   for key, _, spec, scale in CAPACITY_COLUMNS]
+            for v, runs in variants.items()]
+    return '### %s (capacity)\n\n%s\n' % (name, markdown_table(
+        ['variant'] + [title for _, title, _, _ in CAPACITY_COLUMNS], rows))
+
+
+def plot(results, seeds, path):
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    scenarios = list(results['network'])
+    if not scenarios:
+        return
+    variants = [v for v in results['network'][scenarios[0]] if v != ORACLE]
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    width = 0.8 / max(1, len(variants))
+    for index, variant in enumerate(variants):
+        meds, errors = [], [[], []]
+        for name in scenarios:
+            median, low, high = median_interval(_series(
+                results['network'][name].get(variant, {}), seeds, 'ratio'))
+            meds.append(median or 0.0)
+            errors[0].append((median - low) if median else 0.0)
+            errors[1].append((high - median) if median else 0.0)
+        ax.bar([i + index * width for i in range(len(scenarios))], meds, width,
+               yerr=errors, capsize=2, label=variant)
+    ax.axhline(1.0, color='black', linewidth=0.8)
+    ax.set_xticks([i + 0.4 - width / 2 for i in range(len(scenarios))])
+    ax.set_xticklabels(scenarios)
+    ax.set_ylabel("mean round trip / the oracle's (median, 95 % interval)")
+    ax.set_ylim(0.8, None)
+    ax.legend(ncol=4, fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def text(results):
+    seeds = results['seeds']
+    parts = ['## The simulated league: %d seeds a cell (median [95 %% interval])\n'
+             % len(seeds)]
+    for name, variants in results['network'].items():
+        parts.append(network_tables(name, variants, seeds))
+    for name, variants in results['capacity'].items():
+        parts.append(capacity_tables(name, variants, seeds))
+    return '\n'.join(parts)
+
+
+def write(results, out):
+    """Write league.json, league.md and league.png into ``out``; returns the Markdown."""
+    os.makedirs(out, exist_ok=True)
+    body = text(results)
+    with open(os.path.join(out, 'league.json'), 'w') as stream:
+        json.dump(results, stream, indent=1, sort_keys=True)
+    with open(os.path.join(out, 'league.md'), 'w') as stream:
+        stream.write(body)
+    plot(results, results['seeds'], os.path.join(out, 'league.png'))
+    return body
