@@ -43,6 +43,8 @@ VARIANTS = ('paper', 'fleet', 'static', 'fleet_hysteresis') + suite.RULES
 # besides static, any suite variant whose robots select, on hosts of their own
 ACCEPTED = ('static',) + tuple(name for name, v in suite.VARIANTS.items()
                                if v.mode == 'select' and not v.host)
+
+
 def robot_args(kind, rate, folder):
     if kind == 'image':
         return ['sort_tasks:=false', 'image_source:=%s' % folder, 'frame_rate:=%g' % rate,

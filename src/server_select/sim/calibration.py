@@ -5,8 +5,8 @@ Network scenarios run as the testbed ran them: every league variant side by side
 shared servers (``together``); capacity cases as the league runs them (each variant
 alone). Targets: each simulated median within 10 % of the testbed's, and every ordering
 of two variants that the testbed shows beyond its spread (their min-max ranges apart)
-kept by the simulator's medians. ``--hop-ms`` and ``--probe-ms`` try other model
-constants (``config/sim/model.yaml`` keeps the chosen ones).
+kept by the simulator's medians. ``--hop-ms``, ``--probe-ms`` and ``--cpu-factor`` try
+other model constants (``config/sim/model.yaml`` keeps the chosen ones).
 """
 
 import argparse
@@ -49,11 +49,13 @@ def _capacity(job):
 @functools.lru_cache(maxsize=None)
 def _model(constants):
     model = Model.load()
-    hop, probe = constants
+    hop, probe, factor = constants
     if hop is not None:
         model.hop = hop * 1e-3
     if probe is not None:
         model.probe_cpu = probe * 1e-3
+    if factor is not None:
+        model.cpu_factor = factor
     return model
 
 
@@ -111,13 +113,18 @@ def main(argv=None):
     parser.add_argument('--seeds', type=int, default=10)
     parser.add_argument('--hop-ms', type=float)
     parser.add_argument('--probe-ms', type=float)
+    parser.add_argument('--cpu-factor', type=float)
+    parser.add_argument('--part', choices=('all', 'network', 'capacity'), default='all')
     parser.add_argument('--processes', type=int, default=os.cpu_count() or 1)
     parser.add_argument('--out', help='also write calibration.md here')
     args = parser.parse_args(argv)
     with open(package_file('config', 'sim', 'testbed.yaml')) as stream:
         reference = yaml.safe_load(stream)
-    sims = measure(reference, range(1, args.seeds + 1), (args.hop_ms, args.probe_ms),
-                   args.processes)
+    for part in ('network', 'capacity'):
+        if args.part not in ('all', part):
+            reference[part] = {}
+    sims = measure(reference, range(1, args.seeds + 1),
+                   (args.hop_ms, args.probe_ms, args.cpu_factor), args.processes)
     rows, misses, checked, kept, orderings = compare(reference, sims)
     text = markdown_table(['cell', 'variant', 'testbed median (min-max)',
                            'simulator median [95 % interval]', 'sim / testbed',

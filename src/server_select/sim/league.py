@@ -9,7 +9,8 @@ sizes: the report compares them per seed (:mod:`server_select.sim.report`).
 
 ``python3 -m server_select.sim.league --seeds 30 --out DIR`` writes ``league.json`` (every
 run's figures), ``league.md`` and ``league.png``; ``--scenarios``, ``--variants``,
-``--cases``, ``--capacity-variants`` choose cells (a scenario may be a file of yours).
+``--cases``, ``--capacity-variants`` choose cells (a scenario may be a file of yours, or
+generated: ``gen:1-200``).
 """
 
 import argparse
@@ -23,7 +24,7 @@ from server_select.bench.capacity_cases import SCENARIOS as CAPACITY_SCENARIOS
 from server_select.bench.capacity_cases import TIMEOUT, WARMUP, scenario as capacity_scenario
 from server_select.bench.capacity_report import static_assignment
 from server_select.core.selection.balancers import PEERS
-from server_select.sim import report
+from server_select.sim import generate, report
 from server_select.sim.figures import figures
 from server_select.sim.model import Model
 from server_select.sim.run import simulate
@@ -49,7 +50,9 @@ def _model():
 
 @functools.lru_cache(maxsize=None)
 def network_scenario(name):
-    return Scenario.load(scenario_path(name))
+    """A suite scenario's name, a file, or ``gen:<seed>`` (:mod:`~server_select.sim.generate`)."""
+    return generate.scenario(name) if name.startswith('gen:') else \
+        Scenario.load(scenario_path(name))
 
 
 @functools.lru_cache(maxsize=None)
@@ -125,6 +128,7 @@ def parse(argv):
     parser.add_argument('--out', default='results/league')
     args = parser.parse_args(argv)
     args.seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    args.scenarios = generate.expand(args.scenarios)
     unknown = [c for c in args.cases if c not in CASES]
     if unknown:
         parser.error('unknown capacity cases %s (of %s)' % (unknown, ', '.join(CASES)))
@@ -135,7 +139,7 @@ def main(argv=None):
     args = parse(sys.argv[1:] if argv is None else argv)
     start = time.monotonic()
     results, cpu = run(args, lambda text: print(text, file=sys.stderr, flush=True))
-    results['seeds'] = args.seeds
+    results.update(seeds=args.seeds, variants=args.variants + args.capacity_variants)
     text = report.write(results, args.out)
     print(text)
     print('%d seeds, %.0f s (%.0f CPU s on %d processes); %s' % (

@@ -9,6 +9,8 @@
   mean round trip matches the testbed's (docs/league.md, "Calibration").
 - ``probe_ms``: a probe answer's CPU at the server (the LatencyProbe handler and its load
   report).
+- ``cpu_factor``: how much longer CPU work takes on the testbed than timed alone (its
+  nodes, emulator and recorder share two cores): calibrated on the capacity cases.
 
 ``python3 -m server_select.sim.model --measure`` times the kinds here and rewrites
 ``kinds`` (the constants it keeps).
@@ -33,6 +35,7 @@ class Model(object):
     def __init__(self, data):
         self.hop = float(data['hop_ms']) * 1e-3
         self.probe_cpu = float(data['probe_ms']) * 1e-3
+        self.cpu_factor = float(data.get('cpu_factor', 1.0))
         self.kinds = dict((name, (float(k['median_ms']) * 1e-3, float(k['sigma']),
                                   int(k.get('per', 0))))
                           for name, k in data['kinds'].items())
@@ -45,6 +48,7 @@ class Model(object):
     def work(self, kind, rng, size=0):
         """CPU seconds of one ``kind`` task (``size`` values for a sort task)."""
         median, sigma, per = self.kinds[kind]
+        median *= self.cpu_factor
         if per and size:
             median *= size / float(per)
         return median * math.exp(rng.gauss(0.0, sigma)) if sigma > 0 else median

@@ -25,18 +25,18 @@ CAPACITY_COLUMNS = (('share', 'goodput % of capacity', '%.0f', 100),
                     ('of_static', "goodput % of static's work", '%.0f', 100),
                     ('wanted', 'work still wanted %', '%.0f', 100),
                     ('failed', 'failed', '%.0f', 1), ('mean', 'mean ms', '%.0f', 1e3),
-                    ('p99', 'p99 ms', '%.0f', 1e3), ('switches', 'switches /min /robot',
-                                                      '%.1f', 1),
-                    ('extra', 'extra sends %', '%.0f', 100), ('probes', 'probes /s /robot',
-                                                              '%.1f', 1))
+                    ('p99', 'p99 ms', '%.0f', 1e3),
+                    ('switches', 'switches /min /robot', '%.1f', 1),
+                    ('extra', 'extra sends %', '%.0f', 100),
+                    ('probes', 'probes /s /robot', '%.1f', 1))
 
 
 def cell(values, spec, scale=1.0):
     median, low, high = median_interval(values)
     if median is None:
         return '-'
-    return (spec + ' [' + spec + '-' + spec + ']') % (scale * median, scale * low,
-                                                     scale * high)
+    pattern = spec + ' [' + spec + '-' + spec + ']'
+    return pattern % (scale * median, scale * low, scale * high)
 
 
 def _series(runs, seeds, key):
@@ -136,8 +136,16 @@ def plot(results, seeds, path):
     plt.close(fig)
 
 
+def _ordered(variants, order):
+    return dict((v, variants[v]) for v in sorted(
+        variants, key=lambda v: order.index(v) if v in order else len(order)))
+
+
 def text(results):
-    seeds = results['seeds']
+    seeds, order = results['seeds'], results.get('variants', [])
+    for part in ('network', 'capacity'):
+        for name in results[part]:
+            results[part][name] = _ordered(results[part][name], order)
     parts = ['## The simulated league: %d seeds a cell (median [95 %% interval])\n'
              % len(seeds)]
     for name, variants in results['network'].items():

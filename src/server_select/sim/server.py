@@ -73,7 +73,7 @@ class SimServer(object):
         if not self.running(t):
             return None
         t = self.resumed(t)
-        seconds = self.model.probe_cpu / (self.cpu if self.cpu else 1.0)
+        seconds = self.model.probe_cpu * self.model.cpu_factor / (self.cpu if self.cpu else 1.0)
         if self.cpu and self.cpu < 1.0 and self.idle < self.workers:
             # the worker used the quota: the probe waits for the next period's
             period = self.host.cpu_period * 1e-3
@@ -86,7 +86,7 @@ class SimServer(object):
         finishes that much later."""
         self.queue.announce(robot, rates)
         if self.cpu and self.idle < self.workers:
-            self.stolen += self.model.probe_cpu
+            self.stolen += self.model.probe_cpu * self.model.cpu_factor
         return self.queue.load(excluding=robot)
 
     # -- tasks ----------------------------------------------------------------------------

@@ -1,0 +1,69 @@
+"""``rosrun server_select simulate SCENARIO.yaml --variants fleet,prequal --seeds 30``: one
+scenario in the simulator, each variant with the same seeds, the table printed and
+``league.json``, ``league.md`` and ``league.png`` written to ``--out``.
+
+``--from-bag run.bag`` takes the links from a recorded run instead (each robot-server
+pair's probe round trips: :mod:`server_select.sim.from_bag`) and writes that scenario
+beside the results: what the other rules would have done on the run's links.
+"""
+
+import argparse
+import os
+import sys
+
+import yaml
+
+from server_select.sim import league, report
+from server_select.sim.model import Model
+from server_select.sim.report import ORACLE
+from server_select.testbed.scenario import Scenario, ScenarioError
+
+
+def parse(argv):
+    parser = argparse.ArgumentParser(prog='simulate', description=__doc__.split('\n\n')[0])
+    parser.add_argument('scenario', nargs='?', help='a scenario file (the testbed\'s '
+                        'format), a suite scenario\'s name, or gen:<seed>')
+    parser.add_argument('--from-bag', metavar='BAG', help='the links of a recorded run')
+    parser.add_argument('--variants', default='fleet,prequal,p2c_peak_ewma',
+                        help='suite variants (the oracle is always run: %(default)s)')
+    parser.add_argument('--seeds', type=int, default=30)
+    parser.add_argument('--first-seed', type=int, default=1)
+    parser.add_argument('--processes', type=int, default=os.cpu_count() or 1)
+    parser.add_argument('--out', default='simulation')
+    args = parser.parse_args(argv)
+    if bool(args.scenario) == bool(args.from_bag):
+        parser.error('give a scenario or --from-bag, one of them')
+    return args
+
+
+def main(argv=None):
+    args = parse(sys.argv[1:] if argv is None else argv)
+    os.makedirs(args.out, exist_ok=True)
+    name = args.scenario
+    try:
+        if args.from_bag:
+            data = __import__('server_select.sim.from_bag', fromlist=['scenario']).scenario(
+                args.from_bag, Model.load())
+            name = os.path.abspath(os.path.join(args.out, 'from_bag.yaml'))
+            with open(name, 'w') as stream:
+                stream.write('# the links of %s\n' % args.from_bag)
+                yaml.safe_dump(data, stream, sort_keys=False)
+        elif name.endswith('.yaml'):
+            Scenario.load(name)          # a bad file: its one line, before any run
+    except (ScenarioError, ValueError, OSError) as error:
+        print('simulate: %s' % error, file=sys.stderr)
+        return 2
+    variants = [ORACLE] + [v for v in args.variants.split(',') if v and v != ORACLE]
+    options = league.parse(['--seeds', str(args.seeds), '--first-seed', str(args.first_seed),
+                            '--scenarios', name, '--variants', ','.join(variants),
+                            '--cases', '', '--processes', str(args.processes),
+                            '--out', args.out])
+    results, _ = league.run(options, lambda text: print(text, file=sys.stderr))
+    results.update(seeds=options.seeds, variants=variants)
+    print(report.write(results, args.out))
+    print('written: %s' % os.path.join(args.out, 'league.md'))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
