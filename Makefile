@@ -16,7 +16,7 @@ DEMO_MD := $(BUILD)/demo_summary.md
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
-  bench-scale bench-routing bench-hedging bench-capacity league bench-master bench-fleet bench-seal bench-probes bench-top bench-robot \
+  bench-scale bench-routing bench-hedging bench-capacity league calibrate league-testbed bench-master bench-fleet bench-seal bench-probes bench-top bench-robot \
   test check unit-test testbed-test fault-test catkin-test rostest lint docs help clean
 all: build
 
@@ -29,7 +29,9 @@ help:
 	@echo 'make search-demo     the cooperative search: 2 robots, 2 servers, hidden people'
 	@echo 'make evaluate        the paper experiment on the testbed (SCENARIO=config/...yaml)'
 	@echo 'make evaluate-suite  every scenario, every variant, side by side (about 45 min)'
-	@echo 'make league          the fleet profile beside the peer balancers, every scenario'
+	@echo 'make league          the fleet profile beside the peer balancers, simulated (~6 min)'
+	@echo 'make calibrate       the simulator beside the testbed league (~4 min)'
+	@echo 'make league-testbed  the league on the testbed, for cells named in LEAGUE_ARGS'
 	@echo 'make bench           the papers tables and throughput (bench-scale, bench-routing,'
 	@echo '                     bench-hedging, bench-capacity, bench-master, bench-memory, bench-emulator,'
 	@echo '                     bench-seal, bench-probes, bench-fleet, bench-top, bench-robot)'
@@ -131,12 +133,25 @@ bench-hedging: build
 
 # Goodput and round trip against offered load on servers of finite CPU (cgroup quotas):
 # paper, fleet and the static assignment; overload, crowd and herd (root, ~50 min).
-# The league: the fleet profile beside the peers (p2c peak-EWMA, least request, Prequal,
-# weighted round robin, replication) on every network and capacity scenario, 3 runs each
-# (root, TUN; about 2.5 hours). Tables and plot: results/league/league.md (docs/league.md).
+# The league, simulated: the fleet profile beside the peers (p2c peak-EWMA, least request,
+# Prequal, weighted round robin, replication) on every network scenario and capacity case,
+# 30 paired seeds each (the package's own core objects on a virtual clock; ~6 min).
+# Tables and plot: results/league/league.md (docs/league.md). LEAGUE_ARGS: e.g. "--seeds 60"
+# or "--scenarios gen:1-200".
 LEAGUE_ARGS ?=
 league: build
-	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.league --out results/league $(LEAGUE_ARGS)
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.sim.league --out results/league $(LEAGUE_ARGS)
+
+# The simulator beside the testbed league's medians (config/sim/testbed.yaml; ~4 min).
+calibrate: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.sim.calibration --out results/league
+
+# The league on the testbed, to confirm cells the simulated league names (root, TUN; all
+# cells about 2.5 hours): e.g. LEAGUE_ARGS="--part network --scenarios crossing
+# --variants oracle_fleet,fleet,prequal".
+league-testbed: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.league --out results/league_testbed \
+	  $(LEAGUE_ARGS)
 
 bench-capacity: build
 	@$(ROSENV) cd $(TOP) && for s in overload crowd herd; do \

@@ -1,0 +1,38 @@
+"""A recorded run's links as a simulated scenario: probe samples in a bag (the fleet's
+batches, the paper's per-pair samples) become each pair's link, task reports its rate."""
+
+import math
+
+import rosbag
+import rospy
+
+from server_select.msg import LatencySample, LatencySamples, TaskReport
+from server_select.sim import from_bag
+from server_select.sim.model import Model
+from server_select.testbed.scenario import Scenario
+
+
+def test_a_bag_of_probe_samples_becomes_a_scenario(tmp_path):
+    path = str(tmp_path / 'run.bag')
+    with rosbag.Bag(path, 'w') as bag:
+        for n in range(40):               # 4 s: robot 1's batches, 10 a second
+            t = rospy.Time(100 + 0.1 * n)
+            ok = not 20 <= n < 25          # server 2 fails from 2.0 to 2.5 s
+            bag.write('/latency_samples', LatencySamples(
+                robot_id=1, round=n, server_id=[1, 2], ok=[True, ok],
+                rtt=[0.0100 if n < 10 else 0.0200, 0.0060 if ok else 0.0]), t)
+            bag.write('/robot2/latency_R2S1', LatencySample(robot_id=2, server_id=1,
+                                                            ok=True, rtt=0.008), t)
+            if n % 5 == 0:
+                bag.write('/task_report', TaskReport(robot_id=1, kind='sort', ok=True,
+                                                     rtt=0.01), t)
+    model = Model.load()
+    data = from_bag.scenario(path, model)
+    sc = Scenario(data, 'bag')           # a file the testbed and the simulator both read
+    overhead_ms = 1e3 * (2 * model.hop + model.probe_cpu) / 2.0
+    assert sorted(h.id for h in sc.of_role('server')) == [1, 2]
+    assert math.isclose(sc.link('robot1', 'server1', 0.5).delay, 5.0 - overhead_ms)
+    assert math.isclose(sc.link('robot1', 'server1', 1.5).delay, 10.0 - overhead_ms)
+    assert sc.link('robot1', 'server2', 2.2).down and not sc.link('robot1', 'server2', 2.6).down
+    assert sc.link('robot2', 'server2', 1.0).down          # never probed: no link
+    assert math.isclose(data['suite']['robot_args']['task_rate'], 8 / 2 / 3.9, rel_tol=0.01)
