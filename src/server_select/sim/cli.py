@@ -59,7 +59,7 @@ def main(argv=None):
                             '--cases', '', '--processes', str(args.processes),
                             '--out', args.out])
     results, _ = league.run(options, lambda text: print(text, file=sys.stderr))
-    results.update(seeds=options.seeds, variants=variants)
+    results.update(seeds=options.seeds, variants={'network': variants})
     print(report.write(results, args.out))
     print('written: %s' % os.path.join(args.out, 'league.md'))
     return 0

@@ -139,7 +139,8 @@ def main(argv=None):
     args = parse(sys.argv[1:] if argv is None else argv)
     start = time.monotonic()
     results, cpu = run(args, lambda text: print(text, file=sys.stderr, flush=True))
-    results.update(seeds=args.seeds, variants=args.variants + args.capacity_variants)
+    results.update(seeds=args.seeds, variants={'network': args.variants,
+                                               'capacity': args.capacity_variants})
     text = report.write(results, args.out)
     print(text)
     print('%d seeds, %.0f s (%.0f CPU s on %d processes); %s' % (

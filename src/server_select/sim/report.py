@@ -142,10 +142,10 @@ def _ordered(variants, order):
 
 
 def text(results):
-    seeds, order = results['seeds'], results.get('variants', [])
+    seeds, order = results['seeds'], results.get('variants', {})
     for part in ('network', 'capacity'):
         for name in results[part]:
-            results[part][name] = _ordered(results[part][name], order)
+            results[part][name] = _ordered(results[part][name], order.get(part, []))
     parts = ['## The simulated league: %d seeds a cell (median [95 %% interval])\n'
              % len(seeds)]
     for name, variants in results['network'].items():

@@ -51,7 +51,8 @@ def kinds_of(args):
 class Simulation(object):
     """The loop, network, servers and robots of one run."""
 
-    def __init__(self, scenario, model, seed, variants, fixed=None, together=False):
+    def __init__(self, scenario, model, seed, variants, fixed=None, together=False,
+                 groups=None):
         self.scenario, self.model, self.seed = scenario, model, seed
         self.loop = EventLoop()
         self.streams = Streams(seed)
@@ -75,7 +76,8 @@ class Simulation(object):
                 rid = REPLICA * index + host.id if together else host.id
                 self.variant_of[rid] = name
                 get = _getter(params, spec.profile)
-                robot = SimRobot(self, host._replace(id=rid), sorted(self.servers), get,
+                servers = groups[host.id] if groups else sorted(self.servers)
+                robot = SimRobot(self, host._replace(id=rid), servers, get,
                                  kinds, fixed=(fixed or {}).get(host.id),
                                  oracle=spec.mode == 'oracle', scenario_id=host.id)
                 self.robots.append(robot)
@@ -109,6 +111,8 @@ def _getter(params, profile):
     return lambda name: params[name] if name in params else default(name, profile)
 
 
-def simulate(scenario, model, seed, variants, fixed=None, together=False):
-    """The finished :class:`Simulation` of ``variants`` on ``scenario`` with ``seed``."""
-    return Simulation(scenario, model, seed, variants, fixed, together).run()
+def simulate(scenario, model, seed, variants, fixed=None, together=False, groups=None):
+    """The finished :class:`Simulation` of ``variants`` on ``scenario`` with ``seed``
+    (``fixed``: {robot: server} of fixed mode; ``groups``: {robot: its servers}, a grouped
+    fleet's, where tasks go and what it probes; None: every server)."""
+    return Simulation(scenario, model, seed, variants, fixed, together, groups).run()
