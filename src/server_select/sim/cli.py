@@ -28,6 +28,8 @@ def parse(argv):
                         help='suite variants (the oracle is always run: %(default)s)')
     parser.add_argument('--seeds', type=int, default=30)
     parser.add_argument('--first-seed', type=int, default=1)
+    parser.add_argument('--together', action='store_true', help='the variants side by side '
+                        'on shared servers, as the testbed runs them (one run per seed)')
     parser.add_argument('--processes', type=int, default=os.cpu_count() or 1)
     parser.add_argument('--out', default='simulation')
     args = parser.parse_args(argv)
@@ -57,7 +59,7 @@ def main(argv=None):
     options = league.parse(['--seeds', str(args.seeds), '--first-seed', str(args.first_seed),
                             '--scenarios', name, '--variants', ','.join(variants),
                             '--cases', '', '--processes', str(args.processes),
-                            '--out', args.out])
+                            '--out', args.out] + (['--together'] if args.together else []))
     results, _ = league.run(options, lambda text: print(text, file=sys.stderr))
     results.update(seeds=options.seeds, variants={'network': variants})
     print(report.write(results, args.out))

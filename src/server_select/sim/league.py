@@ -10,7 +10,9 @@ sizes: the report compares them per seed (:mod:`server_select.sim.report`).
 ``python3 -m server_select.sim.league --seeds 30 --out DIR`` writes ``league.json`` (every
 run's figures), ``league.md`` and ``league.png``; ``--scenarios``, ``--variants``,
 ``--cases``, ``--capacity-variants`` choose cells (a scenario may be a file of yours, or
-generated: ``gen:1-200``).
+generated: ``gen:1-200``; a variant may change its robots' parameters,
+``fleet:hedge=false``: an ablation). With ``--together`` a network scenario's variants run
+side by side on shared servers, as the testbed's suite runs them (one run per seed).
 """
 
 import argparse
@@ -27,7 +29,7 @@ from server_select.core.selection.balancers import PEERS
 from server_select.sim import generate, report
 from server_select.sim.figures import figures
 from server_select.sim.model import Model
-from server_select.sim.run import simulate
+from server_select.sim.run import simulate, variant
 from server_select.testbed.scenario import Scenario
 from server_select.testbed.suite_scenario import scenario_path, short_name
 
@@ -73,28 +75,35 @@ def capacity_case(case):
 
 
 def run_cell(job):
-    """``(part, scenario, variant, seed, figures dict, CPU s)`` of one run."""
-    part, name, variant, seed = job
+    """``[(part, scenario, variant, seed, figures dict, CPU s)]`` of one run."""
+    part, name, which, seed = job
     start = time.process_time()
+    if part == 'together':           # every variant of the scenario side by side
+        sim = simulate(network_scenario(name), _model(), seed, which, together=True)
+        return [('network', name, v, seed, figures(sim, v)._asdict(),
+                 time.process_time() - start) for v in which]
     if part == 'network':
-        sim = simulate(network_scenario(name), _model(), seed, [variant])
-        row = figures(sim, variant)._asdict()
+        sim = simulate(network_scenario(name), _model(), seed, [which])
+        row = figures(sim, which)._asdict()
     else:
         scenario, fixed, capacity = capacity_case(name)
-        sim = simulate(scenario, _model(), seed, [variant], fixed=fixed)
-        row = figures(sim, variant)._asdict()
+        sim = simulate(scenario, _model(), seed, [which], fixed=fixed)
+        row = figures(sim, which)._asdict()
         row.update(capacity=capacity, work=sim.completed_work())
-    return part, name, variant, seed, row, time.process_time() - start
+    return [(part, name, which, seed, row, time.process_time() - start)]
 
 
 def jobs(args):
     for seed in args.seeds:
         for name in args.scenarios:
-            for variant in args.variants:
-                yield 'network', name, variant, seed
+            if args.together:
+                yield 'together', name, tuple(args.variants), seed
+                continue
+            for variant_name in args.variants:
+                yield 'network', name, variant_name, seed
         for case in args.cases:
-            for variant in args.capacity_variants:
-                yield 'capacity', case, variant, seed
+            for variant_name in args.capacity_variants:
+                yield 'capacity', case, variant_name, seed
 
 
 def run(args, log=print):
@@ -103,10 +112,11 @@ def run(args, log=print):
     results, cpu = {'network': {}, 'capacity': {}}, 0.0
     work = list(jobs(args))
     with multiprocessing.Pool(args.processes) as pool:
-        for done, (part, name, variant, seed, row, seconds) in enumerate(
-                pool.imap_unordered(run_cell, work, chunksize=4), start=1):
-            results[part].setdefault(short_name(name), {}).setdefault(variant, {})[seed] = row
-            cpu += seconds
+        for done, rows in enumerate(pool.imap_unordered(run_cell, work, chunksize=4), start=1):
+            for part, name, variant_name, seed, row, seconds in rows:
+                results[part].setdefault(short_name(name), {}).setdefault(
+                    variant_name, {})[seed] = row
+                cpu += seconds
             if done % 200 == 0:
                 log('%d of %d runs' % (done, len(work)))
     return results, cpu
@@ -124,6 +134,8 @@ def parse(argv):
     parser.add_argument('--variants', type=_names, default=list(NETWORK_VARIANTS))
     parser.add_argument('--cases', type=_names, default=list(CASES))
     parser.add_argument('--capacity-variants', type=_names, default=list(CAPACITY_VARIANTS))
+    parser.add_argument('--together', action='store_true', help='network variants side by '
+                        'side on shared servers (as the testbed runs them)')
     parser.add_argument('--processes', type=int, default=os.cpu_count() or 1)
     parser.add_argument('--out', default='results/league')
     args = parser.parse_args(argv)
@@ -132,6 +144,11 @@ def parse(argv):
     unknown = [c for c in args.cases if c not in CASES]
     if unknown:
         parser.error('unknown capacity cases %s (of %s)' % (unknown, ', '.join(CASES)))
+    for name in args.variants + args.capacity_variants:
+        try:
+            variant(name)
+        except ValueError as error:
+            parser.error(str(error))
     return args
 
 

@@ -155,6 +155,17 @@ def text(results):
     return '\n'.join(parts)
 
 
+def load(path):
+    """The results a ``league.json`` holds (its seeds as numbers again)."""
+    with open(path) as stream:
+        results = json.load(stream)
+    for part in ('network', 'capacity'):
+        for variants in results.get(part, {}).values():
+            for variant, runs in list(variants.items()):
+                variants[variant] = dict((int(seed), row) for seed, row in runs.items())
+    return results
+
+
 def write(results, out):
     """Write league.json, league.md and league.png into ``out``; returns the Markdown."""
     os.makedirs(out, exist_ok=True)

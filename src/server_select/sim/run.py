@@ -15,7 +15,7 @@ where the measured part starts (35 s, the suite's, by default).
 
 import collections
 
-from server_select.core.settings import default
+from server_select.core.settings import PARAMS, default
 from server_select.sim.events import EventLoop, Streams
 from server_select.sim.network import Network
 from server_select.sim.robot import SimRobot
@@ -32,7 +32,21 @@ Record = collections.namedtuple('Record', 'robot variant ended outcome')
 
 
 def variant(name):
-    return STATIC if name == 'static' else VARIANTS[name]
+    """The Variant a name means: a suite variant, ``static``, or either with parameters
+    of its robots changed, ``fleet:hedge=false:contender_rate=0`` (an ablation; a
+    ValueError names an unknown variant or parameter)."""
+    base, _, changes = name.partition(':')
+    if base != 'static' and base not in VARIANTS:
+        raise ValueError('unknown variant %r (expected static or one of %s)'
+                         % (base, ', '.join(VARIANTS)))
+    spec = STATIC if base == 'static' else VARIANTS[base]
+    params = dict(spec.params)
+    for change in [c for c in changes.split(':') if c]:
+        key, _, value = change.partition('=')
+        if key not in PARAMS or not value:
+            raise ValueError('%s: %r is not a robot parameter=value' % (name, change))
+        params[key] = PARAMS[key].parse(key, value)
+    return spec._replace(params=params)
 
 
 def kinds_of(args):
