@@ -81,7 +81,7 @@ def test_in_order_delivery_under_jitter():
 
 
 class _Model(object):
-    probe_cpu, cpu_factor = 0.0005, 1.0
+    probe_cpu, cpu_factor, warm = 0.0005, 1.0, {}
 
 
 def _server(spec, loop):
@@ -172,3 +172,18 @@ def test_the_oracle_follows_the_nearest_server_and_a_peer_switches_often():
     assert oracle.reaction < 0.6
     rr = figures(simulate(sc, model, 1, ['round_robin']), 'round_robin')
     assert rr.switches > 100 and rr.mean > oracle.mean
+
+
+def test_a_kind_is_loaded_when_a_probe_first_announces_it_and_its_first_task_waits():
+    class Warm(_Model):
+        warm = {'image': 0.1}
+    loop, answers = EventLoop(), []
+    host = Scenario({'hosts': {'manager': {'role': 'manager'},
+                               's': {'role': 'server', 'id': 1, 'cpu': 0.5}}}).hosts['s']
+    server = SimServer(loop, host, Warm(), Streams(1))
+    server.probe(7, [('image', 1.0)])           # 0.1 CPU s at half a core: until 0.2 s
+    server.probe(8, [('image', 1.0)])           # announced again: loaded once
+    loop.at(0.05, server.submit, Task(7, 1, 'image', 0.05, 100), 0.0,
+            lambda task, ok, error, busy: answers.append(loop.now()))
+    loop.run(5.0)
+    assert answers == [pytest.approx(0.3)]

@@ -14,7 +14,7 @@ from server_select.testbed.scenario import Host
 
 
 class _Model(object):
-    probe_cpu, cpu_factor = 0.0, 1.0
+    probe_cpu, cpu_factor, warm = 0.0, 1.0, {}
 
 
 def mean_wait(workers, arrival_rate, service, customers, seed=1):

@@ -3,7 +3,10 @@
 - ``kinds``: each task kind's CPU seconds on one core of this machine, a log-normal
   (``median_ms``, ``sigma``) fitted to real tasks run here (``--measure``: a sort task's
   message in, sorted, out; a camera frame's decoding and Haar detection); a sort task of
-  another size scales with its values (``per`` values).
+  another size scales with its values (``per`` values); ``warm_ms``: the CPU a server
+  spends loading what a kind needs before its first task (OpenCV and a detector for
+  frames, timed in a fresh interpreter), which it starts when a probe first announces
+  the kind.
 - ``hop_ms``: the middleware's delay per message on the testbed beyond the link's own
   (rospy's serialising and threads, the link emulator): calibrated so that the oracle's
   mean round trip matches the testbed's (docs/league.md, "Calibration").
@@ -39,6 +42,8 @@ class Model(object):
         self.kinds = dict((name, (float(k['median_ms']) * 1e-3, float(k['sigma']),
                                   int(k.get('per', 0))))
                           for name, k in data['kinds'].items())
+        self.warm = dict((name, float(k.get('warm_ms', 0.0)) * 1e-3)
+                         for name, k in data['kinds'].items())
 
     @classmethod
     def load(cls, path=None):
@@ -78,8 +83,19 @@ def measure(repeats=200):
         times.append(max(1e-7, time.process_time() - start))
     kinds = {'sort': dict(_fit(times), per=1000)}
     frames = [cpu_per_task('image', repeats=1) for _ in range(max(10, repeats // 10))]
-    kinds['image'] = _fit(frames)
+    kinds['image'] = dict(_fit(frames), warm_ms=round(1e3 * statistics.median(
+        _warm_image() for _ in range(5)), 1))
     return kinds
+
+
+def _warm_image():
+    """CPU seconds a fresh interpreter takes to load OpenCV and build a detector."""
+    import subprocess
+    code = ('import time\nt = time.process_time()\nimport cv2\n'
+            'from server_select.vision.detection import Detector\nDetector().load()\n'
+            'print(time.process_time() - t)')
+    return float(subprocess.run([sys.executable, '-c', code], stdout=subprocess.PIPE,
+                                universal_newlines=True, check=True).stdout)
 
 
 def main(argv=None):

@@ -34,6 +34,8 @@ class SimServer(object):
         self.completions = []     # when each task's work was done
         self.busy_answers = 0
         self.stolen = 0.0         # CPU s probes took from the workers' quota
+        self.unwarmed = set(k for k, seconds in model.warm.items() if seconds > 0)
+        self.warm_until = 0.0     # workers wait for what a kind needs to be loaded
 
     # -- state of the host ----------------------------------------------------------------
     def running(self, t):
@@ -85,6 +87,11 @@ class SimServer(object):
         capped host its CPU comes out of the quota the workers use: the task in service
         finishes that much later."""
         self.queue.announce(robot, rates)
+        now = self.loop.now()
+        for kind in self.unwarmed.intersection(k for k, _ in rates):
+            self.unwarmed.discard(kind)
+            self.warm_until = max(now, self.warm_until) + self.model.warm[kind] * \
+                self.model.cpu_factor / min(1.0, self.cpu or 1.0)
         if self.cpu and self.idle < self.workers:
             self.stolen += self.model.probe_cpu * self.model.cpu_factor
         return self.queue.load(excluding=robot)
@@ -110,6 +117,10 @@ class SimServer(object):
         self._start_workers()
 
     def _start_workers(self):
+        now = self.loop.now()
+        if now < self.warm_until:           # its first task waits for the kind's load
+            self.loop.at(self.warm_until, self._start_workers)
+            return
         while self.idle and self.waiting:
             job = self.queue.take()
             self.waiting -= 1
@@ -122,6 +133,9 @@ class SimServer(object):
             self.idle -= 1
             now = self.loop.now()
             seconds = task.work / self._speed() + self._extra_delay(now)
+            if job.kind in self.unwarmed:      # nobody announced it: its first task loads
+                self.unwarmed.discard(job.kind)
+                seconds += self.model.warm[job.kind] * self.model.cpu_factor / self._speed()
             self.loop.at(self._after_hangs(now, seconds), self._finished, job, seconds)
 
     def _finished(self, job, seconds):
