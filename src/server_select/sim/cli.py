@@ -17,6 +17,7 @@ from server_select.sim import league, report
 from server_select.sim.model import Model
 from server_select.sim.report import ORACLE
 from server_select.testbed.scenario import Scenario, ScenarioError
+from server_select.testbed.suite_scenario import short_name
 
 
 def parse(argv):
@@ -61,7 +62,8 @@ def main(argv=None):
                             '--cases', '', '--processes', str(args.processes),
                             '--out', args.out] + (['--together'] if args.together else []))
     results, _ = league.run(options, lambda text: print(text, file=sys.stderr))
-    results.update(seeds=options.seeds, variants={'network': variants})
+    results.update(seeds=options.seeds, variants={'network': variants},
+                   scenarios={'network': [short_name(name)]})
     print(report.write(results, args.out))
     print('written: %s' % os.path.join(args.out, 'league.md'))
     return 0

@@ -157,7 +157,9 @@ def main(argv=None):
     start = time.monotonic()
     results, cpu = run(args, lambda text: print(text, file=sys.stderr, flush=True))
     results.update(seeds=args.seeds, variants={'network': args.variants,
-                                               'capacity': args.capacity_variants})
+                                               'capacity': args.capacity_variants},
+                   scenarios={'network': [short_name(s) for s in args.scenarios],
+                              'capacity': args.cases})
     text = report.write(results, args.out)
     print(text)
     print('%d seeds, %.0f s (%.0f CPU s on %d processes); %s' % (

@@ -109,7 +109,7 @@ def plot(results, seeds, path):
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-    scenarios = list(results['network'])
+    scenarios = list(results['network'])      # (in the order text() gave them)
     if not scenarios:
         return
     variants = [v for v in results['network'][scenarios[0]] if v != ORACLE]
@@ -144,6 +144,7 @@ def _ordered(variants, order):
 def text(results):
     seeds, order = results['seeds'], results.get('variants', {})
     for part in ('network', 'capacity'):
+        results[part] = _ordered(results[part], results.get('scenarios', {}).get(part, []))
         for name in results[part]:
             results[part][name] = _ordered(results[part][name], order.get(part, []))
     parts = ['## The simulated league: %d seeds a cell (median [95 %% interval])\n'
@@ -169,7 +170,7 @@ def load(path):
 def write(results, out):
     """Write league.json, league.md and league.png into ``out``; returns the Markdown."""
     os.makedirs(out, exist_ok=True)
-    body = text(results)
+    body = text(results)        # (orders the results as asked: the plot follows it)
     with open(os.path.join(out, 'league.json'), 'w') as stream:
         json.dump(results, stream, indent=1, sort_keys=True)
     with open(os.path.join(out, 'league.md'), 'w') as stream:

@@ -228,7 +228,8 @@ def run_scenario(name, out_dir, repeat, variants, options, log=print):
         meta = {'robot_cpu': run.robot_cpu(), 'scenario': path, 'scenario_name': name,
                 'variants': list(variants),
                 'owners': dict((str(k), v) for k, v in owners.items()), 't0': tb.t0,
-                'duration': scenario.duration, 'measure_from': MEASURE_FROM,
+                'duration': scenario.duration,
+                'measure_from': float(suite.get('measure_from', MEASURE_FROM)),
                 'options': vars(options)}
     with open(bag + '.json', 'w') as stream:
         json.dump(meta, stream, indent=1)
