@@ -16,7 +16,8 @@ def run(*args):
 def test_the_simulated_league_writes_every_cell(tmp_path):
     out = run('server_select.sim.league', '--seeds', '2', '--scenarios', 'near_equal,gen:3',
               '--variants', 'oracle_fleet,fleet,prequal', '--cases', 'herd',
-              '--capacity-variants', 'static,fleet', '--out', str(tmp_path))
+              '--capacity-variants', 'static,fleet', '--processes', '1',
+              '--out', str(tmp_path))
     results = json.loads((tmp_path / 'league.json').read_text())
     for name in ('near_equal', 'gen:3'):
         assert sorted(results['network'][name]) == ['fleet', 'oracle_fleet', 'prequal']
@@ -30,10 +31,12 @@ def test_the_simulate_command_takes_a_scenario_file(tmp_path):
     run('server_select.sim.generate', '--first-seed', '9', '--count', '1',
         '--out', str(tmp_path))
     out = run('server_select.sim.cli', str(tmp_path / 'gen9.yaml'), '--variants',
-              'fleet,round_robin', '--seeds', '2', '--out', str(tmp_path / 'out'))
+              'fleet,round_robin', '--seeds', '2', '--processes', '1',
+              '--out', str(tmp_path / 'out'))
     assert '| round_robin |' in out and 'fleet - round_robin' in out
 
 
 def test_the_calibration_compares_every_cell_of_a_part():
-    out = run('server_select.sim.calibration', '--part', 'capacity', '--seeds', '1')
+    out = run('server_select.sim.calibration', '--part', 'capacity', '--seeds', '1',
+              '--processes', '1')
     assert out.count('| herd') == 8 and 'cells within 10 %' in out
