@@ -21,19 +21,39 @@ tasks per second, and the share of the servers' finished work that a robot still
 (None: no work)."""
 
 
+def _change_times(scenario, robot, step):
+    """The times from which a robot's nearest server can differ: its links' events and
+    ramps (every ``step`` s along one), and the servers' hangs, starts, stops and work."""
+    host = scenario.host_for('robot', robot).name
+    times = set()
+    for pair, profile in scenario.links.items():
+        if host in pair:
+            times.update(profile.times)
+            for ramp in profile.ramps:
+                if ramp is not None:
+                    times.update(ramp[0] + k * step
+                                 for k in range(int((ramp[1] - ramp[0]) / step) + 1))
+    for server in scenario.of_role('server'):
+        times.update([server.start] + ([server.stop] if server.stop is not None else []))
+        times.update(t for span in server.hang for t in span)
+        times.update(at for at, _ in server.work)
+    return sorted(times)
+
+
 def _reaction(sim, robots, by_robot, step=0.1):
     delays = []
     for robot in robots:
         sends = sorted((o.stamp, o.server_id) for o in by_robot[robot.id])
-        t, last = sim.measure_from, None
-        while t < sim.scenario.duration:
+        last = sim.scenario.nearest_server(robot.scenario_id, sim.measure_from)
+        for t in _change_times(sim.scenario, robot.scenario_id, step):
+            if not sim.measure_from < t < sim.scenario.duration:
+                continue
             nearest = sim.scenario.nearest_server(robot.scenario_id, t)
-            if last is not None and nearest != last and nearest >= 0:
+            if nearest != last and nearest >= 0:
                 first = next((s for s, server in sends if s >= t and server == nearest), None)
                 if first is not None:
                     delays.append(first - t)
             last = nearest
-            t += step
     return percentile(sorted(delays), 50) if delays else None
 
 
