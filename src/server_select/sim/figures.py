@@ -76,7 +76,8 @@ def figures(sim, variant):
     flows = [s.flow for r in robots for s in r.streams]
     sent = sum(f.sent for f in flows)
     extra = sum(f.resent + f.hedged + f.replicated for f in flows)
-    done = sim.answered_work + sim.unwanted_work
+    answers = sim.answers[variant]
+    done = answers[True] + answers[False]
     return Figures(
         len(outcomes), sum(times) / len(times) if times else None,
         percentile(times, 99) if times else None, sum(1 for o in outcomes if not o.ok),
@@ -84,4 +85,4 @@ def figures(sim, variant):
         extra / float(sent) if sent else 0.0,
         sum(r.probes for r in robots) / end / max(1, len(robots)),
         sum(1 for o in outcomes if o.ok and o.rtt <= sim.timeout) / (end - start),
-        sim.answered_work / float(done) if done else None)
+        answers[True] / float(done) if done else None)

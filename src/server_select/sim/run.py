@@ -79,7 +79,7 @@ class Simulation(object):
         self.timeout = float(args.get('task_timeout', default('task_timeout')))
         kinds = kinds_of(args)
         self.records, self.robots = [], []
-        self.answered_work = self.unwanted_work = 0
+        self.answers = collections.defaultdict(collections.Counter)   # variant -> wanted?
         self.variant_of = {}
         for index, name in enumerate(variants, start=1):
             spec = variant(name)
@@ -99,12 +99,9 @@ class Simulation(object):
     def report(self, robot, outcome):
         self.records.append(Record(robot, self.variant_of[robot], self.loop.now(), outcome))
 
-    def work_answered(self, wanted):
-        """A server's finished task reached its robot: still wanted, or not."""
-        if wanted:
-            self.answered_work += 1
-        else:
-            self.unwanted_work += 1
+    def work_answered(self, robot, wanted):
+        """A server's finished task reached ``robot``: still wanted, or not."""
+        self.answers[self.variant_of[robot]][wanted] += 1
 
     def completed_work(self):
         """Tasks a second the servers finished in the measured part."""

@@ -36,6 +36,7 @@ class SimServer(object):
         self.stolen = 0.0         # CPU s probes took from the workers' quota
         self.unwarmed = set(k for k, seconds in model.warm.items() if seconds > 0)
         self.warm_until = 0.0     # workers wait for what a kind needs to be loaded
+        self._warm_wake = False   # a call of _start_workers is due at warm_until
 
     # -- state of the host ----------------------------------------------------------------
     def running(self, t):
@@ -119,7 +120,9 @@ class SimServer(object):
     def _start_workers(self):
         now = self.loop.now()
         if now < self.warm_until:           # its first task waits for the kind's load
-            self.loop.at(self.warm_until, self._start_workers)
+            if not self._warm_wake:
+                self._warm_wake = True
+                self.loop.at(self.warm_until, self._warmed)
             return
         while self.idle and self.waiting:
             job = self.queue.take()
@@ -137,6 +140,10 @@ class SimServer(object):
                 self.unwarmed.discard(job.kind)
                 seconds += self.model.warm[job.kind] * self.model.cpu_factor / self._speed()
             self.loop.at(self._after_hangs(now, seconds), self._finished, job, seconds)
+
+    def _warmed(self):
+        self._warm_wake = False
+        self._start_workers()
 
     def _finished(self, job, seconds):
         if self.stolen > 0:               # probes used some of the quota meanwhile

@@ -63,7 +63,7 @@ class TaskStream(object):
     def resolve(self, task, server, ok, error, busy):
         resolution = self.flow.resolve(task.task_id, server, ok, error, None, busy)
         if ok:
-            self.robot.sim.work_answered(resolution.status == ENDED)
+            self.robot.sim.work_answered(self.robot.id, resolution.status == ENDED)
         self._schedule()
 
     def _act(self):
