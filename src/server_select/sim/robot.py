@@ -61,7 +61,6 @@ class SimRobot(object):
         self.answered = set()
         self._out = {}                 # server -> its probe still out
         self.probes = 0
-        self.renewals = 0              # task connections made anew after an outage
         self._round = Wakeup(self.loop, self._probe_round)
         self._first = self._last_round = 0.0
         self._to, self._from = {}, {}  # server -> connection for tasks, for results
@@ -190,7 +189,6 @@ class SimRobot(object):
         now = self.loop.now()
         if connection is not None and connection.stalled(now):
             connection.close()
-            self.renewals += 1
             self._to[server_id] = self._connect(server_id, now + 2.0 * (
                 self.loop.now() - self._out[server_id].sent))
 

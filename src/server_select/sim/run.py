@@ -86,10 +86,10 @@ class Simulation(object):
             params = dict(spec.params, mode='select' if spec.mode == 'oracle' else spec.mode)
             params.update((k, v) for k, v in args.items()
                           if k in ('task_timeout', 'start_delay'))
+            get = _getter(params, spec.profile)
             for host in scenario.of_role('robot'):
                 rid = REPLICA * index + host.id if together else host.id
                 self.variant_of[rid] = name
-                get = _getter(params, spec.profile)
                 servers = groups[host.id] if groups else sorted(self.servers)
                 robot = SimRobot(self, host._replace(id=rid), servers, get,
                                  kinds, fixed=(fixed or {}).get(host.id),

@@ -32,7 +32,6 @@ class SimServer(object):
         self.waiting = 0          # accepted, not yet taken
         self.timed = set()        # kinds a worker has done once (the first is not timed)
         self.completions = []     # when each task's work was done
-        self.busy_answers = 0
         self.stolen = 0.0         # CPU s probes took from the workers' quota
         self.unwarmed = set(k for k, seconds in model.warm.items() if seconds > 0)
         self.warm_until = 0.0     # workers wait for what a kind needs to be loaded
@@ -111,7 +110,6 @@ class SimServer(object):
         deadline = now + budget if budget > 0 else None
         why = self.queue.offer(task.kind, (task, reply), deadline, owner=task.robot)
         if why is not None:
-            self.busy_answers += 1
             reply(task, False, why, True)
             return
         self.waiting += 1
@@ -130,7 +128,6 @@ class SimServer(object):
             task, reply = job.item
             why = self.queue.stale(job)
             if why is not None:
-                self.busy_answers += 1
                 reply(task, False, why, True)
                 continue
             self.idle -= 1
