@@ -8,7 +8,8 @@ import pytest
 
 from server_select.core.flow.budget import RetryBudget
 from server_select.core.load.demand import Arrivals, Demand
-from server_select.core.load.work_queue import Load, ServiceTimes, WorkQueue
+from server_select.core.load.service_times import ServiceTimes
+from server_select.core.load.work_queue import Load, WorkQueue
 from server_select.core.load.board import LoadBoard, queueing
 
 from support.clock import Clock

@@ -1,4 +1,4 @@
-"""Adaptive probing: contenders from intervals, probe rates, a far server that comes near,
+"""Adaptive probing: probe rates, a far server that comes near (contenders by the rule),
 and the window with uneven sampling (core/selection/probing.py, core/selection/window.py)."""
 
 import collections
@@ -6,11 +6,9 @@ import random
 
 import pytest
 
-from server_select.core.selection.policy import Policy
-from server_select.core.selection.probing import ContenderRule, ProbePlan, from_params
-from server_select.core.selection.candidates import Selection
+from server_select.core.selection.hot_cold import HotCold
+from server_select.core.selection.probing import ProbePlan, from_params
 from server_select.core.selection.fleet_rankings import FleetRankings
-from server_select.core.selection.health import ServerHealth
 from server_select.core.selection.window import EMPTY, LatencyWindow, PairStats
 
 from support.clock import Clock
@@ -20,67 +18,6 @@ MS = 1e-3
 
 def pair(value, se, n=10):
     return PairStats(value, n, 0, value, se, 0)
-
-
-# -- which servers are contenders ---------------------------------------------------------
-
-def test_contenders_are_the_selected_and_the_servers_whose_interval_overlaps_it():
-    rule = ContenderRule(margin=0.3 * MS, z=3.0)
-    stats = {1: pair(5.0 * MS, 0.2 * MS), 2: pair(6.0 * MS, 0.2 * MS),   # 1 ms < 0.3 + 1.2
-             3: pair(7.0 * MS, 0.2 * MS),                                # 2 ms > 1.5 ms
-             4: pair(40.0 * MS, 0.2 * MS), 5: pair(4.0 * MS, 0.2 * MS)}  # 5 is better
-    assert rule.select(stats, 1) == {1, 2, 5}
-    # noisier windows: wider intervals, more contenders
-    noisy = dict((s, pair(p.value, 0.5 * MS)) for s, p in stats.items())
-    assert rule.select(noisy, 1) == {1, 2, 3, 5}
-
-
-def test_the_margin_alone_makes_a_contender_and_a_server_not_sampled_yet_is_one():
-    rule = ContenderRule(margin=2.0 * MS, z=0.0)
-    stats = {1: pair(5.0 * MS, 0.0), 2: pair(6.9 * MS, 0.0), 3: pair(7.1 * MS, 0.0), 4: EMPTY}
-    assert rule.select(stats, 1) == {1, 2, 4}
-
-
-def test_a_server_whose_window_holds_only_failures_is_no_contender_unless_selected():
-    rule = ContenderRule(margin=0.3 * MS)
-    dead = PairStats(None, 0, 3, None, None, 3)
-    stats = {1: pair(5.0 * MS, 0.1 * MS), 2: dead}
-    assert rule.select(stats, 1) == {1}
-    assert rule.select(stats, 2) == {1, 2}      # selected: still probed often
-
-
-def test_with_no_server_selected_the_best_one_is_the_reference():
-    rule = ContenderRule(margin=0.3 * MS)
-    stats = {1: pair(9.0 * MS, 0.1 * MS), 2: pair(3.0 * MS, 0.1 * MS), 3: pair(3.5 * MS, 0.1 * MS)}
-    assert rule.select(stats, -1) == {2, 3}
-    assert rule.select({}, -1) == set()
-
-
-def test_one_sample_has_the_reference_spread_and_lands_near_or_not():
-    rule = ContenderRule(margin=0.3 * MS, z=3.0)
-    # the reference: se 0.1 ms of 16 samples, a spread of 0.4 ms per sample
-    stats = {1: pair(5.0 * MS, 0.1 * MS, n=16), 2: PairStats(6.0 * MS, 1, 0, 6.0 * MS, 0.0, 0)}
-    assert rule.select(stats, 1) == {1, 2}              # 1 ms < 0.3 + 3 x 0.5
-    assert rule.near(stats, 1, 6.7 * MS) and not rule.near(stats, 1, 6.9 * MS)
-
-
-def test_a_few_late_answers_do_not_make_every_server_a_contender():
-    """Six servers 2.0-5.5 ms away, two answers in sixteen of each 10 ms late (a busy
-    host): the plain standard errors would call all six contenders; the robot's window
-    gives the rule robust ones, and the far four stay in the background."""
-    clock = Clock()
-    view = Selection(1, range(1, 7), 'select', health=ServerHealth(range(1, 7), clock=clock),
-                     clock=clock)
-    for i in range(16):
-        for server, base in zip(range(1, 7), (2.0, 2.3, 4.0, 4.5, 5.0, 5.5)):
-            late = 10.0 if (i + server) % 8 == 0 else 0.0
-            view.on_sample(server, True, (base + 0.05 * (i % 3) + late) * MS, wait=0.0)
-        clock.now += 0.3
-    rule = ContenderRule()
-    plain = view.window.robot_stats(1, range(1, 7), clock.now, errors=False)
-    assert rule.select(plain) == {1, 2, 3, 4, 5, 6}
-    assert 1 in view.contenders(rule) <= {1, 2}
-    assert not view.near(rule, 4.0 * MS) and view.near(rule, 2.1 * MS)
 
 
 # -- probe plans --------------------------------------------------------------------------
@@ -190,12 +127,11 @@ def test_a_promoted_server_is_probed_at_the_next_tick_and_demoted_after_its_hold
 def test_plans_from_parameters():
     table = {'probe_rate': 4.0, 'contender_rate': 0.0, 'background_rate': 0.5,
              'contender_budget': 20.0, 'window': 1.5}
-    plan, rule = from_params(table.get, Policy('hysteresis', 0.0003, 3.0, 3.0))
-    assert not plan.adaptive and rule is None and plan.tick == 0.25
+    plan = from_params(table.get)
+    assert not plan.adaptive and plan.tick == 0.25
     table['contender_rate'] = 10.0
-    plan, rule = from_params(table.get, Policy('hysteresis', 0.0003, 3.0, 3.0))
+    plan = from_params(table.get)
     assert plan.adaptive and plan.tick == 0.1 and plan.hold == 1.5
-    assert (rule.margin, rule.z) == (0.0003, 3.0)
     with pytest.raises(ValueError):
         ProbePlan(contender_rate=0.2, background_rate=0.5)
 
@@ -204,37 +140,33 @@ def test_plans_from_parameters():
 
 def test_a_far_server_that_comes_near_is_noticed_within_two_background_periods():
     """Server 3 is 40 ms away and comes to 2 ms (better than the selected 5 ms) at t = 20 s:
-    its next background probe lands near, the fast re-check makes it a contender at once,
-    and its window then fills at the contender rate."""
-    rng = random.Random(3)
+    its next background probe puts it near the best by the rule's estimates, it becomes a
+    contender, and is then probed at the contender rate."""
+    rng, clock = random.Random(3), Clock(0.0)
     truth = {1: 5.0 * MS, 2: 9.0 * MS, 3: 40.0 * MS, 4: 60.0 * MS}
-    window = LatencyWindow(1.5, keep=3, horizon=8.0)
-    rule = ContenderRule(margin=0.3 * MS, z=3.0)
-    plan = ProbePlan(contender_rate=10.0, background_rate=0.5, budget=20.0, hold=1.5)
+    rule = HotCold(window=1.5, clock=clock, rng=random.Random(1))
+    plan = ProbePlan(contender_rate=4.0, background_rate=1.0, budget=20.0, hold=1.5)
     for server in truth:
         plan.add(server, 0.0)
     noticed, samples_after = None, 0
-    now = 0.0
-    while now < 30.0:
+    while clock.now < 30.0:
+        now = clock.now
         if now >= 20.0:
             truth[3] = 2.0 * MS
-        stats = window.robot_stats(1, truth, now, errors=False)
-        plan.update(rule.select(stats, 1), now)
+        plan.update(rule.contenders(list(truth)), now)
         for server in plan.due(now):
-            rtt = truth[server] + rng.gauss(0, 0.2 * MS)
-            window.add(1, server, now, True, rtt)
-            if server not in plan.contenders and rule.near(
-                    window.robot_stats(1, truth, now, errors=False), 1, rtt):
-                plan.promote(server, now)
+            rule.probed(server, truth[server] + rng.gauss(0, 0.2 * MS))
             if server == 3 and now >= 20.0:
                 samples_after += 1
-                if noticed is None and 3 in plan.contenders:
-                    noticed = now - 20.0
+        if now >= 20.0 and noticed is None and 3 in plan.contenders:
+            noticed = now - 20.0
+        if now > 2.0 and not rule.last:
+            rule.started(rule.order(list(truth))[0])
         if 19.0 <= now < 20.0:
             assert plan.contenders == [1], (now, plan.contenders)   # 3 in the background
-        now = round(now + plan.tick, 6)
-    assert noticed is not None and noticed <= 2 * 2.0, noticed
-    assert samples_after >= 10 * (10.0 - noticed - 2.0), samples_after
+        clock.now = round(now + plan.tick, 6)
+    assert noticed is not None and noticed <= 2 * 1.0, noticed
+    assert samples_after >= 4 * (10.0 - noticed - 2.0), samples_after
 
 
 # -- windows with uneven sampling ---------------------------------------------------------

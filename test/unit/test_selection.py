@@ -191,9 +191,11 @@ def test_asking_whether_a_per_task_rule_is_ready_or_where_it_heads_decides_nothi
     s = Selection(1, [1, 2], 'select', health=health, clock=clock, policy=Policy('hot_cold'))
     rule = s.balancer
     assert s.ready(set()) and s.heading() == NO_SERVER
-    assert rule.current is None and not rule.moves and not rule.sends
+    assert rule.last is None and not rule.sends
     first = s.candidates('sort')[0]                   # a send asks with its kind
-    assert rule.current == first and s.heading() == first
+    assert rule.last is None and s.heading() == NO_SERVER    # asking is not sending
+    rule.started(first, 'sort')
+    assert rule.last == first and s.heading() == first
     for _ in range(3):
-        assert s.ready(set()) and s.heading() == first
-    assert sum(rule.moves.values()) == 1 and not any(rule.sends.values())
+        assert s.ready(set()) and s.heading() == first and s.candidates('sort')[0] == first
+    assert len(rule.sends['sort']) == 1

@@ -207,7 +207,7 @@ PROFILES = {
               'window': 1.5, 'probe_rate': 4.0,
               # adaptive probing: docs/design.md, "Adaptive probing"
               'contender_rate': 10.0, 'window_samples': 3,
-              'fail_fast': 2, 'hedge': True,
+              'hedge': True,
               # capacity: docs/design.md, "Capacity and overload"
               'load_aware': True, 'max_in_flight': 1, 'fresh_factor': 2.0},
 }

@@ -79,7 +79,7 @@ class RobotNode(object):
             if param('load_aware') and mode == 'select' else None
         self.passive = TaskSamples(self.robot_id, self.selection) \
             if self.selection.passive else None
-        if hasattr(self.selection.balancer, 'on_move'):     # the fleet's rule: say why
+        if self.selection.balancer is not None:     # a rule per task: say why it moves
             self.selection.balancer.on_move = lambda server, why: rospy.loginfo(
                 'robot %d: tasks go to server %d now (%s)', self.robot_id, server, why)
         self.addresses, self.prober = robot_prober(self, servers)
@@ -229,13 +229,11 @@ class RobotNode(object):
 
     def summary(self):
         target = self.selection.heading()     # (not target(): a decision, with no kind)
-        moves = getattr(self.selection.balancer, 'moves', None)
-        return 'robot %d: %s; server %s%s, %d switches%s' % (
+        return 'robot %d: %s; server %s%s, %d switches' % (
             self.robot_id, '; '.join(s.summary() for s in self.streams),
             {NO_SERVER: 'none', LOCAL: 'local'}.get(target, target),
             ' (own decision)' if self._local_decision else '',
-            sum(s.flow.switches for s in self.streams),
-            ' (%s)' % ', '.join('%s %d' % m for m in sorted(moves.items())) if moves else '')
+            sum(s.flow.switches for s in self.streams))
 
     def on_shutdown(self):
         for timer in self.timers:

@@ -23,9 +23,8 @@ from server_select.srv import LatencyProbe, LatencyProbeRequest
 class Prober(object):
     """Probes the servers when ``plan`` (a ``ProbePlan``) says, a round when its next time
     comes, and publishes each sample, failed ones too. ``contenders``, for adaptive plans,
-    is ``(rule, view)``: a ``ContenderRule`` and the robot's ``Selection``, whose
-    ``contenders(rule)`` the plan takes each tick; a sample of a background server that
-    lands near them (``view.near(rule, value)``) makes it a contender at once.
+    is the robot's ``Selection``, whose ``contenders()`` (its rule's) the plan takes each
+    round.
 
     Probes go out on one loop thread over persistent connections (a probe that must
     connect first, on a worker thread), each bounded by ``timeout``; a server whose
@@ -120,8 +119,7 @@ class Prober(object):
         if rospy.is_shutdown():
             self._loop.stop()
             return
-        contenders = self.contenders[1].contenders(self.contenders[0]) \
-            if self.contenders is not None else ()
+        contenders = self.contenders.contenders() if self.contenders is not None else ()
         with self._lock:
             now = time.monotonic()
             self.plan.update(contenders, now)
@@ -220,21 +218,8 @@ class Prober(object):
     def _publish(self, server, seq, stamp, rtt, error, batch, wait=None):
         self.samples.sample(server, seq, stamp, rtt, error)
         self.on_sample(server, not error, rtt, error, wait)
-        if not error and self.contenders is not None:
-            self._recheck(server, rtt + (wait or 0.0))
         if batch is not None and batch.record(server, not error, rtt, wait):
             self.samples.round(batch)
-
-    def _recheck(self, server, value):
-        """A background server's sample that lands near the contenders: one from now."""
-        with self._lock:
-            if server in self.plan.contenders:
-                return
-        rule, view = self.contenders
-        if view.near(rule, value):
-            with self._lock:
-                self.plan.promote(server, time.monotonic())
-            self._loop.poke()
 
     def shutdown(self):
         self._loop.stop()

@@ -12,6 +12,7 @@ from server_select.core.flow import attempts
 from server_select.core.flow.task_flow import HEDGE_QUANTILE
 from server_select.core.selection import probing
 from server_select.core.selection import robot_parts
+from server_select.core.selection.effect import ineffective, refusal
 from server_select.ros import seal
 from server_select.ros.load import load_of
 from server_select.ros.membership import ProbeAddresses
@@ -22,7 +23,11 @@ from server_select.ros.task_stream import TaskStream
 
 
 def robot_selection(robot_id, servers, mode):
-    """``(Selection, ServerHealth, Policy)`` of a robot from its parameters."""
+    """``(Selection, ServerHealth, Policy)`` of a robot from its parameters (one set
+    where it has no effect is refused: :mod:`~server_select.core.selection.effect`)."""
+    refused = refusal(ineffective(param, lambda name: rospy.has_param('~' + name)))
+    if refused:
+        raise ParamError(refused)
     fixed = param('fixed_server', default=servers[0] if servers else None,
                   parse=lambda name, value: parse_fixed_server(name, value, servers, mode))
     try:
@@ -33,7 +38,7 @@ def robot_selection(robot_id, servers, mode):
 
 def robot_prober(robot, servers):
     """``(ProbeAddresses or None, Prober)`` of ``robot`` (a RobotNode) from its parameters."""
-    plan, rule = probing.from_params(param, robot.policy)
+    plan = probing.from_params(param)
     # with a fleet key: servers probed where their sealed announcements say
     addresses = ProbeAddresses('robot %d' % robot.robot_id) if seal.enabled() else None
     return addresses, Prober(robot.robot_id, servers, plan, param('probe_timeout'),
@@ -41,7 +46,7 @@ def robot_prober(robot, servers):
                              load_of=(lambda server, response, rtt: robot.load.on_answer(
                                  server, load_of(response), rtt)) if robot.load else None,
                              announce=robot.load.announcement if robot.load else None,
-                             contenders=(rule, robot.selection) if rule else None,
+                             contenders=robot.selection if plan.adaptive else None,
                              node_of=robot.server_node, addresses=addresses)
 
 

@@ -1,6 +1,6 @@
 """A simulated robot (no rospy): the robot node's parts, built from its parameters by the
-constructors the node uses (selection with its rule, health, probe plan and contender
-rule, load view, a task flow per kind, one retry budget), wired to the simulated network.
+constructors the node uses (selection with its rule, health, probe plan, load view, a
+task flow per kind, one retry budget), wired to the simulated network.
 
 What the node's threads do is done here by events, in the same order: a probe round when
 the plan says (a server whose probe is still out is skipped, and failed once it is late),
@@ -36,7 +36,7 @@ class SimRobot(object):
     streams, model and records), with parameters ``get(name)`` and ``kinds``."""
 
     def __init__(self, sim, host, servers, get, kinds, fixed=None, oracle=False,
-                 scenario_id=None):
+                 scenario_id=None, rule_args=None):
         self.sim, self.host, self.id = sim, host, host.id
         # the scenario's robot this one is (its links, its oracle; its random streams:
         # side by side, every variant's copy meets the same tasks)
@@ -45,9 +45,9 @@ class SimRobot(object):
         clock = self.loop.now
         self.selection, self.health, self.policy = robot_selection(
             self.id, servers, get('mode'), fixed, get, clock=clock,
-            rng=sim.streams.rng('rule', self.id))
+            rng=sim.streams.rng('rule', self.id), rule_args=rule_args)
         self.balancer = self.selection.balancer
-        self.plan, self.rule = probing.from_params(get, self.policy)
+        self.plan = probing.from_params(get)
         self.probe_timeout = get('probe_timeout')
         self.answer_times = AnswerTimes()
         self.load = RobotLoad(dict((k.name, k.rate) for k in kinds), self.selection.heading,
@@ -105,8 +105,8 @@ class SimRobot(object):
 
     def _probe_round(self):
         now = self._last_round = self.loop.now()
-        contenders = self.selection.contenders(self.rule) if self.rule is not None else ()
-        self.plan.update(contenders, now)
+        if self.plan.adaptive:
+            self.plan.update(self.selection.contenders(), now)
         for server in [s for s in self.plan.due(now) if not self._still_out(s, now)]:
             if self._still_out(server, None):      # and late: a failed sample
                 self._sample(server, None, STILL_OUT, None)
@@ -167,10 +167,6 @@ class SimRobot(object):
         self._heard(server)
         if self.balancer is not None and self.load is None:
             self.balancer.probed(server, rtt)
-        if self.rule is not None and server not in self.plan.contenders and \
-                self.selection.near(self.rule, rtt + (wait or 0.0)):
-            self.plan.promote(server, self.loop.now())
-            self._round.request(self._next_round())
 
     # -- evidence from tasks (as the node's) ----------------------------------------------
     def on_failure(self, server, why, probe=False, late=False):

@@ -33,9 +33,10 @@ Record = collections.namedtuple('Record', 'robot variant ended outcome')
 
 def variant(name):
     """The Variant a name means: a suite variant, ``static``, or either with parameters
-    of its robots changed, ``fleet:hedge=false:contender_rate=0`` (an ablation; a
-    ValueError names an unknown variant or parameter)."""
-    base, _, changes = name.partition(':')
+    of its robots changed, ``fleet:hedge=false:contender_rate=0``, or mechanisms of its
+    rule switched off, ``fleet~spread~keep`` (ablations; a ValueError names an unknown
+    variant or parameter; :func:`rule_args` the rule's)."""
+    base, _, changes = name.split('~')[0].partition(':')
     if base != 'static' and base not in VARIANTS:
         raise ValueError('unknown variant %r (expected static or one of %s)'
                          % (base, ', '.join(VARIANTS)))
@@ -47,6 +48,12 @@ def variant(name):
             raise ValueError('%s: %r is not a robot parameter=value' % (name, change))
         params[key] = PARAMS[key].parse(key, value)
     return spec._replace(params=params)
+
+
+def rule_args(name):
+    """The per-task rule's own arguments a variant's name asks for (None: none)."""
+    off = name.split('~')[1:]
+    return {'off': off} if off else None
 
 
 def kinds_of(args):
@@ -93,7 +100,8 @@ class Simulation(object):
                 servers = groups[host.id] if groups else sorted(self.servers)
                 robot = SimRobot(self, host._replace(id=rid), servers, get,
                                  kinds, fixed=(fixed or {}).get(host.id),
-                                 oracle=spec.mode == 'oracle', scenario_id=host.id)
+                                 oracle=spec.mode == 'oracle', scenario_id=host.id,
+                                 rule_args=rule_args(name))
                 self.robots.append(robot)
 
     def report(self, robot, outcome):

@@ -18,6 +18,10 @@ in flight (queued + in service), ``{kind: work s}``, workers, when it arrived, t
 share of the workers' time the other robots' tasks take, and ``{kind: the standard error
 of the work}``."""
 
+Decision = collections.namedtuple('Decision', 'server reason estimates')
+Decision.__doc__ = """Where a task would go and why, with what the rule compared (``{server:
+estimate}``, the rule's own; empty for rules that keep none)."""
+
 
 class Balancer(object):
     """The state every peer keeps: this robot's attempts out per server, the newest probe
@@ -33,6 +37,8 @@ class Balancer(object):
         self.out = collections.Counter()     # server -> this robot's attempts out there
         self.probes = {}                     # server -> its newest ProbeAnswer
         self.last = None                     # where the last task went
+        self.reasons = {}                    # server -> why the last ask named it
+        self.on_move = None                  # on_move(server, why): tasks go elsewhere now
 
     def probed(self, server, rtt, load=None):
         """A good probe answer: round trip ``rtt`` and ``load`` (a Load, or None)."""
@@ -48,12 +54,19 @@ class Balancer(object):
     def _probed(self, answer):
         """Subclasses: a probe answer arrived (lock held)."""
 
-    def started(self, server, kind=None):
-        """An attempt of a ``kind`` task is sent to ``server`` (asking :meth:`order` is
-        not sending: a robot may ask where a task would go)."""
+    def started(self, server, kind=None, first=True):
+        """An attempt of a ``kind`` task is sent to ``server``; the ``first`` of a task
+        makes it where tasks go (asking :meth:`order` is not sending: a robot may ask
+        where a task would go)."""
+        moved = None
         with self._lock:
             self.out[server] += 1
             self._started(server, kind, self._clock())
+            if first and server != self.last:
+                moved = self.reasons.get(server, 'sent there')
+                self.last = server
+        if moved is not None and self.on_move is not None:
+            self.on_move(server, moved)
 
     def _started(self, server, kind, now):
         """Subclasses: an attempt was sent (lock held)."""
@@ -71,17 +84,27 @@ class Balancer(object):
         """Subclasses: an attempt's round trip (lock held)."""
 
     def order(self, servers, kind=None):
-        """``servers`` (the usable ones) in this rule's order for the next ``kind`` task."""
+        """``servers`` (the usable ones) in this rule's order for the next ``kind`` task
+        (the first gets it; re-sends and hedges take the next)."""
         servers = list(servers)
         if not servers:
             return []
         with self._lock:
             ordered = self._order(servers, kind, self._clock())
-        self.last = ordered[0]
         return ordered
 
     def _order(self, servers, kind, now):
         raise NotImplementedError
+
+    def contenders(self, servers):
+        """The servers worth probing often: all of them (a rule with estimates of its own
+        names fewer)."""
+        return set(servers)
+
+    def view(self, servers):
+        """The robot's ranking by this rule's own estimates (None: it keeps none; the
+        robot's probe windows rank the servers)."""
+        return None
 
     def _two(self, servers):
         """Two distinct servers drawn at random (one when there is one)."""

@@ -27,7 +27,7 @@ class Selection(object):
     def __init__(self, robot_id, servers, mode, fixed_server=None, health=None, window=5.0,
                  policy=None, manager_timeout=3.0, clock=time.monotonic, statistic=None,
                  passive=False, task_memory=0.0, keep=0, horizon=None, fail_fast=0,
-                 rng=None):
+                 rng=None, rule_args=None):
         if mode not in MODES:
             raise ValueError('unknown mode %r' % (mode,))
         self.robot_id, self.servers, self.mode = robot_id, list(servers), mode
@@ -46,8 +46,10 @@ class Selection(object):
         self.probes = LatencyWindow(window, keep=keep, horizon=horizon) if passive \
             else self.window
         self._chooser = Chooser(policy)
-        # a peer's rule, asked per task, drawing from ``rng`` (None: the ranking decides)
-        rule_args = {'window': window} if policy.kind == 'hot_cold' else {}
+        # a rule asked per task, drawing from ``rng`` (None: the ranking decides);
+        # ``rule_args``: its own (the league's ablations)
+        rule_args = dict(rule_args or {}, **({'window': window} if policy.kind == 'hot_cold'
+                                             else {}))
         self.balancer = balancers.make(policy.kind, clock=clock, rng=rng, **rule_args) \
             if policy.per_task else None
         self.on_change = None      # on_change(): a sample may have changed view()
@@ -108,36 +110,27 @@ class Selection(object):
         return changed
 
     def view(self):
-        """The robot's own ranking of the servers it has samples of, as the manager ranks a
-        robot from its samples (what ``~sample_stream view`` sends it); choosing per task,
-        ``selected`` is where its tasks go now (when ranked)."""
+        """The robot's own ranking: by its rule's estimates when it chooses per task with
+        a rule that keeps them, else as the manager ranks a robot from its samples (what
+        ``~sample_stream view`` sends it); choosing per task, ``selected`` is where its
+        tasks go now (when ranked)."""
+        if self.balancer is not None:
+            ranking = self.balancer.view(self._usable())
+            if ranking is not None:
+                return ranking
         ranking = self.rankings.rank(self.robot_id, self._clock())
         last = self.balancer.last if self.balancer is not None else None
         if last is not None and last in ranking.ranking:
             ranking = ranking._replace(selected=last)
         return ranking
 
-    def contenders(self, rule):
-        """The servers that ``rule`` (a
-        :class:`~server_select.core.selection.probing.ContenderRule`)
-        calls contenders by the robot's own window, around where the next task goes."""
-        now = self._clock()
-        with self._lock:
-            servers = list(self.servers)
-        return rule.select(self.window.robot_stats(self.robot_id, servers, now, errors='robust'),
-                           self.heading())
-
-    def near(self, rule, value):
-        """Whether a sample of ``value`` lands near the contenders (``rule.near``; by the
-        window of the server the next task goes to alone, when it has one)."""
-        now, heading = self._clock(), self.heading()
-        stats = self.window.stats(self.robot_id, heading, now, errors='robust')
-        if stats.ok_count:
-            return rule.near({heading: stats}, heading, value)
-        with self._lock:
-            servers = list(self.servers)
-        return rule.near(self.window.robot_stats(self.robot_id, servers, now, errors='robust'),
-                         heading, value)
+    def contenders(self):
+        """The servers the robot's rule calls contenders (worth probing often): by its
+        own estimates, around where the next task goes; every server for a rule that
+        keeps none, or for a robot that follows its manager."""
+        if self.balancer is not None:
+            return self.balancer.contenders(self._servers())
+        return set(self._servers())
 
     def viewed(self, pick):
         """The robot's view was sent picking ``pick``: from now on the samples of ``pick``,

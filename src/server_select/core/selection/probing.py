@@ -1,35 +1,18 @@
 """When a robot probes each of its servers: uniformly, or adaptively (no rospy).
 
-A ranking is decided by the few servers whose intervals overlap the selected one's: its
-*contenders*. Adaptive probing samples those often and the rest rarely. The standard error
-of a difference of means falls with the square root of the samples, so a contender probed
-at 10 Hz narrows the policy's margin about 1.6x against 4 Hz over the same window, while a
-server 40 ms away needs a probe every few seconds only to notice that it came near.
+A choice is decided by the few servers near the best: the robot's *contenders*, which its
+per-task rule names from its own estimates (``Balancer.contenders``). Adaptive probing
+samples those often and the rest rarely: a server far from the best needs a probe now and
+then only to notice that it came near.
 
-- :class:`ContenderRule`: which servers are contenders, from a robot's window statistics:
-  the selected server, every server whose statistic is within ``margin`` + ``z`` x (the
-  sum of the two standard errors) of the selected one's (their intervals overlap, or it
-  is within the policy's margin), servers better than the selected one, and servers not
-  sampled yet. A pair with one sample has no spread of its own: it is given the selected
-  server's per-sample spread. The errors are the window's robust ones (the network part's
-  from the median absolute deviation): on a busy host a few answers late by milliseconds
-  inflated the plain ones past the spread of the servers, and every server stayed a
-  contender (simulated: six servers at 2.0-5.5 ms, 16 load-aware answers each, 10 % of
-  them 10 ms late: all six in 105 of 200 windows with plain errors; with robust ones in
-  none, 1.9 contenders on average, the nearest always one).
-- :class:`ProbePlan`: each server's next probe time. Contenders are probed at
-  ``contender_rate`` each, together at most ``budget`` probes a second (a near-equal fleet
-  has many contenders), never below ``background_rate``, all of them in one round: their
-  round trips are compared under one load of the robot's host and network (a busy robot
-  took its median to one server from 6.5 to 18.5 ms), and a round costs the robot a
-  ranking and a batch whatever its size (one round a beat, not one per contender and
-  phase: 4 equally near servers made 15 rounds a second of 1.3 probes); the others at
-  ``background_rate``, their phases spread over the period so that they do not come in one
-  burst. A server stays a contender for ``hold`` s after it last was one (so that its
-  window fills with fast samples before it can be demoted) and a server promoted by a
-  *fast re-check* (a background sample that lands near the contenders) is probed at once.
-  Without a ``contender_rate`` the plan is uniform: every server every ``1/rate`` s, in
-  rounds (the paper: 1 Hz).
+:class:`ProbePlan` gives each server's next probe time. Contenders are probed at
+``contender_rate`` each, together at most ``budget`` probes a second (a near-equal fleet
+has many contenders), never below ``background_rate``, all of them in one round: their
+round trips are compared under one load of the robot's host and network, and a round
+costs the robot one batch whatever its size; the others at ``background_rate``, their
+phases spread over the period so that they do not come in one burst. A server stays a
+contender for ``hold`` s after it last was one. Without a ``contender_rate`` the plan is
+uniform: every server every ``1/rate`` s, in rounds (the paper: 1 Hz).
 
 The robot asks :meth:`ProbePlan.due` when :meth:`ProbePlan.next_time` comes and probes
 what it returns as one round (servers due within half a ``tick`` go together); the
@@ -39,52 +22,8 @@ manager sees the same uneven rounds in the robot's sample batches.
 import math
 import threading
 
-from server_select.core.selection.rank import NO_SERVER, latency
 
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0     # phases i x GOLDEN mod 1 spread evenly
-
-
-class ContenderRule(object):
-    """Which servers are a robot's contenders (see the module's docstring)."""
-
-    def __init__(self, margin=0.0, z=3.0):
-        if not (margin >= 0 and z >= 0):
-            raise ValueError('margin and z must be >= 0, got %r, %r' % (margin, z))
-        self.margin, self.z = float(margin), float(z)
-
-    def _reference(self, stats, selected):
-        """(value, standard error, per-sample spread) of the selected server, else of the
-        best-valued one; None when no server has a value."""
-        ref = stats.get(selected)
-        if ref is None or latency(ref) is None:
-            valued = [s for s in stats.values() if latency(s) is not None]
-            if not valued:
-                return None
-            ref = min(valued, key=latency)
-        se = ref.se or 0.0
-        return latency(ref), se, se * math.sqrt(max(1, ref.ok_count))
-
-    def _near(self, reference, value, se):
-        ref_value, ref_se, _ = reference
-        return value - ref_value <= self.margin + self.z * (se + ref_se)
-
-    def select(self, stats, selected=NO_SERVER):
-        """The contenders among ``stats`` (``{server: PairStats}``, a robot's window)."""
-        reference = self._reference(stats, selected)
-        chosen = set([selected]) & set(stats)
-        for server, pair in stats.items():
-            value = latency(pair)
-            if not pair.ok_count and not pair.failed_count:
-                chosen.add(server)                  # not sampled yet: learn it
-            elif value is not None and reference is not None and self._near(
-                    reference, value, pair.se if pair.ok_count > 1 else reference[2]):
-                chosen.add(server)
-        return chosen
-
-    def near(self, stats, selected, value):
-        """Whether one sample of ``value`` lands near the contenders (a fast re-check)."""
-        reference = self._reference(stats, selected)
-        return reference is None or self._near(reference, value, reference[2])
 
 
 class ProbePlan(object):
@@ -212,15 +151,11 @@ class ProbePlan(object):
         return sorted(due)
 
 
-def from_params(get, policy):
-    """The :class:`ProbePlan` and (adaptive plans) the :class:`ContenderRule` that
-    parameters ask for (``get(name)``: ``probe_rate``, ``contender_rate``,
-    ``background_rate``, ``contender_budget``, ``window``), around ``policy``'s margin
-    (a :class:`~server_select.core.selection.policy.Policy`; 3 standard errors unless it has a
-    z)."""
-    plan = ProbePlan(get('probe_rate'), get('contender_rate'), get('background_rate'),
+def from_params(get):
+    """The :class:`ProbePlan` that parameters ask for (``get(name)``: ``probe_rate``,
+    ``contender_rate``, ``background_rate``, ``contender_budget``, ``window``)."""
+    return ProbePlan(get('probe_rate'), get('contender_rate'), get('background_rate'),
                      get('contender_budget'), hold=get('window'))
-    return plan, ContenderRule(policy.margin, policy.z or 3.0) if plan.adaptive else None
 
 
 class ProbeRound(object):

@@ -1,0 +1,98 @@
+"""The ablation table of a simulated league (no rospy): each variant against a base, per
+seed, in every scenario (``python3 -m server_select.sim.ablation league.json``).
+
+A network cell is the paired difference of the mean in per cent of the oracle's mean,
+with its 95 % interval; a capacity cell the paired difference of goodput (per cent of
+capacity) and of failed tasks. ``variant - base``: a mechanism switched off
+(``fleet~spread``) that makes the mean higher is one that pays. ``--add NAME=FILE:VARIANT``
+brings a variant of another league's results (same seeds: e.g. the rule before a change).
+"""
+
+import argparse
+import sys
+
+from server_select.sim import report
+from server_select.sim.stats import paired
+from server_select.core.util.tables import markdown_table
+
+CAPACITY_KEYS = (('share', 'goodput %', 100.0), ('failed', 'failed', 1.0))
+
+
+def _cell(difference):
+    mean, low, high = difference
+    if mean is None:
+        return '-'
+    mark = '**' if low > 0 or high < 0 else ''      # beyond its interval
+    return '%s%+.2f [%+.2f, %+.2f]%s' % (mark, mean, low, high, mark)
+
+
+def network_cell(variants, seeds, name, base, key):
+    """``(mean, low, high)`` of ``name`` minus ``base`` in per cent of the oracle's mean."""
+    oracle = variants[report.ORACLE]
+
+    def relative(variant):
+        runs = variants[variant]
+        return [runs[s][key] / oracle[s]['mean'] if s in runs and s in oracle and
+                oracle[s]['mean'] and runs[s].get(key) is not None else None for s in seeds]
+    mean, low, high = paired(relative(name), relative(base))
+    return (None, None, None) if mean is None else (100 * mean, 100 * low, 100 * high)
+
+
+def capacity_cell(variants, seeds, name, base, key, scale):
+    def series(variant):
+        return [variants[variant][s][key] * scale if s in variants[variant] else None
+                for s in seeds]
+    return paired(series(name), series(base))
+
+
+def table(results, base='fleet'):
+    """The Markdown ablation table of ``results`` (a league's, :func:`report.load`)."""
+    seeds = results['seeds']
+    network = [(n, v) for n, v in results['network'].items() if base in v]
+    capacity = [(n, v) for n, v in results['capacity'].items() if base in v]
+    for name, variants in capacity:
+        report.capacity_tables(name, variants, seeds)          # (adds each run's share)
+    names = []
+    for _, variants in network + capacity:
+        names += [v for v in variants if v not in names and v not in
+                  (base, report.ORACLE, 'static')]
+    rows = []
+    for scenario, variants in network:
+        rows.append(['%s mean' % scenario] + [
+            _cell(network_cell(variants, seeds, name, base, 'mean'))
+            if name in variants and report.ORACLE in variants else '-' for name in names])
+    for scenario, variants in capacity:
+        rows += [['%s %s' % (scenario, title)] + [
+            _cell(capacity_cell(variants, seeds, name, base, key, scale))
+            if name in variants else '-' for name in names]
+            for key, title, scale in CAPACITY_KEYS]
+    header = ['%s minus %s (95 %% interval)' % ('variant', base)] + names
+    return markdown_table(header, rows)
+
+
+def add(results, spec):
+    """Bring ``NAME=FILE:VARIANT`` into ``results`` as variant NAME."""
+    name, _, source = spec.partition('=')
+    path, _, which = source.rpartition(':')
+    other = report.load(path)
+    for part in ('network', 'capacity'):
+        for scenario, variants in other.get(part, {}).items():
+            if which in variants and scenario in results[part]:
+                results[part][scenario][name] = variants[which]
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('results', help="a league's league.json")
+    parser.add_argument('--base', default='fleet')
+    parser.add_argument('--add', action='append', default=[], metavar='NAME=FILE:VARIANT')
+    args = parser.parse_args(argv)
+    results = report.load(args.results)
+    for spec in args.add:
+        add(results, spec)
+    print(table(results, args.base))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,41 @@
+"""Parameters with no effect where they are set are named (core/selection/effect.py)."""
+
+from server_select.core.selection.effect import ineffective, refusal
+from server_select.core.settings import default
+
+
+def found(profile, **explicit):
+    def get(name):
+        return explicit[name] if name in explicit else default(name, profile)
+    return [name for name, _ in ineffective(get, explicit.__contains__)]
+
+
+def test_ranking_knobs_set_on_a_robot_that_chooses_per_task_are_refused():
+    assert found('fleet', hysteresis=0.001, dwell=2.0, statistic='median') == \
+        ['dwell', 'hysteresis', 'statistic']
+    assert found('fleet', policy='prequal', contender_rate=0, margin_z=2.0) == ['margin_z']
+
+
+def test_the_same_knobs_under_a_ranking_policy_pass():
+    assert found('paper', policy='hysteresis', hysteresis=0.001, dwell=2.0, margin_z=2.0) == []
+    assert found('fleet', policy='hysteresis', fail_fast=2, passive=True,
+                 contender_rate=0) == []
+
+
+def test_adaptive_probing_under_a_ranking_policy_is_refused():
+    assert found('fleet', policy='hysteresis') == ['contender_rate']
+    assert found('paper', policy='hysteresis', contender_rate=10) == ['contender_rate']
+
+
+def test_probe_rate_under_contender_pacing_and_a_blind_hot_cold_are_refused():
+    assert found('fleet', probe_rate=5.0) == ['probe_rate']
+    assert found('fleet', probe_rate=5.0, contender_rate=0) == []
+    assert found('fleet', load_aware=False) == ['load_aware']
+    assert found('paper', policy='hot_cold') == ['load_aware']     # the paper's default
+    assert found('fleet') == []
+
+
+def test_the_refusal_names_each_parameter_and_why():
+    line = refusal([('dwell', 'a setting of policy hysteresis')])
+    assert '~dwell (a setting of policy hysteresis)' in line
+    assert refusal([]) is None

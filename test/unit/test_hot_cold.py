@@ -1,0 +1,284 @@
+"""The fleet profile's rule, hot_cold, on its defining behaviour (core/selection/hot_cold.py)."""
+
+import collections
+import copy
+import random
+
+import pytest
+
+from server_select.core.selection import balancers
+from server_select.core.load.work_queue import Load
+
+from support.clock import Clock
+
+
+def hot_cold(clock, seed=1, **kwargs):
+    return balancers.make('hot_cold', rng=random.Random(seed), clock=clock, **kwargs)
+
+
+def load(rif=0, work=0.1, utilization=0.0, error=None):
+    return Load(rif, 0, 1, 0.0, {'image': work}, utilization,
+                {'image': error} if error is not None else None)
+
+
+def feed(rule, clock, answers, rounds=5):
+    """``answers``: {server: (rtt, rif, utilization)}, given ``rounds`` times each."""
+    for _ in range(rounds):
+        for server, (rtt, rif, utilization) in sorted(answers.items()):
+            rule.probed(server, rtt, load(rif, utilization=utilization))
+        clock.now += 0.1
+
+
+def send(rule, servers, kind='image', answered=True):
+    """Ask where a task goes and send it there (the move is made at the send); ``answered``:
+    its answer is in at once (it is no longer in flight there)."""
+    server = rule.order(servers, kind)[0]
+    rule.started(server, kind)
+    if answered:
+        rule.ended(server)
+    return server
+
+
+def test_hot_cold_never_picks_a_hot_server_while_a_cold_one_exists():
+    clock = Clock()
+    rule = hot_cold(clock)
+    feed(rule, clock, {1: (0.001, 4, 0.0), 2: (0.05, 0, 0.0), 3: (0.08, 0, 0.0)})
+    # server 1 is nearest but hot (4 in flight against the others' 0): the fastest cold wins
+    assert rule.order([1, 2, 3], 'image')[0] == 2
+
+
+def test_hot_cold_every_answer_equally_hot_takes_the_fastest():
+    clock = Clock()
+    rule = hot_cold(clock)
+    feed(rule, clock, {1: (0.030, 1, 0.0), 2: (0.010, 1, 0.0)})
+    assert rule.order([1, 2], 'image')[0] == 2
+
+
+def test_hot_cold_keeps_its_server_within_the_noise_and_leaves_beyond_it():
+    clock = Clock()
+    rule = hot_cold(clock)
+    moves = []
+    rule.on_move = lambda server, why: moves.append((server, why))
+    rule.started(1, 'image')
+    for j in [0.0, 0.004, -0.004, 0.002, -0.002]:   # 1 ms apart under +-4 ms of noise
+        rule.probed(1, 0.011 + j, load())
+        rule.probed(2, 0.010 - j, load())
+        clock.now += 0.1
+    assert [send(rule, [1, 2]) for _ in range(20)] == [1] * 20
+    for _ in range(15):   # server 2 is now 20 ms nearer: far beyond the noise
+        rule.probed(1, 0.030, load())
+        rule.probed(2, 0.010, load())
+        clock.now += 0.1
+    assert send(rule, [1, 2]) == 2
+    assert moves[-1][0] == 2 and 'faster than 1' in moves[-1][1], moves
+
+
+def test_hot_cold_asking_changes_nothing_and_the_send_moves():
+    clock = Clock()
+    rule = hot_cold(clock)
+    rule.started(1, 'image')
+    feed(rule, clock, {1: (0.030, 0, 0.0), 2: (0.010, 0, 0.0)})
+    state = copy.deepcopy((dict(rule.answers), rule.out, rule.last, dict(rule.sends),
+                           rule.draw, rule.rng.getstate()))
+    decisions = [rule.choose([1, 2], 'image') for _ in range(50)]
+    orders = [rule.order([1, 2], 'image') for _ in range(50)]
+    assert state == (dict(rule.answers), rule.out, rule.last, dict(rule.sends), rule.draw,
+                     rule.rng.getstate())
+    assert set(d.server for d in decisions) == {2} and orders == [[2, 1]] * 50
+    assert 'faster than 1' in decisions[0].reason
+    assert set(decisions[0].estimates) == {1, 2}
+    rule.started(2, 'image', first=False)    # a re-send or hedge there is no move
+    assert rule.last == 1
+    rule.started(2, 'image')                 # a task's first attempt is
+    assert rule.last == 2
+
+
+def test_hot_cold_an_answer_older_than_the_window_no_longer_counts():
+    clock = Clock()
+    rule = hot_cold(clock, window=1.5)
+    feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.050, 0, 0.0)}, rounds=1)
+    clock.now += 1.4
+    assert rule.choose([1, 2], 'image').estimates[1] is not None
+    clock.now += 0.2
+    decision = rule.choose([1, 2], 'image')
+    assert decision.estimates == {} and 'no answer' in decision.reason
+
+
+def test_hot_cold_counts_the_error_of_the_servers_reported_work():
+    def verdict(error):
+        clock = Clock()
+        rule = hot_cold(clock)
+        rule.started(1, 'image')
+        for _ in range(16):     # two idle servers whose medians differ by 30 ms in 450
+            rule.probed(1, 0.001, load(work=0.45, error=error))
+            rule.probed(2, 0.001, load(work=0.42, error=error))
+            clock.now += 0.05
+        return rule.order([1, 2], 'image')[0]
+    # medians known to 15 ms each: 30 ms is within 3 errors of their difference: stays
+    assert verdict(0.015) == 1
+    assert verdict(0.0) == 2
+
+
+def test_hot_cold_ranks_by_expected_completion_with_the_work_in_flight():
+    clock = Clock()
+    rule = hot_cold(clock)
+    # server 1 is 20 ms nearer, but another robot's 0.1 s frame is always ahead there
+    feed(rule, clock, {1: (0.010, 1, 0.0), 2: (0.030, 0, 0.0)})
+    assert rule.order([1, 2], 'image')[0] == 2
+
+
+def test_hot_cold_leaves_out_the_robots_own_task_and_one_odd_answer():
+    clock = Clock()
+    rule = hot_cold(clock)
+    feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.020, 0, 0.0)})
+    assert send(rule, [1, 2], answered=False) == 1     # its own frame is at server 1 now
+    feed(rule, clock, {1: (0.010, 1, 0.0), 2: (0.020, 0, 0.0)}, rounds=3)
+    rule.probed(1, 0.010, load(2))        # one answer caught another robot's frame
+    assert rule.order([1, 2], 'image')[0] == 1
+
+
+def test_hot_cold_without_answers_picks_at_random_and_stays():
+    picks = set()
+    for seed in range(20):
+        rule = hot_cold(Clock(), seed)
+        first = send(rule, [1, 2, 3])
+        assert [send(rule, [1, 2, 3]) for _ in range(5)] == [first] * 5
+        picks.add(first)
+    assert picks == {1, 2, 3}
+
+
+def test_hot_cold_leaves_an_ejected_server_at_once():
+    clock = Clock()
+    rule = hot_cold(clock)
+    feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.020, 0, 0.0)})
+    assert send(rule, [1, 2]) == 1
+    decision = rule.choose([2], 'image')          # the caller left out server 1
+    assert decision.server == 2 and 'server 1 not usable' in decision.reason
+
+
+def test_hot_cold_switched_off_mechanisms_are_named():
+    with pytest.raises(ValueError, match='bogus'):
+        hot_cold(Clock(), off=('bogus',))
+
+
+def herd(seed, robots=20, steps=150, work=0.04):
+    """20 robots on server 1 (each a task a second of ``work`` s), server 2 comes up idle
+    at step 20; every 0.2 s each robot hears both servers' load as the robots' previous
+    choices made it, and about one in five sends a task. The count on server 1 each step,
+    and the moves."""
+    clock, rng = Clock(), random.Random(seed)
+    rules = [hot_cold(clock, seed * 100 + i) for i in range(robots)]
+    moves = collections.Counter()
+    for rule in rules:
+        rule.started(1, 'image')
+        rule.ended(1)
+        rule.on_move = lambda server, why: moves.update([server])
+    on, counts = [1] * robots, []
+    for step in range(steps):
+        servers = [1, 2] if step >= 20 else [1]
+        total = collections.Counter(on)
+        for i, rule in enumerate(rules):
+            for s in servers:
+                utilization = (total[s] - (on[i] == s)) * work
+                rule.probed(s, 0.010 + rng.gauss(0, 0.0005),
+                            load(int(rng.random() < utilization), work, utilization))
+        for i, rule in enumerate(rules):
+            if rng.random() < 0.2:
+                on[i] = send(rule, servers)
+        clock.now += 0.2
+        counts.append(on.count(1))
+    return counts, sum(moves.values())
+
+
+def test_hot_cold_robots_spread_to_a_new_server_without_a_herd():
+    for seed in range(3):
+        counts, moves = herd(seed)
+        # never all (or nearly all) at once on the new server, settled near half and half,
+        # with few moves (one per robot that should move, and some)
+        assert min(counts[20:]) >= 5, counts
+        assert all(6 <= n <= 14 for n in counts[-10:]), counts
+        assert moves <= 25, moves
+
+
+def test_hot_cold_share_of_robots_alike_that_move():
+    clock = Clock()
+    rule = hot_cold(clock)
+    works = {1: 1.25, 2: 0.833, 3: 0.625}
+    for _ in range(5):     # five others like it on server 3 (0.75 of its time each)
+        for s, u in ((1, 0.0), (2, 0.0), (3, 5 * 1.2 * 0.625)):
+            rule.probed(s, 0.001, Load(0, 0, 1, 0.0, {'image': works[s]}, u))
+        rule.started(3, 'image')
+        rule.ended(3)
+        clock.now += 1 / 1.2
+    rate = rule.rate('image', clock.now)
+    share = rule.share(3, 2, 'image', clock.now)
+    # 6-7 alike on server 3: one to three moving to server 2 make the two meet, not all
+    # of them; and each decides rate x window times before its answers show who moved
+    alike = 1 + 5 * 1.2 * 0.625 / (rate * 0.625)
+    assert 1 / alike / (rate * 1.5) <= share <= 3 / alike / (rate * 1.5), share
+
+
+def test_hot_cold_counts_its_own_rate_from_the_tasks_sent_not_from_being_asked():
+    clock = Clock()
+    rule = hot_cold(clock)
+    for s in (1, 2):
+        rule.probed(s, 0.001, Load(0, 0, 1, 0.0, {'sort': 0.002}, 0.0))
+    for _ in range(5):                                  # asked, nothing sent
+        rule.order([1, 2], 'sort')
+    assert rule.rate('sort', clock.now) == pytest.approx(1 / 5.0)   # the one it decides
+    for _ in range(3):
+        send(rule, [1, 2], 'sort')
+        clock.now += 0.5
+    assert rule.rate('sort', clock.now) == pytest.approx(4 / 5.0)
+    assert rule.rate('image', clock.now) == pytest.approx(1 / 5.0)
+
+
+def overload(seed, works=(1.25, 0.833, 0.625), robots=6, rate=1.2, steps=300, lag=5):
+    """6 robots streaming ``rate`` frames/s to 3 servers of unequal speed (``works``: s of
+    work a frame, one worker each) at twice what they can do together, all choosing at
+    once at the start; every 0.2 s each robot hears each server's load as the robots'
+    choices ``lag`` steps before made it, and sends a frame at its rate. Robots per server
+    each step, and the moves."""
+    clock, rng = Clock(), random.Random(seed)
+    rules = [hot_cold(clock, seed * 100 + i) for i in range(robots)]
+    moves = collections.Counter()
+    for rule in rules:
+        rule.on_move = lambda server, why: moves.update([server])
+    on, counts = [None] * robots, []
+    past = [list(on)] * (lag + 1)
+    for step in range(steps):
+        seen = past[-lag - 1]
+        total = collections.Counter(seen)
+        for i, rule in enumerate(rules):
+            for s, work in enumerate(works, start=1):
+                utilization = (total[s] - (seen[i] == s)) * rate * work
+                rif = min(utilization, 2.0)
+                rule.probed(s, 0.001 + rng.gauss(0, 0.0002),
+                            load(int(rif) + (rng.random() < rif - int(rif)), work,
+                                 utilization))
+        for i, rule in enumerate(rules):
+            if on[i] is None or rng.random() < rate * 0.2:
+                on[i] = send(rule, [1, 2, 3])
+        clock.now += 0.2
+        past.append(list(on))
+        counts.append(tuple(on.count(s) for s in (1, 2, 3)))
+    return counts, sum(moves.values()) - robots      # (each robot's first choice is no move)
+
+
+def goodput(counts, works=(1.25, 0.833, 0.625), rate=1.2):
+    """The share of the servers' capacity a split of robots ``counts`` keeps busy."""
+    return sum(min(n * rate, 1 / w) for n, w in zip(counts, works)) / sum(1 / w for w in works)
+
+
+def test_hot_cold_robots_that_read_alike_spread_over_unequal_servers_in_overload():
+    moved = []
+    for seed in range(5):
+        counts, moves = overload(seed)
+        # all start on the fastest server (its answers were idle); each moves with the
+        # share of its like that makes the servers meet: near the proportional split
+        # (1:2:3) within seconds, no herd from server to server
+        assert counts[0] == (0, 0, 6), counts[0]
+        kept = [goodput(c) for c in counts[50:]]
+        assert sum(kept) / len(kept) >= 0.95, (counts[::10], moves)
+        moved.append(moves)
+    assert sorted(moved)[2] <= 12, moved      # median: 2 moves a minute a robot at most
