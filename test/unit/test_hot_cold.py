@@ -101,7 +101,25 @@ def test_hot_cold_an_answer_older_than_the_window_no_longer_counts():
     assert rule.choose([1, 2], 'image').estimates[1] is not None
     clock.now += 0.2
     decision = rule.choose([1, 2], 'image')
-    assert decision.estimates == {} and 'no answer' in decision.reason
+    assert decision.estimates == {1: None, 2: None} and 'no answer' in decision.reason
+
+
+def test_hot_cold_counts_answers_that_saw_one_queue_as_one():
+    def verdict(work):
+        clock = Clock()
+        rule = hot_cold(clock)
+        rule.started(1, 'image')
+        rule.ended(1)
+        for i in range(15):   # another robot's task queued at server 1 for the first half
+            rule.probed(1, 0.001, load(int(i < 7), work))
+            rule.probed(2, 0.001, load(0, work))
+            clock.now += 0.1
+        return rule.order([1, 2], 'image')[0]
+    # 0.5 s of work a frame: the queue changed about once in the window, one observation
+    # that server 1 is busier, not seven: the robot stays; with 20 ms of work the queue
+    # was seen queued and empty many times over: server 1 is slower, the robot leaves
+    assert verdict(0.5) == 1
+    assert verdict(0.02) == 2
 
 
 def test_hot_cold_counts_the_error_of_the_servers_reported_work():
@@ -200,24 +218,6 @@ def test_hot_cold_robots_spread_to_a_new_server_without_a_herd():
         assert moves <= 25, moves
 
 
-def test_hot_cold_share_of_robots_alike_that_move():
-    clock = Clock()
-    rule = hot_cold(clock)
-    works = {1: 1.25, 2: 0.833, 3: 0.625}
-    for _ in range(5):     # five others like it on server 3 (0.75 of its time each)
-        for s, u in ((1, 0.0), (2, 0.0), (3, 5 * 1.2 * 0.625)):
-            rule.probed(s, 0.001, Load(0, 0, 1, 0.0, {'image': works[s]}, u))
-        rule.started(3, 'image')
-        rule.ended(3)
-        clock.now += 1 / 1.2
-    rate = rule.rate('image', clock.now)
-    share = rule.share(3, 2, 'image', clock.now)
-    # 6-7 alike on server 3: one to three moving to server 2 make the two meet, not all
-    # of them; and each decides rate x window times before its answers show who moved
-    alike = 1 + 5 * 1.2 * 0.625 / (rate * 0.625)
-    assert 1 / alike / (rate * 1.5) <= share <= 3 / alike / (rate * 1.5), share
-
-
 def test_hot_cold_counts_its_own_rate_from_the_tasks_sent_not_from_being_asked():
     clock = Clock()
     rule = hot_cold(clock)
@@ -231,54 +231,3 @@ def test_hot_cold_counts_its_own_rate_from_the_tasks_sent_not_from_being_asked()
         clock.now += 0.5
     assert rule.rate('sort', clock.now) == pytest.approx(4 / 5.0)
     assert rule.rate('image', clock.now) == pytest.approx(1 / 5.0)
-
-
-def overload(seed, works=(1.25, 0.833, 0.625), robots=6, rate=1.2, steps=300, lag=5):
-    """6 robots streaming ``rate`` frames/s to 3 servers of unequal speed (``works``: s of
-    work a frame, one worker each) at twice what they can do together, all choosing at
-    once at the start; every 0.2 s each robot hears each server's load as the robots'
-    choices ``lag`` steps before made it, and sends a frame at its rate. Robots per server
-    each step, and the moves."""
-    clock, rng = Clock(), random.Random(seed)
-    rules = [hot_cold(clock, seed * 100 + i) for i in range(robots)]
-    moves = collections.Counter()
-    for rule in rules:
-        rule.on_move = lambda server, why: moves.update([server])
-    on, counts = [None] * robots, []
-    past = [list(on)] * (lag + 1)
-    for step in range(steps):
-        seen = past[-lag - 1]
-        total = collections.Counter(seen)
-        for i, rule in enumerate(rules):
-            for s, work in enumerate(works, start=1):
-                utilization = (total[s] - (seen[i] == s)) * rate * work
-                rif = min(utilization, 2.0)
-                rule.probed(s, 0.001 + rng.gauss(0, 0.0002),
-                            load(int(rif) + (rng.random() < rif - int(rif)), work,
-                                 utilization))
-        for i, rule in enumerate(rules):
-            if on[i] is None or rng.random() < rate * 0.2:
-                on[i] = send(rule, [1, 2, 3])
-        clock.now += 0.2
-        past.append(list(on))
-        counts.append(tuple(on.count(s) for s in (1, 2, 3)))
-    return counts, sum(moves.values()) - robots      # (each robot's first choice is no move)
-
-
-def goodput(counts, works=(1.25, 0.833, 0.625), rate=1.2):
-    """The share of the servers' capacity a split of robots ``counts`` keeps busy."""
-    return sum(min(n * rate, 1 / w) for n, w in zip(counts, works)) / sum(1 / w for w in works)
-
-
-def test_hot_cold_robots_that_read_alike_spread_over_unequal_servers_in_overload():
-    moved = []
-    for seed in range(5):
-        counts, moves = overload(seed)
-        # all start on the fastest server (its answers were idle); each moves with the
-        # share of its like that makes the servers meet: near the proportional split
-        # (1:2:3) within seconds, no herd from server to server
-        assert counts[0] == (0, 0, 6), counts[0]
-        kept = [goodput(c) for c in counts[50:]]
-        assert sum(kept) / len(kept) >= 0.95, (counts[::10], moves)
-        moved.append(moves)
-    assert sorted(moved)[2] <= 12, moved      # median: 2 moves a minute a robot at most

@@ -204,9 +204,9 @@ PROFILES = {
               # one rule, chosen by the robot per task (docs/selection.md; the league:
               # docs/league.md)
               'policy': 'hot_cold',
-              'window': 1.5, 'probe_rate': 4.0,
+              'window': 2.0, 'probe_rate': 4.0,
               # adaptive probing: docs/design.md, "Adaptive probing"
-              'contender_rate': 10.0, 'window_samples': 3,
+              'contender_rate': 4.0, 'background_rate': 1.0,
               'hedge': True,
               # capacity: docs/design.md, "Capacity and overload"
               'load_aware': True, 'max_in_flight': 1, 'fresh_factor': 2.0},

@@ -119,10 +119,11 @@ class Prober(object):
         if rospy.is_shutdown():
             self._loop.stop()
             return
-        contenders = self.contenders.contenders() if self.contenders is not None else ()
+        contenders, task_rate = (self.contenders.contenders(), self.contenders.task_rate()) \
+            if self.contenders is not None else ((), None)
         with self._lock:
             now = time.monotonic()
-            self.plan.update(contenders, now)
+            self.plan.update(contenders, now, task_rate)
             servers = [s for s in self.plan.due(now) if not self._out(s, now)]
         if not servers:
             return

@@ -39,7 +39,9 @@ NETWORK_VARIANTS = ('oracle_fleet', 'fleet') + PEERS
 # the league's capacity cases: (the capacity benchmark's case, offered load, its options)
 CASES = {
     'overload_unequal': ('overload', 2.0, {'shares': '0.10,0.15,0.20'}),
+    'half_unequal': ('overload', 0.5, {'shares': '0.15,0.25,0.40', 'robots': 8}),
     'herd': ('herd', 0.5, {}),
+    'herd_20': ('herd', 0.5, {'robots': 20, 'shares': '0.25,0.25,0.25,0.25'}),
 }
 CAPACITY_VARIANTS = ('static', 'fleet') + PEERS
 SECONDS = 30.0         # measured s of a capacity run (the testbed league's)

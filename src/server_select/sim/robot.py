@@ -106,7 +106,7 @@ class SimRobot(object):
     def _probe_round(self):
         now = self._last_round = self.loop.now()
         if self.plan.adaptive:
-            self.plan.update(self.selection.contenders(), now)
+            self.plan.update(self.selection.contenders(), now, self.selection.task_rate())
         for server in [s for s in self.plan.due(now) if not self._still_out(s, now)]:
             if self._still_out(server, None):      # and late: a failed sample
                 self._sample(server, None, STILL_OUT, None)

@@ -101,6 +101,10 @@ class Balancer(object):
         names fewer)."""
         return set(servers)
 
+    def task_rate(self):
+        """The robot's tasks a second lately (None: this rule does not count them)."""
+        return None
+
     def view(self, servers):
         """The robot's ranking by this rule's own estimates (None: it keeps none; the
         robot's probe windows rank the servers)."""

@@ -132,6 +132,10 @@ class Selection(object):
             return self.balancer.contenders(self._servers())
         return set(self._servers())
 
+    def task_rate(self):
+        """The robot's tasks a second lately, as its rule counts them (None: not known)."""
+        return self.balancer.task_rate() if self.balancer is not None else None
+
     def viewed(self, pick):
         """The robot's view was sent picking ``pick``: from now on the samples of ``pick``,
         and those that beat it, are the ones that may change the view."""

@@ -1,9 +1,12 @@
-"""Parameters that would do nothing where they are set (no rospy).
+"""Parameters that would do nothing where they are set, or that the fleet's rule fixes
+(no rospy).
 
 A robot that chooses per task (``~policy`` hot_cold or a peer) ranks nothing by windows
 and follows no flags, so the knobs of the ranking policies have no effect on it; a knob
-set there would be a mistake that passes in silence. A node refuses one at start, with a
-line naming it and why (:func:`ineffective`).
+set there would be a mistake that passes in silence. ``hot_cold`` has few knobs
+(:data:`HOT_COLD_KNOBS`); what else decides where its tasks go has the values the
+league measured (docs/selection.md) and is not for setting. A node refuses either at
+start, with a line naming the parameter and why (:func:`ineffective`).
 """
 
 from server_select.core.selection.policy import PER_TASK
@@ -18,6 +21,20 @@ RANKING_ONLY = {
     'task_memory': 'a setting of ~passive',
     'fail_fast': 'a setting of the ranking policies',
     'manager_timeout': 'a robot that chooses per task follows no flags',
+    'window_samples': 'a rule per task counts the answers of the last ~window s',
+    'window_max': 'a setting of ~window_samples',
+}
+# what a fleet robot's hot_cold can be told: the parameters that change where its tasks go
+HOT_COLD_KNOBS = ('window', 'contender_rate', 'hedge', 'max_in_flight', 'fresh_factor',
+                  'retry_budget')
+# parameter -> what hot_cold fixes in its place
+FIXED_BY_HOT_COLD = {
+    'background_rate': 'servers far from the best are probed at the profile\'s rate',
+    'contender_budget': 'contenders\' probes follow the robot\'s task rate',
+    'eject_time': 'failing servers are ejected as the profile says',
+    'eject_max': 'failing servers are ejected as the profile says',
+    'retry_factor': 'attempt deadlines follow the servers\' round trips and load',
+    'retry_floor': 'attempt deadlines follow the servers\' round trips and load',
 }
 
 
@@ -28,6 +45,10 @@ def ineffective(get, is_set):
     if get('policy') in PER_TASK:
         found += [(name, '%s; ~policy %s chooses per task' % (why, get('policy')))
                   for name, why in sorted(RANKING_ONLY.items()) if is_set(name)]
+        if get('policy') == 'hot_cold':
+            found += [(name, 'fixed by hot_cold: %s (its knobs: %s)'
+                       % (why, ', '.join(HOT_COLD_KNOBS)))
+                      for name, why in sorted(FIXED_BY_HOT_COLD.items()) if is_set(name)]
         if is_set('probe_rate') and get('contender_rate'):
             found.append(('probe_rate', 'probes are paced by ~contender_rate %g'
                           % get('contender_rate')))

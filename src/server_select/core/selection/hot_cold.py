@@ -8,10 +8,9 @@ share). A server's estimate is their mean, its noise their standard error and th
 of the server's reported work. ``choose`` takes the robot's server while it is cold
 (others' work in flight not above the 2^-0.25 quantile of the servers') and within 3
 errors of the best cold server; else the best, at random among those within the noise of
-it. Robots on one server read the same answers and would leave it together, so a move
-that would not pay if every robot like this one made it is made with the probability
-that spreads them (docs/selection.md). ``choose`` changes nothing: the move is made when
-the task is sent (:meth:`started`).
+it (robots that read the same answers do not all move to one). ``choose`` changes
+nothing: the move is made when the task is sent (:meth:`started`). docs/selection.md
+has each mechanism's measured worth.
 """
 
 import collections
@@ -27,9 +26,9 @@ Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
 RATE_HORIZON = 5.0       # s of the robot's own tasks its rate is counted over
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('hot', 'keep', 'spread', 'tries', 'work_error')
+MECHANISMS = ('hot', 'keep', 'span', 'tries', 'work_error')
 
-Estimate = collections.namedtuple('Estimate', 'latency error heat work')
+Estimate = collections.namedtuple('Estimate', 'latency error heat work answers')
 
 
 class HotCold(Balancer):
@@ -65,9 +64,15 @@ class HotCold(Balancer):
         when sent: asking where one would go is not sending it."""
         return (sum(1 for t in self.sends[kind] if now - t <= RATE_HORIZON) + 1) / RATE_HORIZON
 
-    def estimate(self, server, kind, now, alike=1.0):
+    def task_rate(self):
+        with self._lock:
+            now = self._clock()
+            return sum(1 for times in self.sends.values() for t in times
+                       if now - t <= RATE_HORIZON) / RATE_HORIZON
+
+    def estimate(self, server, kind, now):
         """The :class:`Estimate` of a ``kind`` task at ``server`` from its answers of the
-        window (None: none), as if ``alike - 1`` more robots like this one sent there."""
+        window (None: none)."""
         answers = [(a, o) for a, o in self.answers[server] if now - a.at <= self.window]
         if not answers:
             return None
@@ -79,14 +84,17 @@ class HotCold(Balancer):
         mine = self.rate(kind, now) * work / workers
         values, heat = [], []
         for a, others in answers:
-            queued = others * work / workers + (alike - 1.0) * mine * work
-            tries = max(1.0, a.utilization + mine * alike) if 'tries' in self.on else 1.0
+            queued = others * work / workers
+            tries = max(1.0, a.utilization + mine) if 'tries' in self.on else 1.0
             values.append((a.rtt + queued + work) * tries)
-            heat.append(others * work / workers)
-        mean, error = mean_error(values)
+            heat.append(queued)
+        # answers closer together than a task's work saw much the same queue
+        span = answers[-1][0].at - answers[0][0].at
+        independent = 1.0 + span * workers / work if work > 0 and 'span' in self.on else None
+        mean, error = mean_error(values, independent)
         if 'work_error' in self.on:
             error = math.hypot(error, newest.service_error.get(kind, 0.0))
-        return Estimate(mean, error, statistics.median(heat), work / workers)
+        return Estimate(mean, error, statistics.median(heat), work / workers, len(values))
 
     def choose(self, servers, kind=None):
         """The :class:`Decision` for the next ``kind`` task among the usable ``servers``
@@ -105,12 +113,12 @@ class HotCold(Balancer):
     def _decide(self, servers, kind, now):
         here = self.last if self.last in servers else None
         gone = self.last is not None and here is None
-        estimates = dict((s, self.estimate(s, kind, now)) for s in servers)
+        estimates = self._pooled(dict((s, self.estimate(s, kind, now)) for s in servers))
         known = dict((s, e) for s, e in estimates.items() if e is not None)
         if not known:
             pick = here if here is not None else servers[int(self.draw * len(servers))]
             return Decision(pick, 'no answer yet: at random' if here is None else
-                            'no answer yet: kept', {})
+                            'no answer yet: kept', estimates)
         heats = sorted(e.heat for e in known.values())
         limit = percentile(heats, 100 * HOT_QUANTILE) if 'hot' in self.on else heats[-1]
         cold = [s for s, e in known.items()
@@ -125,10 +133,6 @@ class HotCold(Balancer):
                             if here != best else 'kept: the fastest', estimates)
         near = sorted(s for s in cold if within(s)) if 'keep' in self.on else [best]
         there = near[int(self.draw * len(near))]
-        if here in known and 'spread' in self.on and \
-                self.draw * len(near) % 1.0 >= self.share(here, there, kind, now):
-            return Decision(here, 'kept: robots like this one move to server %s' % there,
-                            estimates)
         why = ('server %s hot' % here if here in known and here not in cold else
                'server %s faster than %s by %.3g ms' % (
                    there, here, 1e3 * (known[here].latency - known[there].latency))
@@ -137,58 +141,49 @@ class HotCold(Balancer):
         return Decision(there, why + (' (within the noise of %d: at random)' % len(near)
                                       if len(near) > 1 else ''), estimates)
 
-    def main_kind(self, now):
-        """The kind of task the robot sent most of lately (None: none yet)."""
+    @staticmethod
+    def _pooled(estimates):
+        """``estimates`` with those of one answer (no spread of their own) given the
+        spread of one answer at the others (their median)."""
+        spreads = sorted(e.error * math.sqrt(e.answers) for e in estimates.values()
+                         if e is not None and e.answers > 1)
+        if not spreads:
+            return estimates
+        spread = statistics.median(spreads)
+        return dict((s, e._replace(error=max(e.error, spread)) if e and e.answers == 1 else e)
+                    for s, e in estimates.items())
+
+    def _estimates(self, servers, now):
+        """``{server: Estimate or None}`` for the kind the robot sent most of lately."""
         counts = dict((k, sum(1 for t in times if now - t <= RATE_HORIZON))
                       for k, times in self.sends.items())
-        return max(sorted(counts, key=str), key=counts.get) if any(counts.values()) else None
+        kind = max(sorted(counts, key=str), key=counts.get) if any(counts.values()) else None
+        return self._pooled(dict((s, self.estimate(s, kind, now)) for s in servers))
 
     def contenders(self, servers):
         """The servers worth probing often, by the estimates the choice uses: where tasks
-        go, those within the noise of the best, and those never heard from."""
+        go, those within the noise of the best, and those with no answer in the window
+        (never heard from, or back from an outage)."""
         with self._lock:
-            now = self._clock()
-            estimates = self._decide(list(servers), self.main_kind(now), now).estimates
+            estimates = self._estimates(servers, self._clock())
         known = dict((s, e) for s, e in estimates.items() if e is not None)
-        chosen = set(s for s in servers if s == self.last or s not in self.answers)
+        chosen = set(s for s in servers if s == self.last or s not in known)
         if known:
-            best = known[min(known, key=lambda s: known[s].latency)]
+            best = min(known.values(), key=lambda e: e.latency)
             chosen.update(s for s, e in known.items() if e.latency - best.latency <=
                           Z * math.hypot(e.error, best.error))
         return chosen
 
     def view(self, servers):
         """The robot's servers ranked by the estimates the choice uses (a Ranking, for its
-        manager and its views): known ones by latency, the others left out."""
+        manager and its views): those with answers in the window by latency."""
         with self._lock:
             now = self._clock()
-            estimates = self._decide(list(servers), self.main_kind(now), now).estimates
+            estimates = self._estimates(servers, now)
             counts = dict((s, sum(1 for a, _ in self.answers[s] if now - a.at <= self.window))
                           for s in servers)
-        known = sorted((s for s in servers if estimates.get(s)),
-                       key=lambda s: (estimates[s].latency, s))
+        known = sorted((s for s in servers if estimates[s]), key=lambda s: estimates[s].latency)
         return Ranking(self.last if self.last in known else known[0] if known else NO_SERVER,
                        known, [estimates[s].latency for s in known],
                        [counts[s] for s in known], sorted(set(servers) - set(known)),
                        [estimates[s].error for s in known], [estimates[s].heat for s in known])
-
-    def share(self, here, there, kind, now):
-        """The probability that this robot, one of those like it at ``here``, moves to
-        ``there`` now: 1 where the move pays even if they all make it; else the share of
-        them whose moving makes the two estimates meet, spread over a window's tasks."""
-        at_here = self.estimate(here, kind, now)
-        mine = self.rate(kind, now) * at_here.work
-        if mine <= 0.0:
-            return 1.0
-        others = statistics.fmean(a.utilization for a, _ in self.answers[here]
-                                  if now - a.at <= self.window)
-        alike = 1.0 + others / mine
-        if self.estimate(there, kind, now, alike).latency <= \
-                self.estimate(here, kind, now, 2.0 - alike).latency:
-            return 1.0
-        # each one more that moves closes the gap by what it adds there and takes here
-        at_there = self.estimate(there, kind, now).latency
-        step = (self.estimate(there, kind, now, 2.0).latency - at_there +
-                at_here.latency - self.estimate(here, kind, now, 0.0).latency)
-        movers = 1.0 + (at_here.latency - at_there) / step
-        return min(1.0, movers / alike) / max(1.0, self.rate(kind, now) * self.window)

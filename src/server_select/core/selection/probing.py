@@ -24,6 +24,7 @@ import threading
 
 
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0     # phases i x GOLDEN mod 1 spread evenly
+PROBES_PER_TASK = 2.0    # a contender's probes per task of the robot, at most
 
 
 class ProbePlan(object):
@@ -31,7 +32,7 @@ class ProbePlan(object):
     timer drives it. Times are the caller's clock (s)."""
 
     def __init__(self, rate=1.0, contender_rate=0.0, background_rate=0.5, budget=20.0,
-                 hold=1.0):
+                 hold=1.0, per_task=PROBES_PER_TASK):
         for name, value in (('rate', rate), ('background_rate', background_rate),
                             ('budget', budget)):
             if not value > 0:
@@ -42,6 +43,8 @@ class ProbePlan(object):
         self.adaptive = bool(contender_rate)
         self.contender_rate, self.background_rate = float(contender_rate), float(background_rate)
         self.budget, self.hold = float(budget), float(hold)
+        self.per_task = float(per_task)
+        self._task_rate = None   # the robot's tasks a second (None: not known)
         self.tick = 1.0 / (contender_rate if self.adaptive else rate)
         self._next = {}          # server -> when it is due
         self._until = {}         # contender -> until when it stays one
@@ -78,6 +81,8 @@ class ProbePlan(object):
             return self.tick
         if server in self._until:
             share = min(self.contender_rate, self.budget / max(1, len(self._until)))
+            if self.per_task and self._task_rate is not None:
+                share = min(share, self.per_task * self._task_rate)
             return 1.0 / max(self.background_rate, share)
         return 1.0 / self.background_rate
 
@@ -85,13 +90,15 @@ class ProbePlan(object):
         """Probes per second now, all servers together."""
         return sum(1.0 / self.interval(s) for s in self._next)
 
-    def update(self, contenders, now):
-        """The contenders now (``ContenderRule.select``): they become (or stay) contenders
-        for ``hold`` s; those whose hold has ended are demoted to the background, their
-        next probe within one background period, at a phase of their own (servers
-        demoted together are not probed together)."""
+    def update(self, contenders, now, task_rate=None):
+        """The contenders now (the rule's): they become (or stay) contenders for ``hold``
+        s; those whose hold has ended are demoted to the background, their next probe
+        within one background period, at a phase of their own (servers demoted together
+        are not probed together). ``task_rate``: the robot's tasks a second, which the
+        contenders' probes follow (``per_task`` each; None: not known)."""
         if not self.adaptive:
             return
+        self._task_rate = task_rate
         for server in contenders:
             if server in self._next:
                 self.promote(server, now, at_once=False)
