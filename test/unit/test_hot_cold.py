@@ -231,3 +231,27 @@ def test_hot_cold_counts_its_own_rate_from_the_tasks_sent_not_from_being_asked()
         clock.now += 0.5
     assert rule.rate('sort', clock.now) == pytest.approx(4 / 5.0)
     assert rule.rate('image', clock.now) == pytest.approx(1 / 5.0)
+
+
+def test_hot_cold_ranks_and_plans_probes_by_the_estimates_it_chooses_by():
+    clock = Clock()
+    rule = hot_cold(clock)
+    feed(rule, clock, {1: (0.030, 0, 0.0), 2: (0.010, 0, 0.0), 3: (0.010, 0, 0.0)})
+    first = send(rule, [1, 2, 3])           # (the kind it sends is what the view counts)
+    assert first in (2, 3)
+    rule.probed(4, 0.001, load())
+    clock.now += 1.0
+    rule.probed(1, 0.030, load())           # server 4's answer is 1.5 s old, 5 none: gone
+    rule.probed(2, 0.010, load())
+    rule.probed(3, 0.010, load())
+    clock.now += 0.6
+    decision = rule.choose([1, 2, 3, 4, 5], 'image')
+    view = rule.view([1, 2, 3, 4, 5])
+    assert view.ranking == [2, 3, 1] and view.excluded == [4, 5]
+    assert view.means == [decision.estimates[s].latency for s in view.ranking]
+    assert view.selected == first
+    # contenders: near the best by those estimates, and those not heard from in the window
+    assert rule.contenders([1, 2, 3, 4, 5]) == {2, 3, 4, 5}
+    rule.started(1, 'image')                # where tasks go is one too
+    assert rule.contenders([1, 2, 3, 4, 5]) == {1, 2, 3, 4, 5}
+    assert rule.view([1, 2, 3, 4, 5]).selected == 1

@@ -6,6 +6,7 @@ with its 95 % interval; a capacity cell the paired difference of goodput (per ce
 capacity) and of failed tasks. ``variant - base``: a mechanism switched off
 (``fleet~spread``) that makes the mean higher is one that pays. ``--add NAME=FILE:VARIANT``
 brings a variant of another league's results (same seeds: e.g. the rule before a change).
+``--fields`` sums up many network scenarios (``gen:1-200``) in one row per variant.
 """
 
 import argparse
@@ -70,6 +71,31 @@ def table(results, base='fleet'):
     return markdown_table(header, rows)
 
 
+def fields_table(results, base='fleet', margin=1.0):
+    """Over many network scenarios (generated fields): each variant against ``base``, the
+    paired difference of the mean over every (scenario, seed) in per cent of the oracle's
+    mean, and the share of scenarios where ``base``'s mean is no worse than the
+    variant's + ``margin`` per cent of the oracle's."""
+    seeds, rows = results['seeds'], []
+    network = [v for v in results['network'].values() if base in v and report.ORACLE in v]
+    names = sorted(set(n for v in network for n in v) - {base, report.ORACLE})
+    for name in names:
+        pairs = [network_cell(dict((k, v[k]) for k in (name, base, report.ORACLE)),
+                              [s], name, base, 'mean')[0]
+                 for v in network if name in v for s in seeds]
+        pairs = [p for p in pairs if p is not None]
+        per_field = [network_cell(v, seeds, name, base, 'mean')[0] for v in network
+                     if name in v]
+        per_field = [p for p in per_field if p is not None]
+        mean, low, high = paired(pairs, [0.0] * len(pairs))
+        rows.append([name, str(len(per_field)), _cell((mean, low, high)),
+                     '%.0f %%' % (100.0 * sum(d >= -margin for d in per_field) /
+                                  max(1, len(per_field)))])
+    return markdown_table(['variant', 'fields', 'variant minus %s, %% of the oracle (95 %% '
+                           'interval)' % base, '%s no worse (within %g %%)' % (base, margin)],
+                          rows)
+
+
 def add(results, spec):
     """Bring ``NAME=FILE:VARIANT`` into ``results`` as variant NAME."""
     name, _, source = spec.partition('=')
@@ -86,11 +112,13 @@ def main(argv=None):
     parser.add_argument('results', help="a league's league.json")
     parser.add_argument('--base', default='fleet')
     parser.add_argument('--add', action='append', default=[], metavar='NAME=FILE:VARIANT')
+    parser.add_argument('--fields', action='store_true', help='one summary over all '
+                        'network scenarios (generated fields) instead of a row each')
     args = parser.parse_args(argv)
     results = report.load(args.results)
     for spec in args.add:
         add(results, spec)
-    print(table(results, args.base))
+    print(fields_table(results, args.base) if args.fields else table(results, args.base))
     return 0
 
 

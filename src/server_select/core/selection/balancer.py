@@ -29,6 +29,7 @@ class Balancer(object):
 
     name = None
     copies = 1
+    own_view = False     # whether it ranks the servers by estimates of its own (view())
 
     def __init__(self, rng=None, clock=time.monotonic):
         self.rng = rng or random.Random()
@@ -38,7 +39,7 @@ class Balancer(object):
         self.probes = {}                     # server -> its newest ProbeAnswer
         self.last = None                     # where the last task went
         self.reasons = {}                    # server -> why the last ask named it
-        self.on_move = None                  # on_move(server, why): tasks go elsewhere now
+        self.on_move = None                  # on_move(server, why): the rule moved, why
 
     def probed(self, server, rtt, load=None):
         """A good probe answer: round trip ``rtt`` and ``load`` (a Load, or None)."""
@@ -63,7 +64,7 @@ class Balancer(object):
             self.out[server] += 1
             self._started(server, kind, self._clock())
             if first and server != self.last:
-                moved = self.reasons.get(server, 'sent there')
+                moved = self.reasons.get(server)     # (a peer's moves go unexplained)
                 self.last = server
         if moved is not None and self.on_move is not None:
             self.on_move(server, moved)
@@ -106,9 +107,8 @@ class Balancer(object):
         return None
 
     def view(self, servers):
-        """The robot's ranking by this rule's own estimates (None: it keeps none; the
-        robot's probe windows rank the servers)."""
-        return None
+        """The robot's ranking by this rule's own estimates (rules with ``own_view``)."""
+        raise NotImplementedError
 
     def _two(self, servers):
         """Two distinct servers drawn at random (one when there is one)."""

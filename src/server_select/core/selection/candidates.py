@@ -18,7 +18,7 @@ from server_select.core.selection.rank import NO_SERVER, rank_servers
 from server_select.core.selection.fleet_rankings import FleetRankings
 from server_select.core.config.names import LOCAL
 from server_select.core.config.params import MODES  # noqa: F401 (re-exported)
-from server_select.core.selection.window import LatencyWindow
+from server_select.core.selection.window import RTT_RANGE, LatencyWindow, valid_rtt
 
 
 class Selection(object):
@@ -100,9 +100,14 @@ class Selection(object):
         """One of the robot's own samples: a probe, or (``probe`` False) an answered task
         with ``~passive`` (ValueError for an impossible round trip); ``wait``: the part of a
         load-aware probe's ``rtt`` that is the server's wait. True when the robot's own
-        ranking may have changed because of it (:meth:`FleetRankings.add`)."""
+        ranking may have changed (:meth:`FleetRankings.add`; a rule's own view: always)."""
         now = self._clock()
-        changed = self.rankings.add(self.robot_id, server, now, ok, rtt, probe, wait)
+        if self.balancer is not None and self.balancer.own_view:
+            if ok and not valid_rtt(rtt):
+                raise ValueError('round trip %r is not %s' % (rtt, RTT_RANGE))
+            changed = True
+        else:
+            changed = self.rankings.add(self.robot_id, server, now, ok, rtt, probe, wait)
         if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
         if changed and self.on_change is not None:
@@ -114,10 +119,8 @@ class Selection(object):
         a rule that keeps them, else as the manager ranks a robot from its samples (what
         ``~sample_stream view`` sends it); choosing per task, ``selected`` is where its
         tasks go now (when ranked)."""
-        if self.balancer is not None:
-            ranking = self.balancer.view(self._usable())
-            if ranking is not None:
-                return ranking
+        if self.balancer is not None and self.balancer.own_view:
+            return self.balancer.view(self._usable())
         ranking = self.rankings.rank(self.robot_id, self._clock())
         last = self.balancer.last if self.balancer is not None else None
         if last is not None and last in ranking.ranking:
@@ -125,9 +128,8 @@ class Selection(object):
         return ranking
 
     def contenders(self):
-        """The servers the robot's rule calls contenders (worth probing often): by its
-        own estimates, around where the next task goes; every server for a rule that
-        keeps none, or for a robot that follows its manager."""
+        """The servers worth probing often, by the robot's rule (every server for a rule
+        that keeps no estimates, or for a robot that follows its manager)."""
         if self.balancer is not None:
             return self.balancer.contenders(self._servers())
         return set(self._servers())

@@ -34,6 +34,7 @@ Estimate = collections.namedtuple('Estimate', 'latency error heat work answers')
 class HotCold(Balancer):
     """The ``hot_cold`` rule (the module docstring says what it does)."""
     name = 'hot_cold'
+    own_view = True
 
     def __init__(self, window=1.5, off=(), **kwargs):
         Balancer.__init__(self, **kwargs)
