@@ -27,11 +27,11 @@ def test_adaptive_probing_under_a_ranking_policy_is_refused():
     assert found('paper', policy='hysteresis', contender_rate=10) == ['contender_rate']
 
 
-def test_probe_rate_under_contender_pacing_and_a_blind_hot_cold_are_refused():
+def test_probe_rate_under_contender_pacing_and_a_blind_least_latency_are_refused():
     assert found('fleet', probe_rate=5.0) == ['probe_rate']
     assert found('fleet', probe_rate=5.0, contender_rate=0) == []
     assert found('fleet', load_aware=False) == ['load_aware']
-    assert found('paper', policy='hot_cold') == ['load_aware']     # the paper's default
+    assert found('paper', policy='least_latency') == ['load_aware']     # the paper's default
     assert found('fleet') == []
 
 

@@ -6,7 +6,7 @@ import random
 
 import pytest
 
-from server_select.core.selection.hot_cold import HotCold
+from server_select.core.selection.least_latency import LeastLatency
 from server_select.core.selection.probing import ProbePlan, from_params
 from server_select.core.selection.fleet_rankings import FleetRankings
 from server_select.core.selection.window import EMPTY, LatencyWindow, PairStats
@@ -144,7 +144,7 @@ def test_a_far_server_that_comes_near_is_noticed_within_two_background_periods()
     contender, and is then probed at the contender rate."""
     rng, clock = random.Random(3), Clock(0.0)
     truth = {1: 5.0 * MS, 2: 9.0 * MS, 3: 40.0 * MS, 4: 60.0 * MS}
-    rule = HotCold(window=1.5, clock=clock, rng=random.Random(1))
+    rule = LeastLatency(window=1.5, clock=clock, rng=random.Random(1))
     plan = ProbePlan(contender_rate=4.0, background_rate=1.0, budget=20.0, hold=1.5)
     for server in truth:
         plan.add(server, 0.0)

@@ -141,7 +141,7 @@ def test_profiles_only_name_known_parameters():
         assert set(profile) <= set(PARAMS)
     assert default('routing') == 'broadcast' and default('routing', 'fleet') == 'direct'
     assert default('sample_stream', 'fleet') == 'view' and default('window') == 5.0
-    assert default('policy') == 'mean' and default('policy', 'fleet') == 'hot_cold'
+    assert default('policy') == 'mean' and default('policy', 'fleet') == 'least_latency'
 
 
 def test_a_group_manager_ranks_only_its_members():

@@ -188,7 +188,7 @@ def test_asking_whether_a_per_task_rule_is_ready_or_where_it_heads_decides_nothi
     loaded server to a near one between two tasks) nor count as a send."""
     clock = Clock()
     health = ServerHealth([1, 2], clock=clock, probation_probes=1)
-    s = Selection(1, [1, 2], 'select', health=health, clock=clock, policy=Policy('hot_cold'))
+    s = Selection(1, [1, 2], 'select', health=health, clock=clock, policy=Policy('least_latency'))
     rule = s.balancer
     assert s.ready(set()) and s.heading() == NO_SERVER
     assert rule.last is None and not rule.sends

@@ -115,7 +115,7 @@ def test_a_variant_is_compared_with_the_oracle_of_its_routing_and_its_hosts():
 
 def test_every_oracle_variant_follows_the_oracles_flags():
     """An oracle variant's robots must take the oracle's flags: a robot whose rule
-    chooses per task (the fleet profile's hot_cold) treats flags as a record only, and
+    chooses per task (the fleet profile's least_latency) treats flags as a record only, and
     would be one more copy of the fleet's own rule, not the bound."""
     from server_select.core.selection.policy import Policy
     from server_select.core.settings import default

@@ -9,7 +9,7 @@ checks the direction and that there is no cycle):
 - ``config``: parameter parsers, graph names and the ids that stand for no server.
 - ``trust``: fleet key files, seals (who may sign what) and the publisher check.
 - ``load``: a server's work queue and load reports; what robots announce they send.
-- ``selection``: latency windows, rankings, the selection rules (``hot_cold`` and the
+- ``selection``: latency windows, rankings, the selection rules (``least_latency`` and the
   peers), probing plans, passive samples, a robot's health table.
 - ``flow``: a task's life at the robot: send, re-send, hedge, check, report once.
 - ``fleet``: membership by leases, server groups.

@@ -63,9 +63,10 @@ PARAMS = {
     'fixed_server': Param(None, parse_id, 'target in fixed mode (default: first server)'),
     'probe_rate': Param(1.0, parse_positive, 'probes per second to each server (Hz)'),
     'probe_timeout': Param(0.5, parse_positive, 'a probe without answer after this fails (s)'),
-    'contender_rate': Param(0.0, parse_non_negative, 'adaptive probing: probes per second to '
-                            'each contender (the selected server and those near it; 0: every '
-                            'server at ~probe_rate)'),
+    'contender_rate': Param(0.0, parse_non_negative, 'adaptive probing (a rule per task): '
+                            'probes per second to each contender (where tasks go and the '
+                            'servers near the best), at most 2 per task sent; 0: every '
+                            'server at ~probe_rate'),
     'background_rate': Param(0.5, parse_positive, 'adaptive probing: probes per second to '
                              'each server that is not a contender (Hz)'),
     'contender_budget': Param(20.0, parse_positive, 'adaptive probing: probes per second to '
@@ -125,7 +126,8 @@ PARAMS = {
                          'CompressedImage topic (newest frame wins)'),
     'image_transport': Param('raw', one_of('raw', 'compressed'), 'how frames travel'),
     'jpeg_quality': Param(80, parse_count, 'JPEG quality of compressed frames (0-100)'),
-    'window': Param(5.0, parse_positive, 'latency sample window (s)'),
+    'window': Param(5.0, parse_positive, 'latency sample window (s); least_latency: an answer '
+                    'older than this no longer counts'),
     'window_samples': Param(0, parse_count, "a pair's window also keeps its newest this many "
                             'samples, up to ~window_max old (for servers probed rarely)'),
     'window_max': Param(8.0, parse_positive, 'the oldest a sample kept by ~window_samples may '
@@ -135,8 +137,8 @@ PARAMS = {
     'hysteresis': Param(0.0, parse_non_negative, 'keep the current server while within this '
                         'of the best (s); 0: the paper'),
     'policy': Param('mean', one_of(*POLICIES), 'which ranked server a robot gets: mean (the '
-                    'paper) or hysteresis (docs/design.md, "Policies"); or a '
-                    'rule the robot applies per task: hot_cold (docs/selection.md), or a peer: '
+                    'paper) or hysteresis (docs/design.md, "Policies"); or a rule the '
+                    'robot applies per task: least_latency (docs/selection.md), or a peer: '
                     'p2c_peak_ewma, least_request, prequal, round_robin, replicate '
                     '(docs/league.md)'),
     'statistic': Param('mean', one_of(*STATISTICS), 'what the window ranks by (policies '
@@ -203,7 +205,7 @@ PROFILES = {
               'robots': [], 'servers': [],
               # one rule, chosen by the robot per task (docs/selection.md; the league:
               # docs/league.md)
-              'policy': 'hot_cold',
+              'policy': 'least_latency',
               'window': 2.0, 'probe_rate': 4.0,
               # adaptive probing: docs/design.md, "Adaptive probing"
               'contender_rate': 4.0, 'background_rate': 1.0,

@@ -34,12 +34,12 @@ from server_select.testbed.suite_scenario import (expand, launch_args, scenario_
 Variant = collections.namedtuple('Variant', 'mode profile params host')
 Variant.__new__.__defaults__ = ({},)     # host: what its robots' hosts are like (scenario keys)
 PI3_BUSY = {'like': 'pi3', 'busy': 0.5}  # a Raspberry Pi 3 robot half busy with its own work
-# the per-task rules: the fleet's own (hot_cold) and the league's peers
-RULES = ('hot_cold',) + PEERS
+# the per-task rules: the fleet's own (least_latency) and the league's peers
+RULES = ('least_latency',) + PEERS
 # the fleet profile's robots following the oracle's flags: a rule that chooses per task
-# (the profile's hot_cold) keeps flags for the record only
+# (the profile's least_latency) keeps flags for the record only
 FOLLOW_FLAGS = {'policy': 'mean'}
-# the fleet profile's selection before it chose per task with hot_cold (for the league)
+# the fleet profile's selection before it chose per task with least_latency (for the league)
 # (less its draws for moves, ~spread, which went with it)
 PREVIOUS_FLEET = {'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
                   'passive': True, 'task_memory': 5.0, 'contender_rate': 0}
@@ -50,7 +50,7 @@ def peer_params(name):
     with that rule choosing per task, every server probed alike (Prequal's pool wants
     answers from all; adaptive probing follows the fleet's own ranking), replication
     without hedges (it already sends each task twice)."""
-    if name == 'hot_cold':     # the fleet's own rule: the fleet's adaptive probing
+    if name == 'least_latency':     # the fleet's own rule: the fleet's adaptive probing
         return {'policy': name}
     params = {'policy': name, 'contender_rate': 0}
     if name == 'replicate':
@@ -78,7 +78,7 @@ VARIANTS = collections.OrderedDict([
                                                'contender_budget': 40.0})),
     # Prequal's 3 probes per query at the suite's 2 tasks a second: contenders share 6 Hz
     ('fleet_6hz', Variant('select', 'fleet', {'contender_budget': 6.0})),
-    # the fleet profile's rule before hot_cold: the manager's hysteresis over the robots'
+    # the fleet profile's rule before least_latency: the manager's hysteresis over the robots'
     # windows, answered tasks as samples
     ('fleet_hysteresis', Variant('select', 'fleet', PREVIOUS_FLEET)),
     # every probe sample to the manager, which ranks (the robots' own rankings: fleet)

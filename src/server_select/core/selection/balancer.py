@@ -1,7 +1,7 @@
 """What every per-task rule keeps (no rospy): :class:`Balancer`, the state a robot's rule
 is told (its attempts out per server, each server's newest probe answer, a random source).
 The rules build on it: the league's peers (:mod:`balancers`) and the fleet profile's
-``hot_cold`` (:mod:`hot_cold`).
+``least_latency`` (:mod:`least_latency`).
 """
 
 import collections

@@ -42,7 +42,7 @@ import collections
 import math
 
 from server_select.core.selection.balancer import Balancer
-from server_select.core.selection.hot_cold import HotCold
+from server_select.core.selection.least_latency import LeastLatency
 from server_select.core.util.stats import percentile
 
 PEERS = ('p2c_peak_ewma', 'least_request', 'prequal', 'round_robin', 'replicate')
@@ -207,9 +207,9 @@ _CLASSES = dict((c.name, c) for c in (P2CPeakEwma, LeastRequest, Prequal, RoundR
 
 
 def make(name, **kwargs):
-    """The balancer called ``name`` (one of :data:`PEERS`, or the fleet's ``hot_cold``)."""
-    if name == 'hot_cold':
-        return HotCold(**kwargs)
+    """The balancer called ``name`` (one of :data:`PEERS`, or the fleet's ``least_latency``)."""
+    if name == 'least_latency':
+        return LeastLatency(**kwargs)
     if name not in _CLASSES:
         raise ValueError('unknown balancer %r (expected one of %s)' % (name, ', '.join(PEERS)))
     return _CLASSES[name](**kwargs)

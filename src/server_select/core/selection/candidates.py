@@ -48,7 +48,7 @@ class Selection(object):
         self._chooser = Chooser(policy)
         # a rule asked per task, drawing from ``rng`` (None: the ranking decides);
         # ``rule_args``: its own (the league's ablations)
-        rule_args = dict(rule_args or {}, **({'window': window} if policy.kind == 'hot_cold'
+        rule_args = dict(rule_args or {}, **({'window': window} if policy.kind == 'least_latency'
                                              else {}))
         self.balancer = balancers.make(policy.kind, clock=clock, rng=rng, **rule_args) \
             if policy.per_task else None

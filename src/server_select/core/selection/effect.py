@@ -1,9 +1,9 @@
 """Parameters that would do nothing where they are set, or that the fleet's rule fixes
 (no rospy).
 
-A robot that chooses per task (``~policy`` hot_cold or a peer) ranks nothing by windows
+A robot that chooses per task (``~policy`` least_latency or a peer) ranks nothing by windows
 and follows no flags, so the knobs of the ranking policies have no effect on it; a knob
-set there would be a mistake that passes in silence. ``hot_cold`` has few knobs
+set there would be a mistake that passes in silence. ``least_latency`` has few knobs
 (:data:`HOT_COLD_KNOBS`); what else decides where its tasks go has the values the
 league measured (docs/selection.md) and is not for setting. A node refuses either at
 start, with a line naming the parameter and why (:func:`ineffective`).
@@ -24,10 +24,10 @@ RANKING_ONLY = {
     'window_samples': 'a rule per task counts the answers of the last ~window s',
     'window_max': 'a setting of ~window_samples',
 }
-# what a fleet robot's hot_cold can be told: the parameters that change where its tasks go
+# what a fleet robot's least_latency can be told: the parameters that change where its tasks go
 HOT_COLD_KNOBS = ('window', 'contender_rate', 'hedge', 'max_in_flight', 'fresh_factor',
                   'retry_budget')
-# parameter -> what hot_cold fixes in its place
+# parameter -> what least_latency fixes in its place
 FIXED_BY_HOT_COLD = {
     'background_rate': 'servers far from the best are probed at the profile\'s rate',
     'contender_budget': 'contenders\' probes follow the robot\'s task rate',
@@ -45,8 +45,8 @@ def ineffective(get, is_set):
     if get('policy') in PER_TASK:
         found += [(name, '%s; ~policy %s chooses per task' % (why, get('policy')))
                   for name, why in sorted(RANKING_ONLY.items()) if is_set(name)]
-        if get('policy') == 'hot_cold':
-            found += [(name, 'fixed by hot_cold: %s (its knobs: %s)'
+        if get('policy') == 'least_latency':
+            found += [(name, 'fixed by least_latency: %s (its knobs: %s)'
                        % (why, ', '.join(HOT_COLD_KNOBS)))
                       for name, why in sorted(FIXED_BY_HOT_COLD.items()) if is_set(name)]
         if is_set('probe_rate') and get('contender_rate'):
@@ -56,8 +56,8 @@ def ineffective(get, is_set):
         found.append(('contender_rate', 'adaptive probing follows the estimates of a rule '
                       'that chooses per task; ~policy %s ranks by windows (set it to 0)'
                       % get('policy')))
-    if get('policy') == 'hot_cold' and not get('load_aware'):
-        found.append(('load_aware', 'hot_cold estimates from the servers\' load: false '
+    if get('policy') == 'least_latency' and not get('load_aware'):
+        found.append(('load_aware', 'least_latency estimates from the servers\' load: false '
                       'would leave it blind'))
     return found
 

@@ -16,10 +16,10 @@ window's statistic) and the current choice, and returns the server to select:
 A server that leaves the ranking (no good sample in the window) is always left at once.
 
 Rules a robot applies per task itself are policies too (:data:`PER_TASK`): the fleet
-profile's ``hot_cold`` (:mod:`server_select.core.selection.hot_cold`) and the league's peers
-(:data:`~server_select.core.selection.balancers.PEERS`: ``p2c_peak_ewma``, ``least_request``,
-``prequal``, ``round_robin``, ``replicate``). The robot's ranking then names where its
-tasks go, and its manager's flag says so (:meth:`Policy.choose`).
+profile's ``least_latency`` (:mod:`server_select.core.selection.least_latency`) and the
+league's peers (:data:`~server_select.core.selection.balancers.PEERS`: ``p2c_peak_ewma``,
+``least_request``, ``prequal``, ``round_robin``, ``replicate``). The robot's ranking then
+names where its tasks go, and its manager's flag says so (:meth:`Policy.choose`).
 """
 
 import math
@@ -27,9 +27,9 @@ import math
 from server_select.core.selection.balancers import PEERS
 from server_select.core.selection.rank import NO_SERVER
 
-POLICIES = ('mean', 'hysteresis', 'hot_cold') + PEERS
+POLICIES = ('mean', 'hysteresis', 'least_latency') + PEERS
 # policies a robot applies per task itself (a balancer): the fleet's rule and the peers
-PER_TASK = ('hot_cold',) + PEERS
+PER_TASK = ('least_latency',) + PEERS
 
 
 class Policy(object):

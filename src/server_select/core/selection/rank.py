@@ -46,6 +46,19 @@ def rank_servers(pair_stats, fail_fast=0):
     )
 
 
+def by_estimate(estimates, selected=None):
+    """A :class:`Ranking` of ``{server: estimate or None}`` (a rule's own: ``latency``,
+    ``error``, ``wait``, ``answers``), ``selected`` where tasks go (when ranked; else the
+    best); servers with no estimate left out."""
+    ranked = sorted((s for s, e in estimates.items() if e is not None),
+                    key=lambda s: (estimates[s].latency, s))
+    return Ranking(selected if selected in ranked else ranked[0] if ranked else NO_SERVER,
+                   ranked, [estimates[s].latency for s in ranked],
+                   [estimates[s].answers for s in ranked],
+                   sorted(s for s, e in estimates.items() if e is None),
+                   [estimates[s].error for s in ranked], [estimates[s].wait for s in ranked])
+
+
 def view_key(ranking, policy, current):
     """What of a robot's own ``ranking`` its manager needs to hear at once: the servers
     ranked, those left out, and which server ``policy`` picks from ``current`` (the server

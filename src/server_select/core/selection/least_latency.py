@@ -1,16 +1,16 @@
-"""The fleet profile's rule, ``hot_cold`` (no rospy): Prequal's hot-cold choice, kept while
-nothing beats it beyond the noise.
+"""The fleet profile's rule, ``least_latency`` (no rospy): the server a task is expected to
+be answered soonest by, kept while nothing beats it beyond the noise.
 
-Every probe answer of the last ``window`` s is one estimate of a task sent to its server
-then: round trip + the other robots' work in flight there per worker + the work, times
-the tries a server asked for more than it can do needs (its utilization with this robot's
-share). A server's estimate is their mean, its noise their standard error and the error
-of the server's reported work. ``choose`` takes the robot's server while it is cold
-(others' work in flight not above the 2^-0.25 quantile of the servers') and within 3
-errors of the best cold server; else the best, at random among those within the noise of
-it (robots that read the same answers do not all move to one). ``choose`` changes
-nothing: the move is made when the task is sent (:meth:`started`). docs/selection.md
-has each mechanism's measured worth.
+Each probe answer of the last ``window`` s shows a server as a task sent then would meet
+it: the robot's round trip, the other robots' work in flight there per worker, the work
+per task, and its utilization. A server's estimate is the median round trip (a late
+answer or two must not hold it up) + the mean work in flight + the work, times the tries
+a server asked for more than it can do needs (its utilization with this robot's share,
+when above 1); its noise their errors and the error of the reported work. ``choose``
+keeps the robot's server while it is within 3 errors of the best; else takes the best,
+at random among those within 3 errors of it (robots that read the same answers do not
+all move to one). ``choose`` changes nothing: the move is made when a task's first
+attempt is sent (:meth:`started`). docs/selection.md has each mechanism's worth.
 """
 
 import collections
@@ -18,22 +18,27 @@ import math
 import statistics
 
 from server_select.core.selection.balancer import Balancer, Decision
-from server_select.core.selection.rank import NO_SERVER, Ranking
-from server_select.core.util.stats import mean_error, percentile
+from server_select.core.selection.rank import by_estimate
+from server_select.core.util.stats import mean_error, median_error
 
-HOT_QUANTILE = 2 ** -0.25
 Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
 RATE_HORIZON = 5.0       # s of the robot's own tasks its rate is counted over
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('hot', 'keep', 'span', 'tries', 'work_error')
+MECHANISMS = ('keep', 'robust', 'tries', 'work_error')
 
-Estimate = collections.namedtuple('Estimate', 'latency error heat work answers')
+Estimate = collections.namedtuple('Estimate', 'latency error wait answers')
 
 
-class HotCold(Balancer):
-    """The ``hot_cold`` rule (the module docstring says what it does)."""
-    name = 'hot_cold'
+def within(estimate, best):
+    """Whether ``estimate`` is within the noise of ``best``: 3 standard errors of their
+    difference."""
+    return estimate.latency - best.latency <= Z * math.hypot(estimate.error, best.error)
+
+
+class LeastLatency(Balancer):
+    """The ``least_latency`` rule (the module docstring says what it does)."""
+    name = 'least_latency'
     own_view = True
 
     def __init__(self, window=1.5, off=(), **kwargs):
@@ -83,19 +88,18 @@ class HotCold(Balancer):
         work = newest.service.get(kind, self.least_work.get(kind, 0.0))
         workers = float(newest.workers)
         mine = self.rate(kind, now) * work / workers
-        values, heat = [], []
-        for a, others in answers:
-            queued = others * work / workers
-            tries = max(1.0, a.utilization + mine) if 'tries' in self.on else 1.0
-            values.append((a.rtt + queued + work) * tries)
-            heat.append(queued)
-        # answers closer together than a task's work saw much the same queue
-        span = answers[-1][0].at - answers[0][0].at
-        independent = 1.0 + span * workers / work if work > 0 and 'span' in self.on else None
-        mean, error = mean_error(values, independent)
-        if 'work_error' in self.on:
-            error = math.hypot(error, newest.service_error.get(kind, 0.0))
-        return Estimate(mean, error, statistics.median(heat), work / workers, len(values))
+        rtts = [a.rtt for a, _ in answers]
+        queued = [others * work / workers for _, others in answers]
+        tries = statistics.fmean(max(1.0, a.utilization + mine) for a, _ in answers) \
+            if 'tries' in self.on else 1.0
+        if 'robust' in self.on:     # a late answer or two (a retransmission, a hang ending)
+            rtt, rtt_error = median_error(rtts)   # must not hold the mean up for a window
+        else:
+            rtt, rtt_error = mean_error(rtts)
+        wait, wait_error = mean_error(queued)
+        work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.on else 0.0
+        return Estimate((rtt + wait + work) * tries,
+                        math.hypot(rtt_error, wait_error, work_error) * tries, wait, len(answers))
 
     def choose(self, servers, kind=None):
         """The :class:`Decision` for the next ``kind`` task among the usable ``servers``
@@ -120,26 +124,18 @@ class HotCold(Balancer):
             pick = here if here is not None else servers[int(self.draw * len(servers))]
             return Decision(pick, 'no answer yet: at random' if here is None else
                             'no answer yet: kept', estimates)
-        heats = sorted(e.heat for e in known.values())
-        limit = percentile(heats, 100 * HOT_QUANTILE) if 'hot' in self.on else heats[-1]
-        cold = [s for s, e in known.items()
-                if e.heat <= limit + (e.work if s == here else 0.0)]
-        best = min(cold, key=lambda s: known[s].latency)
-
-        def within(s):
-            a, b = known[s], known[best]
-            return a.latency - b.latency <= Z * math.hypot(a.error, b.error)
-        if here in cold and (here == best or 'keep' in self.on and within(here)):
+        best = min(known, key=lambda s: known[s].latency)
+        near = sorted(s for s in known if within(known[s], known[best])) \
+            if 'keep' in self.on else [best]
+        if here in known and (here == best or 'keep' in self.on and here in near):
             return Decision(here, 'kept: within the noise of server %s' % best
                             if here != best else 'kept: the fastest', estimates)
-        near = sorted(s for s in cold if within(s)) if 'keep' in self.on else [best]
         there = near[int(self.draw * len(near))]
-        why = ('server %s hot' % here if here in known and here not in cold else
-               'server %s faster than %s by %.3g ms' % (
-                   there, here, 1e3 * (known[here].latency - known[there].latency))
-               if here in known else 'server %s not usable' % self.last if gone else
-               'the fastest cold server')
-        return Decision(there, why + (' (within the noise of %d: at random)' % len(near)
+        why = 'server %s faster than %s by %.3g ms' % (
+            there, here, 1e3 * (known[here].latency - known[there].latency)) \
+            if here in known else 'server %s not usable' % self.last if gone else \
+            'server %s not heard from in %g s' % (here, self.window) if here else 'the fastest'
+        return Decision(there, why + (' (%d within the noise: one at random)' % len(near)
                                       if len(near) > 1 else ''), estimates)
 
     @staticmethod
@@ -168,23 +164,12 @@ class HotCold(Balancer):
         with self._lock:
             estimates = self._estimates(servers, self._clock())
         known = dict((s, e) for s, e in estimates.items() if e is not None)
-        chosen = set(s for s in servers if s == self.last or s not in known)
-        if known:
-            best = min(known.values(), key=lambda e: e.latency)
-            chosen.update(s for s, e in known.items() if e.latency - best.latency <=
-                          Z * math.hypot(e.error, best.error))
-        return chosen
+        best = min(known.values(), key=lambda e: e.latency) if known else None
+        return set(s for s in servers if s == self.last or s not in known or
+                   within(known[s], best))
 
     def view(self, servers):
-        """The robot's servers ranked by the estimates the choice uses (a Ranking, for its
-        manager and its views): those with answers in the window by latency."""
+        """The robot's servers ranked by the estimates the choice uses (for its manager
+        and its views)."""
         with self._lock:
-            now = self._clock()
-            estimates = self._estimates(servers, now)
-            counts = dict((s, sum(1 for a, _ in self.answers[s] if now - a.at <= self.window))
-                          for s in servers)
-        known = sorted((s for s in servers if estimates[s]), key=lambda s: estimates[s].latency)
-        return Ranking(self.last if self.last in known else known[0] if known else NO_SERVER,
-                       known, [estimates[s].latency for s in known],
-                       [counts[s] for s in known], sorted(set(servers) - set(known)),
-                       [estimates[s].error for s in known], [estimates[s].heat for s in known])
+            return by_estimate(self._estimates(servers, self._clock()), self.last)

@@ -1,4 +1,5 @@
-"""The fleet profile's rule, hot_cold, on its defining behaviour (core/selection/hot_cold.py)."""
+"""The fleet profile's rule, least_latency, on its defining behaviour
+(core/selection/least_latency.py)."""
 
 import collections
 import copy
@@ -12,8 +13,8 @@ from server_select.core.load.work_queue import Load
 from support.clock import Clock
 
 
-def hot_cold(clock, seed=1, **kwargs):
-    return balancers.make('hot_cold', rng=random.Random(seed), clock=clock, **kwargs)
+def least_latency(clock, seed=1, **kwargs):
+    return balancers.make('least_latency', rng=random.Random(seed), clock=clock, **kwargs)
 
 
 def load(rif=0, work=0.1, utilization=0.0, error=None):
@@ -39,24 +40,33 @@ def send(rule, servers, kind='image', answered=True):
     return server
 
 
-def test_hot_cold_never_picks_a_hot_server_while_a_cold_one_exists():
+def test_least_latency_takes_the_nearest_of_equally_busy_servers():
     clock = Clock()
-    rule = hot_cold(clock)
-    feed(rule, clock, {1: (0.001, 4, 0.0), 2: (0.05, 0, 0.0), 3: (0.08, 0, 0.0)})
-    # server 1 is nearest but hot (4 in flight against the others' 0): the fastest cold wins
-    assert rule.order([1, 2, 3], 'image')[0] == 2
-
-
-def test_hot_cold_every_answer_equally_hot_takes_the_fastest():
-    clock = Clock()
-    rule = hot_cold(clock)
+    rule = least_latency(clock)
     feed(rule, clock, {1: (0.030, 1, 0.0), 2: (0.010, 1, 0.0)})
     assert rule.order([1, 2], 'image')[0] == 2
 
 
-def test_hot_cold_keeps_its_server_within_the_noise_and_leaves_beyond_it():
+def test_least_latency_a_late_answer_does_not_hold_a_server_back_for_a_window():
     clock = Clock()
-    rule = hot_cold(clock)
+    rule = least_latency(clock)
+    feed(rule, clock, {1: (0.002, 0, 0.0), 2: (0.008, 0, 0.0)}, rounds=10)
+    assert send(rule, [1, 2]) == 1
+    decision = rule.choose([2], 'image')           # server 1 hangs: ejected
+    rule.started(decision.server, 'image')
+    rule.ended(decision.server)
+    clock.now += 1.0
+    rule.probed(1, 0.5, load())                    # the hang ends: one answer 0.5 s late
+    for _ in range(2):
+        clock.now += 0.25
+        rule.probed(1, 0.002, load())
+        rule.probed(2, 0.008, load())
+    assert rule.order([1, 2], 'image')[0] == 1     # back at once, not a window later
+
+
+def test_least_latency_keeps_its_server_within_the_noise_and_leaves_beyond_it():
+    clock = Clock()
+    rule = least_latency(clock)
     moves = []
     rule.on_move = lambda server, why: moves.append((server, why))
     rule.started(1, 'image')
@@ -73,9 +83,9 @@ def test_hot_cold_keeps_its_server_within_the_noise_and_leaves_beyond_it():
     assert moves[-1][0] == 2 and 'faster than 1' in moves[-1][1], moves
 
 
-def test_hot_cold_asking_changes_nothing_and_the_send_moves():
+def test_least_latency_asking_changes_nothing_and_the_send_moves():
     clock = Clock()
-    rule = hot_cold(clock)
+    rule = least_latency(clock)
     rule.started(1, 'image')
     feed(rule, clock, {1: (0.030, 0, 0.0), 2: (0.010, 0, 0.0)})
     state = copy.deepcopy((dict(rule.answers), rule.out, rule.last, dict(rule.sends),
@@ -93,9 +103,9 @@ def test_hot_cold_asking_changes_nothing_and_the_send_moves():
     assert rule.last == 2
 
 
-def test_hot_cold_an_answer_older_than_the_window_no_longer_counts():
+def test_least_latency_an_answer_older_than_the_window_no_longer_counts():
     clock = Clock()
-    rule = hot_cold(clock, window=1.5)
+    rule = least_latency(clock, window=1.5)
     feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.050, 0, 0.0)}, rounds=1)
     clock.now += 1.4
     assert rule.choose([1, 2], 'image').estimates[1] is not None
@@ -104,28 +114,10 @@ def test_hot_cold_an_answer_older_than_the_window_no_longer_counts():
     assert decision.estimates == {1: None, 2: None} and 'no answer' in decision.reason
 
 
-def test_hot_cold_counts_answers_that_saw_one_queue_as_one():
-    def verdict(work):
-        clock = Clock()
-        rule = hot_cold(clock)
-        rule.started(1, 'image')
-        rule.ended(1)
-        for i in range(15):   # another robot's task queued at server 1 for the first half
-            rule.probed(1, 0.001, load(int(i < 7), work))
-            rule.probed(2, 0.001, load(0, work))
-            clock.now += 0.1
-        return rule.order([1, 2], 'image')[0]
-    # 0.5 s of work a frame: the queue changed about once in the window, one observation
-    # that server 1 is busier, not seven: the robot stays; with 20 ms of work the queue
-    # was seen queued and empty many times over: server 1 is slower, the robot leaves
-    assert verdict(0.5) == 1
-    assert verdict(0.02) == 2
-
-
-def test_hot_cold_counts_the_error_of_the_servers_reported_work():
+def test_least_latency_counts_the_error_of_the_servers_reported_work():
     def verdict(error):
         clock = Clock()
-        rule = hot_cold(clock)
+        rule = least_latency(clock)
         rule.started(1, 'image')
         for _ in range(16):     # two idle servers whose medians differ by 30 ms in 450
             rule.probed(1, 0.001, load(work=0.45, error=error))
@@ -137,17 +129,17 @@ def test_hot_cold_counts_the_error_of_the_servers_reported_work():
     assert verdict(0.0) == 2
 
 
-def test_hot_cold_ranks_by_expected_completion_with_the_work_in_flight():
+def test_least_latency_ranks_by_expected_completion_with_the_work_in_flight():
     clock = Clock()
-    rule = hot_cold(clock)
+    rule = least_latency(clock)
     # server 1 is 20 ms nearer, but another robot's 0.1 s frame is always ahead there
     feed(rule, clock, {1: (0.010, 1, 0.0), 2: (0.030, 0, 0.0)})
     assert rule.order([1, 2], 'image')[0] == 2
 
 
-def test_hot_cold_leaves_out_the_robots_own_task_and_one_odd_answer():
+def test_least_latency_leaves_out_the_robots_own_task_and_one_odd_answer():
     clock = Clock()
-    rule = hot_cold(clock)
+    rule = least_latency(clock)
     feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.020, 0, 0.0)})
     assert send(rule, [1, 2], answered=False) == 1     # its own frame is at server 1 now
     feed(rule, clock, {1: (0.010, 1, 0.0), 2: (0.020, 0, 0.0)}, rounds=3)
@@ -155,28 +147,28 @@ def test_hot_cold_leaves_out_the_robots_own_task_and_one_odd_answer():
     assert rule.order([1, 2], 'image')[0] == 1
 
 
-def test_hot_cold_without_answers_picks_at_random_and_stays():
+def test_least_latency_without_answers_picks_at_random_and_stays():
     picks = set()
     for seed in range(20):
-        rule = hot_cold(Clock(), seed)
+        rule = least_latency(Clock(), seed)
         first = send(rule, [1, 2, 3])
         assert [send(rule, [1, 2, 3]) for _ in range(5)] == [first] * 5
         picks.add(first)
     assert picks == {1, 2, 3}
 
 
-def test_hot_cold_leaves_an_ejected_server_at_once():
+def test_least_latency_leaves_an_ejected_server_at_once():
     clock = Clock()
-    rule = hot_cold(clock)
+    rule = least_latency(clock)
     feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.020, 0, 0.0)})
     assert send(rule, [1, 2]) == 1
     decision = rule.choose([2], 'image')          # the caller left out server 1
     assert decision.server == 2 and 'server 1 not usable' in decision.reason
 
 
-def test_hot_cold_switched_off_mechanisms_are_named():
+def test_least_latency_switched_off_mechanisms_are_named():
     with pytest.raises(ValueError, match='bogus'):
-        hot_cold(Clock(), off=('bogus',))
+        least_latency(Clock(), off=('bogus',))
 
 
 def herd(seed, robots=20, steps=150, work=0.04):
@@ -185,7 +177,7 @@ def herd(seed, robots=20, steps=150, work=0.04):
     choices made it, and about one in five sends a task. The count on server 1 each step,
     and the moves."""
     clock, rng = Clock(), random.Random(seed)
-    rules = [hot_cold(clock, seed * 100 + i) for i in range(robots)]
+    rules = [least_latency(clock, seed * 100 + i) for i in range(robots)]
     moves = collections.Counter()
     for rule in rules:
         rule.started(1, 'image')
@@ -208,7 +200,7 @@ def herd(seed, robots=20, steps=150, work=0.04):
     return counts, sum(moves.values())
 
 
-def test_hot_cold_robots_spread_to_a_new_server_without_a_herd():
+def test_least_latency_robots_spread_to_a_new_server_without_a_herd():
     for seed in range(3):
         counts, moves = herd(seed)
         # never all (or nearly all) at once on the new server, settled near half and half,
@@ -218,9 +210,9 @@ def test_hot_cold_robots_spread_to_a_new_server_without_a_herd():
         assert moves <= 25, moves
 
 
-def test_hot_cold_counts_its_own_rate_from_the_tasks_sent_not_from_being_asked():
+def test_least_latency_counts_its_own_rate_from_the_tasks_sent_not_from_being_asked():
     clock = Clock()
-    rule = hot_cold(clock)
+    rule = least_latency(clock)
     for s in (1, 2):
         rule.probed(s, 0.001, Load(0, 0, 1, 0.0, {'sort': 0.002}, 0.0))
     for _ in range(5):                                  # asked, nothing sent
@@ -233,9 +225,9 @@ def test_hot_cold_counts_its_own_rate_from_the_tasks_sent_not_from_being_asked()
     assert rule.rate('image', clock.now) == pytest.approx(1 / 5.0)
 
 
-def test_hot_cold_ranks_and_plans_probes_by_the_estimates_it_chooses_by():
+def test_least_latency_ranks_and_plans_probes_by_the_estimates_it_chooses_by():
     clock = Clock()
-    rule = hot_cold(clock)
+    rule = least_latency(clock)
     feed(rule, clock, {1: (0.030, 0, 0.0), 2: (0.010, 0, 0.0), 3: (0.010, 0, 0.0)})
     first = send(rule, [1, 2, 3])           # (the kind it sends is what the view counts)
     assert first in (2, 3)
