@@ -43,6 +43,11 @@ BAD_PARAMS = [
      '~orb: source: required'),
     ('robot', ROBOT_OK + ['_sort_tasks:=false'], 'no tasks to send'),
     ('robot', ROBOT_OK + ['_image_source:=/no/such/folder'], '~image_source:'),
+    ('robot', ROBOT_OK + ['_profile:=fleet', '_dwell:=2', '_eject_time:=2'],
+     '~dwell (a setting of policy hysteresis; ~policy least_latency chooses per task); '
+     '~eject_time (fixed by least_latency'),
+    ('robot', ROBOT_OK + ['_profile:=fleet', '_probe_rate:=8'],
+     '~probe_rate (probes are paced by ~contender_rate 4)'),
     ('manager', ['_robots:=1', '_servers:=[]'], '~servers: expected a non-empty list of ids'),
     ('manager', ['_robots:=1', '_servers:=1', '_window:=0'], '~window: expected a positive'),
     ('manager', ['_robots:=1', '_servers:=1', '_robot_node:=robot{nr}'],

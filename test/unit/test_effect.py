@@ -1,6 +1,6 @@
 """Parameters with no effect where they are set are named (core/selection/effect.py)."""
 
-from server_select.core.selection.effect import ineffective, refusal
+from server_select.core.selection.effect import FLEET_KNOBS, ineffective, refusal
 from server_select.core.settings import default
 
 
@@ -39,3 +39,12 @@ def test_the_refusal_names_each_parameter_and_why():
     line = refusal([('dwell', 'a setting of policy hysteresis')])
     assert '~dwell (a setting of policy hysteresis)' in line
     assert refusal([]) is None
+
+
+def test_what_the_fleet_rule_fixes_is_refused_and_its_knobs_are_not():
+    assert found('fleet', eject_time=2.0, retry_factor=3.0, background_rate=2.0) == \
+        ['background_rate', 'eject_time', 'retry_factor']
+    assert found('fleet', policy='prequal', contender_rate=0, eject_time=2.0) == []
+    assert found('fleet', window=3.0, contender_rate=2.0, hedge=False, max_in_flight=2,
+                 fresh_factor=1.0, retry_budget=0.2) == []
+    assert len(FLEET_KNOBS) <= 6

@@ -75,7 +75,8 @@ class RobotNode(object):
         self.search = image.search if image else None
         self.camera = image.source if image and isinstance(image.source, TopicSource) else None
         self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds),
-                              self.selection.heading, self.selection.balancer) \
+                              self.selection.heading, self.selection.balancer,
+                              max_age=param('window')) \
             if param('load_aware') and mode == 'select' else None
         self.passive = TaskSamples(self.robot_id, self.selection) \
             if self.selection.passive else None

@@ -51,7 +51,7 @@ class SimRobot(object):
         self.probe_timeout = get('probe_timeout')
         self.answer_times = AnswerTimes()
         self.load = RobotLoad(dict((k.name, k.rate) for k in kinds), self.selection.heading,
-                              self.balancer, clock) \
+                              self.balancer, clock, max_age=get('window')) \
             if get('load_aware') and get('mode') == 'select' else None
         self.budget = RetryBudget(get('retry_budget'), clock=clock)
         self.start_delay = get('start_delay')

@@ -15,10 +15,11 @@ class RobotLoad(object):
     task goes to: a probe of it announces the rate the robot sends tasks at (measured from
     its sends, :class:`~server_select.core.load.demand.Arrivals`; a kind's rate in ``mix``
     until its first task is sent), a probe of any other announces none, so that servers
-    count the robot where its tasks go now. Thread-safe."""
+    count the robot where its tasks go now. A report older than ``max_age`` s (the robot's
+    window: one age for every use of an answer) counts as none. Thread-safe."""
 
-    def __init__(self, mix, target=None, balancer=None, clock=time.monotonic):
-        self.board = LoadBoard(mix, clock=clock)
+    def __init__(self, mix, target=None, balancer=None, clock=time.monotonic, max_age=2.0):
+        self.board = LoadBoard(mix, max_age=max_age, clock=clock)
         self.balancer = balancer     # a peer's rule hears every answer's load too
         self.mix = dict(mix)
         self.kinds = sorted(mix)

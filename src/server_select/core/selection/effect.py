@@ -1,10 +1,10 @@
 """Parameters that would do nothing where they are set, or that the fleet's rule fixes
 (no rospy).
 
-A robot that chooses per task (``~policy`` least_latency or a peer) ranks nothing by windows
-and follows no flags, so the knobs of the ranking policies have no effect on it; a knob
-set there would be a mistake that passes in silence. ``least_latency`` has few knobs
-(:data:`HOT_COLD_KNOBS`); what else decides where its tasks go has the values the
+A robot that chooses per task (``~policy`` least_latency or a peer) ranks nothing by
+windows and follows no flags, so the knobs of the ranking policies have no effect on it;
+a knob set there would be a mistake that passes in silence. ``least_latency`` has few
+knobs (:data:`FLEET_KNOBS`); what else decides where its tasks go has the values the
 league measured (docs/selection.md) and is not for setting. A node refuses either at
 start, with a line naming the parameter and why (:func:`ineffective`).
 """
@@ -24,11 +24,11 @@ RANKING_ONLY = {
     'window_samples': 'a rule per task counts the answers of the last ~window s',
     'window_max': 'a setting of ~window_samples',
 }
-# what a fleet robot's least_latency can be told: the parameters that change where its tasks go
-HOT_COLD_KNOBS = ('window', 'contender_rate', 'hedge', 'max_in_flight', 'fresh_factor',
-                  'retry_budget')
+# what least_latency can be told: the parameters that change where a fleet robot's tasks go
+FLEET_KNOBS = ('window', 'contender_rate', 'hedge', 'max_in_flight', 'fresh_factor',
+               'retry_budget')
 # parameter -> what least_latency fixes in its place
-FIXED_BY_HOT_COLD = {
+FIXED_BY_RULE = {
     'background_rate': 'servers far from the best are probed at the profile\'s rate',
     'contender_budget': 'contenders\' probes follow the robot\'s task rate',
     'eject_time': 'failing servers are ejected as the profile says',
@@ -47,8 +47,8 @@ def ineffective(get, is_set):
                   for name, why in sorted(RANKING_ONLY.items()) if is_set(name)]
         if get('policy') == 'least_latency':
             found += [(name, 'fixed by least_latency: %s (its knobs: %s)'
-                       % (why, ', '.join(HOT_COLD_KNOBS)))
-                      for name, why in sorted(FIXED_BY_HOT_COLD.items()) if is_set(name)]
+                       % (why, ', '.join(FLEET_KNOBS)))
+                      for name, why in sorted(FIXED_BY_RULE.items()) if is_set(name)]
         if is_set('probe_rate') and get('contender_rate'):
             found.append(('probe_rate', 'probes are paced by ~contender_rate %g'
                           % get('contender_rate')))
@@ -66,5 +66,5 @@ def refusal(found):
     """One line saying what :func:`ineffective` found (None: nothing)."""
     if not found:
         return None
-    return 'parameters with no effect here: %s (unset them)' % '; '.join(
+    return 'parameters not for setting here: %s (unset them)' % '; '.join(
         '~%s (%s)' % item for item in found)
