@@ -42,7 +42,7 @@ FOLLOW_FLAGS = {'policy': 'mean'}
 # the fleet profile's selection before it chose per task with least_latency (for the league)
 # (less its draws for moves, ~spread, which went with it)
 PREVIOUS_FLEET = {'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0, 'dwell': 3.0,
-                  'passive': True, 'task_memory': 5.0, 'contender_rate': 0}
+                  'passive': True, 'task_memory': 5.0}
 
 
 def peer_params(name):

@@ -19,8 +19,8 @@ share of the workers' time the other robots' tasks take, and ``{kind: the standa
 of the work}``."""
 
 Decision = collections.namedtuple('Decision', 'server reason estimates')
-Decision.__doc__ = """Where a task would go and why, with what the rule compared (``{server:
-estimate}``, the rule's own; empty for rules that keep none)."""
+Decision.__doc__ = """Where a task would go and why, with what the rule compared: ``{server:
+its estimate}`` (None: no answer in the window). The fleet's rule's ``choose`` returns one."""
 
 
 class Balancer(object):

@@ -52,10 +52,6 @@ def ineffective(get, is_set):
         if is_set('probe_rate') and get('contender_rate'):
             found.append(('probe_rate', 'probes are paced by ~contender_rate %g'
                           % get('contender_rate')))
-    elif get('contender_rate'):
-        found.append(('contender_rate', 'adaptive probing follows the estimates of a rule '
-                      'that chooses per task; ~policy %s ranks by windows (set it to 0)'
-                      % get('policy')))
     if get('policy') == 'least_latency' and not get('load_aware'):
         found.append(('load_aware', 'least_latency estimates from the servers\' load: false '
                       'would leave it blind'))
