@@ -22,14 +22,14 @@ def pair(value, se, n=10):
 
 # -- probe plans --------------------------------------------------------------------------
 
-def run(plan, seconds, start=0.0, contenders=None):
+def run(plan, seconds, start=0.0, contenders=None, task_rate=None):
     """Tick ``plan`` for ``seconds``; counts of probes per server."""
     counts = collections.Counter()
     ticks = int(round(seconds / plan.tick))
     for i in range(ticks):
         now = start + i * plan.tick
         if contenders is not None:
-            plan.update(contenders, now)
+            plan.update(contenders, now, task_rate)
         counts.update(plan.due(now))
     return counts
 
@@ -53,6 +53,17 @@ def test_contenders_at_their_rate_the_others_at_the_background_rate():
     assert all(9 <= steady[s] <= 11 for s in range(3, 11)), steady
     assert plan.rate() == pytest.approx(20 + 0.5 * 8)
     assert counts[1] >= 185 and counts[3] >= 10   # at first every server is learnt, at 2 Hz
+
+
+def test_contenders_are_probed_at_most_twice_per_task_the_robot_sends():
+    plan = ProbePlan(contender_rate=4.0, background_rate=1.0, budget=20.0, hold=2.0)
+    for server in range(1, 5):
+        plan.add(server, 0.0)
+    run(plan, 10.0, contenders={1}, task_rate=2.0)
+    assert run(plan, 20.0, start=10.0, contenders={1}, task_rate=2.0)[1] == 80   # 4 Hz
+    slow = run(plan, 20.0, start=30.0, contenders={1}, task_rate=0.5)   # a frame each 2 s
+    assert slow[1] == pytest.approx(20, abs=1) and slow[2] == pytest.approx(20, abs=1)
+    assert run(plan, 20.0, start=50.0, contenders={1}, task_rate=None)[1] == 80   # unknown
 
 
 def test_many_contenders_share_the_budget_but_never_fall_below_the_background_rate():
