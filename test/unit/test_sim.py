@@ -10,7 +10,7 @@ from server_select.sim.events import EventLoop, Streams, Wakeup
 from server_select.sim.figures import figures
 from server_select.sim.model import Model
 from server_select.sim.network import Network
-from server_select.sim.run import simulate
+from server_select.sim.run import simulate, variant
 from server_select.sim.server import SimServer
 from server_select.sim.stream import Task
 from server_select.testbed.scenario import Scenario
@@ -187,3 +187,16 @@ def test_a_kind_is_loaded_when_a_probe_first_announces_it_and_its_first_task_wai
             lambda task, ok, error, busy: answers.append(loop.now()))
     loop.run(5.0)
     assert answers == [pytest.approx(0.3)]
+
+
+def test_a_variant_may_switch_a_mechanism_of_the_rule_off_and_a_wrong_one_is_named():
+    sc = scenario({'robot1 server1': [{'at': 0, 'delay': 2, 'jitter': 0.5}],
+                   'robot1 server2': [{'at': 0, 'delay': 2.2, 'jitter': 0.5}]},
+                  servers={1: {}, 2: {}}, duration=40.0)
+    sc.suite['measure_from'] = 5.0
+    model = Model.load()
+    kept = figures(simulate(sc, model, 1, ['fleet']), 'fleet')
+    loose = figures(simulate(sc, model, 1, ['fleet~keep']), 'fleet~keep')
+    assert kept.switches < loose.switches       # near-equal servers: keep holds it still
+    with pytest.raises(ValueError, match='no mechanism spread'):
+        variant('fleet~spread')

@@ -4,7 +4,7 @@ seed, in every scenario (``python3 -m server_select.sim.ablation league.json``).
 A network cell is the paired difference of the mean in per cent of the oracle's mean,
 with its 95 % interval; a capacity cell the paired difference of goodput (per cent of
 capacity) and of failed tasks. ``variant - base``: a mechanism switched off
-(``fleet~spread``) that makes the mean higher is one that pays. ``--add NAME=FILE:VARIANT``
+(``fleet~keep``) that makes the mean higher is one that pays. ``--add NAME=FILE:VARIANT``
 brings a variant of another league's results (same seeds: e.g. the rule before a change).
 ``--fields`` sums up many network scenarios (``gen:1-200``) in one row per variant.
 """

@@ -15,6 +15,7 @@ where the measured part starts (35 s, the suite's, by default).
 
 import collections
 
+from server_select.core.selection.least_latency import MECHANISMS
 from server_select.core.settings import PARAMS, default
 from server_select.sim.events import EventLoop, Streams
 from server_select.sim.network import Network
@@ -34,13 +35,14 @@ Record = collections.namedtuple('Record', 'robot variant ended outcome')
 def variant(name):
     """The Variant a name means: a suite variant, ``static``, or either with parameters
     of its robots changed, ``fleet:hedge=false:contender_rate=0``, or mechanisms of its
-    rule switched off, ``fleet~spread~keep`` (ablations; a ValueError names an unknown
+    rule switched off, ``fleet~keep~robust`` (ablations; a ValueError names an unknown
     variant or parameter; :func:`rule_args` the rule's)."""
     base, _, changes = name.split('~')[0].partition(':')
     if base != 'static' and base not in VARIANTS:
         raise ValueError('unknown variant %r (expected static or one of %s)'
                          % (base, ', '.join(VARIANTS)))
     spec = STATIC if base == 'static' else VARIANTS[base]
+    rule_args(name)
     params = dict(spec.params)
     for change in [c for c in changes.split(':') if c]:
         key, _, value = change.partition('=')
@@ -51,8 +53,13 @@ def variant(name):
 
 
 def rule_args(name):
-    """The per-task rule's own arguments a variant's name asks for (None: none)."""
+    """The per-task rule's own arguments a variant's name asks for (None: none; a
+    ValueError names a mechanism the fleet's rule does not have)."""
     off = name.split('~')[1:]
+    unknown = sorted(set(off) - set(MECHANISMS))
+    if unknown:
+        raise ValueError('%s: no mechanism %s (the rule has %s)'
+                         % (name, ', '.join(unknown), ', '.join(MECHANISMS)))
     return {'off': off} if off else None
 
 

@@ -6,8 +6,8 @@ for one
 robot) and sends its ranking when the servers it ranks, those left out, or the policy's
 pick change, and every ``1/~view_rate`` s. The manager then costs O(servers) per *change*
 rather than O(1) per *sample*: it scales with robots, not with probes. What only it can
-do stays with it: the policy's state per robot, spreading robots that would move at
-once (``~spread``), group membership, and the flags a recorder sees.
+do stays with it: the policy's state per robot, group membership, and the flags a
+recorder sees.
 
 A robot's ranking counts for ``stale`` s after it arrived: a robot that went silent
 (gone, or cut off) has an empty ranking after that, as a robot whose samples all left
