@@ -23,8 +23,9 @@ from server_select.ros.task_stream import TaskStream
 
 
 def robot_selection(robot_id, servers, mode):
-    """``(Selection, ServerHealth, Policy)`` of a robot from its parameters (one set
-    where it has no effect is refused: :mod:`~server_select.core.selection.effect`)."""
+    """``(Selection, ServerHealth, Policy)`` of a robot from its parameters (a parameter
+    set that is not for setting with the others is refused:
+    :mod:`~server_select.core.selection.effect`)."""
     refused = refusal(ineffective(param, lambda name: rospy.has_param('~' + name)))
     if refused:
         raise ParamError(refused)

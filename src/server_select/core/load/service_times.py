@@ -19,14 +19,12 @@ class ServiceTimes(object):
     error (thread-safe). A step in the work shows once half of those are new: at 4 tasks
     a second with the third slow one (0.75 s), where the last 20 had needed eleven (2.75
     s: loaded_server's reaction); fewer tasks make a wider error, which the robots count
-    as noise. A kind no task of which was done for ``forget`` s is no longer reported:
-    robots that left a slow server learn again what it does now (by one task)."""
+    as noise."""
 
-    def __init__(self, keep=20, horizon=1.0, least=3, clock=time.monotonic, forget=10.0):
+    def __init__(self, keep=20, horizon=1.0, least=3, clock=time.monotonic):
         if keep < 1 or not 1 <= least <= keep:
             raise ValueError('need 1 <= least <= keep, got %r, %r' % (least, keep))
         self.keep, self.horizon, self.least = keep, float(horizon), least
-        self.forget = float(forget)
         self._clock = clock
         self._lock = threading.Lock()
         self._times = {}
@@ -50,18 +48,12 @@ class ServiceTimes(object):
         """Seconds of work per task of ``kind`` (``default`` while none was done)."""
         return self._medians.get(kind, default)
 
-    def _recent(self, values):
-        now = self._clock()
-        return dict((kind, value) for kind, value in values.items()
-                    if now - self._times[kind][-1][0] <= self.forget)
-
     def snapshot(self):
-        """``{kind: seconds}`` of every kind done in the last ``forget`` s."""
+        """``{kind: seconds}`` of every kind done so far."""
         with self._lock:
-            return self._recent(self._medians)
+            return dict(self._medians)
 
     def errors(self):
-        """``{kind: the standard error of its median}`` (0.0 from one task) of the kinds
-        of :meth:`snapshot`."""
+        """``{kind: the standard error of its median}`` (0.0 from one task)."""
         with self._lock:
-            return self._recent(self._errors)
+            return dict(self._errors)
