@@ -6,11 +6,11 @@ it: the robot's round trip, the other robots' work in flight there per worker, t
 per task, and its utilization. A server's estimate is the median round trip (a late
 answer or two must not hold it up) + the mean work in flight + the work, times the tries
 a server asked for more than it can do needs (its utilization with this robot's share,
-when above 1); its noise their errors and the error of the reported work. ``choose``
-keeps the robot's server while it is within 3 errors of the best; else takes the best,
-at random among those within 3 errors of it (robots that read the same answers do not
-all move to one). ``choose`` changes nothing: the move is made when a task's first
-attempt is sent (:meth:`started`). docs/selection.md has each mechanism's worth.
+when above 1); its noise the errors of the first two. ``choose`` keeps the robot's
+server while it is within 3 errors of the best; else takes the best, at random among
+those within 3 errors of it (robots that read the same answers do not all move to one).
+``choose`` changes nothing: the move is made when a task's first attempt is sent
+(:meth:`started`). docs/selection.md has each mechanism's worth.
 """
 
 import collections
@@ -25,7 +25,7 @@ Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
 RATE_HORIZON = 5.0       # s of the robot's own tasks its rate is counted over
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('keep', 'robust', 'tries', 'work_error')
+MECHANISMS = ('keep', 'robust', 'tries')
 
 Estimate = collections.namedtuple('Estimate', 'latency error wait answers')
 
@@ -97,9 +97,8 @@ class LeastLatency(Balancer):
         else:
             rtt, rtt_error = mean_error(rtts)
         wait, wait_error = mean_error(queued)
-        work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.on else 0.0
-        return Estimate((rtt + wait + work) * tries,
-                        math.hypot(rtt_error, wait_error, work_error) * tries, wait, len(answers))
+        return Estimate((rtt + wait + work) * tries, math.hypot(rtt_error, wait_error) * tries,
+                        wait, len(answers))
 
     def choose(self, servers, kind=None):
         """The :class:`Decision` for the next ``kind`` task among the usable ``servers``
