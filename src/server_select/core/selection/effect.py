@@ -39,8 +39,8 @@ FIXED_BY_RULE = {
 
 
 def ineffective(get, is_set):
-    """``[(name, why)]`` of the parameters set explicitly (``is_set(name)``) that have no
-    effect with the others' values (``get(name)``)."""
+    """``[(name, why)]`` of the parameters set explicitly (``is_set(name)``) that are not
+    for setting with the others' values (``get(name)``): no effect, or fixed by the rule."""
     found = []
     if get('policy') in PER_TASK:
         found += [(name, '%s; ~policy %s chooses per task' % (why, get('policy')))
