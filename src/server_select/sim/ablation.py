@@ -20,23 +20,11 @@ CAPACITY_KEYS = (('share', 'goodput %', 100.0), ('failed', 'failed', 1.0))
 
 
 def _cell(difference):
-    mean, low, high = difference
-    if mean is None:
+    if difference is None or difference[0] is None:
         return '-'
+    mean, low, high = difference
     mark = '**' if low > 0 or high < 0 else ''      # beyond its interval
     return '%s%+.2f [%+.2f, %+.2f]%s' % (mark, mean, low, high, mark)
-
-
-def network_cell(variants, seeds, name, base, key):
-    """``(mean, low, high)`` of ``name`` minus ``base`` in per cent of the oracle's mean."""
-    oracle = variants[report.ORACLE]
-
-    def relative(variant):
-        runs = variants[variant]
-        return [runs[s][key] / oracle[s]['mean'] if s in runs and s in oracle and
-                oracle[s]['mean'] and runs[s].get(key) is not None else None for s in seeds]
-    mean, low, high = paired(relative(name), relative(base))
-    return (None, None, None) if mean is None else (100 * mean, 100 * low, 100 * high)
 
 
 def capacity_cell(variants, seeds, name, base, key, scale):
@@ -60,7 +48,7 @@ def table(results, base='fleet'):
     rows = []
     for scenario, variants in network:
         rows.append(['%s mean' % scenario] + [
-            _cell(network_cell(variants, seeds, name, base, 'mean'))
+            _cell(report.paired_difference(variants, seeds, name, base, 'mean'))
             if name in variants and report.ORACLE in variants else '-' for name in names])
     for scenario, variants in capacity:
         rows += [['%s %s' % (scenario, title)] + [
@@ -80,13 +68,12 @@ def fields_table(results, base='fleet', margin=1.0):
     network = [v for v in results['network'].values() if base in v and report.ORACLE in v]
     names = sorted(set(n for v in network for n in v) - {base, report.ORACLE})
     for name in names:
-        pairs = [network_cell(dict((k, v[k]) for k in (name, base, report.ORACLE)),
-                              [s], name, base, 'mean')[0]
-                 for v in network if name in v for s in seeds]
-        pairs = [p for p in pairs if p is not None]
-        per_field = [network_cell(v, seeds, name, base, 'mean')[0] for v in network
-                     if name in v]
-        per_field = [p for p in per_field if p is not None]
+        pairs = [100 * (x - y) for v in network if name in v
+                 for x, y in zip(report.relative(v, seeds, name, 'mean'),
+                                 report.relative(v, seeds, base, 'mean'))
+                 if x is not None and y is not None]
+        per_field = [d[0] for d in (report.paired_difference(v, seeds, name, base, 'mean')
+                                    for v in network if name in v) if d is not None]
         mean, low, high = paired(pairs, [0.0] * len(pairs))
         rows.append([name, str(len(per_field)), _cell((mean, low, high)),
                      '%.0f %%' % (100.0 * sum(d >= -margin for d in per_field) /

@@ -65,19 +65,24 @@ def network_tables(name, variants, seeds):
     return text
 
 
-def _relative(variants, seeds, variant, key):
-    oracle = variants[ORACLE]
-    return [variants[variant][s][key] / oracle[s]['mean']
-            if s in variants[variant] and s in oracle and oracle[s]['mean'] else None
-            for s in seeds]
+def relative(variants, seeds, variant, key):
+    """``variant``'s ``key`` over the oracle's mean, per seed (None: not known)."""
+    oracle, runs = variants[ORACLE], variants[variant]
+    return [runs[s][key] / oracle[s]['mean'] if s in runs and s in oracle and
+            oracle[s]['mean'] and runs[s].get(key) is not None else None for s in seeds]
+
+
+def paired_difference(variants, seeds, name, base, key):
+    """``(mean, low, high)`` of ``name``'s ``key`` minus ``base``'s, in per cent of the
+    oracle's mean, per seed (None: no seed has both)."""
+    mean, low, high = paired(relative(variants, seeds, name, key),
+                             relative(variants, seeds, base, key))
+    return None if mean is None else (100 * mean, 100 * low, 100 * high)
 
 
 def differences(variants, seeds, other, key):
-    """``(mean, low, high)`` of the fleet's ``key`` minus ``other``'s, in per cent of the
-    oracle's mean, per seed."""
-    mean, low, high = paired(_relative(variants, seeds, FLEET, key),
-                             _relative(variants, seeds, other, key))
-    return None if mean is None else (100 * mean, 100 * low, 100 * high)
+    """:func:`paired_difference` of the fleet minus ``other``."""
+    return paired_difference(variants, seeds, FLEET, other, key)
 
 
 def paired_table(variants, seeds):
