@@ -18,7 +18,7 @@ from server_select.core.selection.rank import NO_SERVER, rank_servers
 from server_select.core.selection.fleet_rankings import FleetRankings
 from server_select.core.config.names import LOCAL
 from server_select.core.config.params import MODES  # noqa: F401 (re-exported)
-from server_select.core.selection.window import RTT_RANGE, LatencyWindow, valid_rtt
+from server_select.core.selection.window import LatencyWindow, check_sample
 
 
 class Selection(object):
@@ -103,8 +103,7 @@ class Selection(object):
         ranking may have changed (:meth:`FleetRankings.add`; a rule's own view: always)."""
         now = self._clock()
         if self.balancer is not None and self.balancer.own_view:
-            if ok and not valid_rtt(rtt):
-                raise ValueError('round trip %r is not %s' % (rtt, RTT_RANGE))
+            check_sample(ok, rtt)
             changed = True
         else:
             changed = self.rankings.add(self.robot_id, server, now, ok, rtt, probe, wait)

@@ -48,6 +48,12 @@ def valid_rtt(rtt):
         math.isfinite(rtt) and 0 <= rtt <= MAX_RTT
 
 
+def check_sample(ok, rtt):
+    """ValueError for a successful sample whose ``rtt`` is not :data:`RTT_RANGE`."""
+    if ok and not valid_rtt(rtt):
+        raise ValueError('round trip %r is not %s' % (rtt, RTT_RANGE))
+
+
 def trimmed_mean(values):
     """The mean of ``values`` without their highest and lowest quarter (at least one each
     from three values on)."""
@@ -177,8 +183,7 @@ class LatencyWindow(object):
         Returns whether the pair had a value before, and its :class:`PairStats` after
         (with plain standard errors, which cost nothing: :meth:`stats` gives the robust
         ones)."""
-        if ok and not valid_rtt(rtt):
-            raise ValueError('round trip %r is not %s' % (rtt, RTT_RANGE))
+        check_sample(ok, rtt)
         with self._lock:
             pair = self._pairs.get((robot_id, server_id))
             if pair is None:
