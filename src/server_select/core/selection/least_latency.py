@@ -65,21 +65,24 @@ class LeastLatency(Balancer):
             times.popleft()
         self.draw = self.rng.random()
 
+    def _sent(self, kind, now):
+        """How many ``kind`` tasks the robot sent in the last :data:`RATE_HORIZON` s."""
+        return sum(1 for t in self.sends.get(kind, ()) if now - t <= RATE_HORIZON)
+
     def rate(self, kind, now):
         """The robot's ``kind`` tasks a second (the next one included: never 0), counted
         when sent: asking where one would go is not sending it."""
-        return (sum(1 for t in self.sends[kind] if now - t <= RATE_HORIZON) + 1) / RATE_HORIZON
+        return (self._sent(kind, now) + 1) / RATE_HORIZON
 
     def task_rate(self):
         with self._lock:
             now = self._clock()
-            return sum(1 for times in self.sends.values() for t in times
-                       if now - t <= RATE_HORIZON) / RATE_HORIZON
+            return sum(self._sent(kind, now) for kind in self.sends) / RATE_HORIZON
 
     def estimate(self, server, kind, now):
         """The :class:`Estimate` of a ``kind`` task at ``server`` from its answers of the
         window (None: none)."""
-        answers = [(a, o) for a, o in self.answers[server] if now - a.at <= self.window]
+        answers = [(a, o) for a, o in self.answers.get(server, ()) if now - a.at <= self.window]
         if not answers:
             return None
         newest = answers[-1][0]
@@ -151,8 +154,7 @@ class LeastLatency(Balancer):
 
     def _estimates(self, servers, now):
         """``{server: Estimate or None}`` for the kind the robot sent most of lately."""
-        counts = dict((k, sum(1 for t in times if now - t <= RATE_HORIZON))
-                      for k, times in self.sends.items())
+        counts = dict((k, self._sent(k, now)) for k in self.sends)
         kind = max(sorted(counts, key=str), key=counts.get) if any(counts.values()) else None
         return self._pooled(dict((s, self.estimate(s, kind, now)) for s in servers))
 
