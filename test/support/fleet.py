@@ -88,6 +88,11 @@ def counts(reports, last=None):
             'errors': collections.Counter(m.error.split(' (')[0] for m in failed)}
 
 
+def _tail(path, lines=15):
+    with open(path, errors='replace') as stream:
+        return ''.join(collections.deque(stream, lines))
+
+
 def _kill(pid, sig):
     try:
         os.kill(pid, sig)
@@ -110,8 +115,13 @@ class Fleet(object):
                 ['roslaunch', 'server_select', 'demo.launch', 'output:=log']
                 + ['%s:=%s' % kv for kv in sorted(self.args.items())],
                 stdout=stream, stderr=subprocess.STDOUT, start_new_session=True)
-        assert wait_until(lambda: all(self.pid(n) for n in NODES), 60.0, period=0.5), \
-            'the fleet did not come up (%s)' % self.log
+        if not wait_until(lambda: all(self.pid(n) for n in NODES), 60.0, period=0.5):
+            missing = [n for n in NODES if not self.pid(n)]
+            # a launch left running would start its stragglers under the next fleet's names
+            self.__exit__(None, None, None)
+            raise AssertionError('the fleet did not come up in 60 s: %s not registered '
+                                 '(%s; its last lines:\n%s)'
+                                 % (', '.join(missing), self.log, _tail(self.log)))
         return self
 
     def __exit__(self, *exc):
