@@ -26,7 +26,7 @@ ROLE_FILES = ('server.launch', 'robot.launch', 'manager.launch', 'top_manager.la
               'oracle.launch')
 # Nodes started without a role launch file of their own, and the parameters they read.
 OTHER_NODES = {
-    'report': ('duration', 'output', 'end_launch'),
+    'report': ('duration', 'output', 'end_launch', 'fleet_key', 'fleet_key_next'),
     'search_monitor': ('area', 'radius', 'timeout', 'output', 'end_launch'),
     'usage': ('nodes', 'delay', 'duration', 'output'),
 }

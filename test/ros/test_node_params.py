@@ -6,6 +6,7 @@ The cases are written as ``rosrun`` arguments and read the way rosrun reads them
 value as YAML), so that a case here is what an operator would type.
 """
 
+import logging
 import os
 
 import pytest
@@ -18,7 +19,7 @@ from server_select.core.trust.keys import make_key
 from server_select.nodes.manager import ManagerNode
 from server_select.nodes.robot import RobotNode
 from server_select.nodes.server import ServerNode
-from server_select.ros import node, seal
+from server_select.ros import launch_args, node, params_in_force, seal
 
 NODES = {'robot': RobotNode, 'manager': ManagerNode, 'server': ServerNode}
 ROBOT_OK = ['_robot_id:=1', '_servers:=1,2,3']
@@ -82,6 +83,8 @@ def param_server(monkeypatch):
 
     monkeypatch.setattr(rospy, 'get_param', get_param)
     monkeypatch.setattr(rospy, 'has_param', lambda name: name in table)
+    monkeypatch.setattr(rospy, 'set_param', table.__setitem__)
+    monkeypatch.setattr(params_in_force, '_WRITTEN', {})
     monkeypatch.setattr(node, '_PROFILE', None)
     monkeypatch.setattr(node, '_FLEET_NS', None)
     monkeypatch.setattr(seal, '_STATE', {})
@@ -111,6 +114,27 @@ def test_good_parameters_are_accepted(param_server, kind, args):
     (their wiring to the graph starts only in ``start()``)."""
     param_server.update(private_params(args))
     assert NODES[kind]() is not None
+
+
+def test_the_defaults_a_node_uses_are_written_back(param_server):
+    """``rosparam get /robot1/probe_rate`` shows what the robot uses: the profile's
+    default, written where the robot looked; a value set is left as it was."""
+    param_server.update(private_params(ROBOT_OK + ['_profile:=fleet', '_window:=3']))
+    NODES['robot']()
+    assert param_server['~contender_rate'] == 4.0 and param_server['~window'] == 3
+    assert param_server['~servers'] == '1,2,3'
+    assert params_in_force._WRITTEN['contender_rate'] == 4.0
+    assert 'window' not in params_in_force._WRITTEN
+
+
+def test_an_unknown_private_parameter_is_named_with_the_nearest_known_one(monkeypatch):
+    monkeypatch.setattr(rospy, 'get_name', lambda: '/robot1')
+    monkeypatch.setattr(rospy, 'get_param_names', lambda: [
+        '/robot1/probe_rte', '/robot1/probe_rate', '/robot1/orb/rate', '/robot1/zzz',
+        '/robot10/probe_rte', '/robot1/defaults_written/pid', '/rosdistro'])
+    monkeypatch.setattr(params_in_force, '_NAMESPACES', {'orb'})
+    assert params_in_force.unknown(node.PARAMS) == [('probe_rte', 'probe_rate'),
+                                                    ('zzz', None)]
 
 
 def test_a_fleet_key_that_cannot_be_used_ends_the_node_by_name(param_server, tmp_path):
@@ -172,3 +196,30 @@ def test_a_node_given_another_roles_key_or_type_is_refused_by_name(param_server,
     assert seal.enabled()
     with pytest.raises(ParamError, match='signs as no role'):
         seal.SealedPublisher('/samples', LatencySamples, queue_size=1)
+
+
+def test_a_launch_argument_no_launch_file_declares_is_named_by_the_first_node():
+    """``roslaunch server_select demo.launch probe_rat:=5``: roslaunch ignores it; the
+    first node of the package it starts (the manager) names it. An argument of an included
+    file (robot.launch's ``task_plugins``, through ``pass_all_args``) is declared."""
+    first, unknown = launch_args.undeclared(
+        ['roslaunch', '--screen', '-p', '11411', 'server_select', 'demo.launch',
+         'profile:=fleet', 'probe_rat:=5', 'task_plugins:=a:B', 'xyzzy:=1', '__log:=x'])
+    assert first == '/manager'
+    assert unknown == [('probe_rat', 'probe_rate'), ('xyzzy', None)]
+    first, unknown = launch_args.undeclared(['roslaunch', 'server_select', 'robot.launch',
+                                             'robot_id:=2'])
+    assert (first, unknown) == ('/robot2', [])
+
+
+def test_rospys_warning_of_a_connection_abandoned_before_its_header_goes_to_debug():
+    """A client that gave up connecting: no WARN in a healthy fleet; a bad header warns."""
+    keep = node.AbandonedConnections().filter
+    record = logging.LogRecord('rosout', logging.WARNING, __file__, 1,
+                               'Inbound TCP/IP connection failed: %s', (
+                                   'connection from sender terminated before handshake '
+                                   'header received. 0 bytes were received. Please check '
+                                   'sender for additional details.',), None)
+    assert not keep(record)
+    record.args = ('header too long: 40000000 bytes',)
+    assert keep(record)

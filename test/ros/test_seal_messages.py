@@ -96,3 +96,16 @@ def test_a_probe_answer_counts_for_its_own_request_server_and_address_only():
     assert refusal(at='rosrpc://impostor:40002').startswith('wrong signature')   # relayed
     assert refusal(server_node='/impostor').startswith('wrong signature')
     assert refusal(msg=LatencyProbeResponse(server_id=1, seq=7)) == 'not signed'
+
+
+def test_one_flag_sealed_for_two_topics_keeps_each_topics_seal():
+    """The manager publishes one flag on the robot's latched topic, then on the shared one:
+    the latched publisher keeps the object, so sealing for the second topic must not
+    change what the first holds."""
+    sealer = Sealer(Keys.from_fleet(SECRET, 'manager'), '/manager')
+    flag = SelectionFlag(robot_id=1, server_id=2, ranking=[2, 1])
+    own = sealed(flag, sealer, '/robot_1/server_select_flag')
+    sealed(flag, sealer, '/server_select_flag')
+    received = wire(own, SelectionFlag)
+    received._connection_header['topic'] = '/robot_1/server_select_flag'
+    assert check(received, '/manager', Verifier([KEY])) is None

@@ -213,7 +213,7 @@ def test_replicated_task_goes_to_two_servers_and_the_first_answer_wins():
     assert published == [(task, 1), (task, 2)] and b.out == {1: 1, 2: 1}
     clock.now += 0.05
     assert f.resolve(task, 2, True).status == 'ended'
-    assert f.resolve(task, 1, True).status == 'duplicate'
+    assert f.resolve(task, 1, True).status == 'outrun'
     assert len(reports) == 1 and reports[0].answered_by == 2 and reports[0].attempts == 2
     assert sum(b.out.values()) == 0 and f.replicated == 1
 

@@ -6,8 +6,8 @@ import itertools
 import pytest
 
 from server_select.core.flow.attempts import AttemptClock
-from server_select.core.flow.task_flow import (DUPLICATE, FOREIGN, LATE, LOCAL, NO_SERVER, RETRIED,
-                                               UNKNOWN, TaskFlow)
+from server_select.core.flow.task_flow import (DUPLICATE, FOREIGN, LATE, LOCAL, NO_SERVER,
+                                               OUTRUN, RETRIED, UNKNOWN, TaskFlow)
 
 from support.clock import Clock
 
@@ -84,12 +84,13 @@ def test_a_silent_server_is_left_at_its_attempt_deadline_and_nothing_is_lost():
     w.clock.now += 0.01
     w.flow.tick()
     assert [s for _, s in w.published] == [3, 1] and w.failures == [3]
-    # the first server answers after all: first answer wins, the second is a duplicate
+    # the first server answers after all: first answer wins, the re-sent copy is outrun
     w.clock.now += 0.1
     outcome = w.answer(1, 3).outcome
     assert (outcome.ok, outcome.answered_by, outcome.attempts) == (True, 3, 2)
     assert outcome.rtt == pytest.approx(0.6)
-    assert w.answer(1, 1).status == DUPLICATE
+    assert w.answer(1, 1).status == OUTRUN
+    assert w.answer(1, 3).status == DUPLICATE             # the winner again: a fault
     assert len(w.reports) == 1
 
 
@@ -220,8 +221,8 @@ def test_a_hedged_task_goes_to_the_next_server_a_round_trip_past_the_p95_first_w
     w.clock.now += 0.001
     outcome = w.answer(task, 4).outcome                   # the copy wins
     assert outcome.ok and outcome.answered_by == 4 and outcome.attempts == 2
-    assert w.answer(task, 3).status == DUPLICATE         # the original, late: counted, dropped
-    assert w.flow.ignored[DUPLICATE] == 1
+    assert w.answer(task, 3).status == OUTRUN            # the original, late: counted, dropped
+    assert w.flow.ignored == {OUTRUN: 1}
     w.flow.tick()
     assert [s for _, s in w.published] == [3, 4]  # once per task
 

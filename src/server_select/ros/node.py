@@ -1,5 +1,6 @@
 """Wiring shared by the nodes: parameters read through the table, and the main() skeleton."""
 
+import logging
 import os
 import signal
 
@@ -10,7 +11,9 @@ import rospy
 from server_select.core.config.params import ParamError
 from server_select.core.util.procs import wait_until
 from server_select.core.settings import PARAMS, REQUIRED, default as profile_default
+from server_select.ros import launch_args, params_in_force
 
+_UNSET = object()
 _FLEET_NS = None
 _PROFILE = None
 _LIVE = set()           # private parameters followed through the master's updates
@@ -23,7 +26,8 @@ def param(name, default=None, parse=None):
 
     ``default`` and ``parse`` override the table's (for a default that depends on another
     parameter, e.g. ``~seed`` defaults to ``~robot_id``). A missing required parameter or
-    a value the parser refuses raises :class:`ParamError` naming ``~name``.
+    a value the parser refuses raises :class:`ParamError` naming ``~name``. A default
+    used is written back to the parameter server (:mod:`params_in_force`).
     """
     spec = PARAMS[name]
     default = profile_default(name, profile()) if default is None else default
@@ -31,7 +35,10 @@ def param(name, default=None, parse=None):
     if default is REQUIRED and not rospy.has_param(private):
         raise ParamError('%s: required parameter is not set (resolved: %s)'
                          % (private, rospy.resolve_name(private)))
-    value = rospy.get_param(private, default)
+    value = rospy.get_param(private, _UNSET)
+    if value is _UNSET:
+        value = default
+        params_in_force.write_default(name, value)
     if value is None:
         return None
     return (parse or spec.parse)(private, value)
@@ -50,20 +57,42 @@ def live_param(name):
     return PARAMS[name].parse(private, rospy.get_param_cached(private))
 
 
+class AbandonedConnections(logging.Filter):
+    """rospy warns of every inbound connection closed before its first byte: a client
+    that gave up connecting (a probe past its deadline while the node was starting) or
+    one that only looked. No message was lost and there is nothing to do about it, so it
+    is logged at debug level; a connection that sent a bad header still warns."""
+    SIGN = '0 bytes were received'
+
+    def filter(self, record):
+        message = record.getMessage()
+        if record.levelno == logging.WARNING and message.startswith(
+                'Inbound TCP/IP connection failed') and self.SIGN in message:
+            rospy.logdebug(message)
+            return False
+        return True
+
+
 def quiet_logging():
     """rospy's log handler asks for ``/rosout_disable_topics_generation`` at every log line
     through its parameter cache, which keeps nothing while the parameter is unset: each
     line would be a ``subscribeParam`` call to the master. Set it (to its default, False)
-    if unset, so that the cache holds it after the first line."""
+    if unset, so that the cache holds it after the first line. rospy's warning of an
+    abandoned connection goes to debug (:class:`AbandonedConnections`)."""
     if not rospy.has_param(ROSOUT_TOPICS):
         rospy.set_param(ROSOUT_TOPICS, False)
+    logging.getLogger('rosout').addFilter(AbandonedConnections())
 
 
 def profile():
     """The node's ``~profile`` (``paper`` unless set)."""
     global _PROFILE
     if _PROFILE is None:
-        _PROFILE = PARAMS['profile'].parse('~profile', rospy.get_param('~profile', 'paper'))
+        value = rospy.get_param('~profile', _UNSET)
+        if value is _UNSET:
+            value = 'paper'
+            params_in_force.write_default('profile', value)
+        _PROFILE = PARAMS['profile'].parse('~profile', value)
     return _PROFILE
 
 
@@ -85,15 +114,9 @@ def end_parent_launch():
     """Ask the roslaunch that started this node to shut down, as Ctrl-C would (a clean end,
     without the "REQUIRED process has died" of a required node that exits by itself). False
     when the parent is not roslaunch."""
-    parent = os.getppid()
-    try:
-        with open('/proc/%d/cmdline' % parent, 'rb') as stream:
-            argv = stream.read().split(b'\0')
-    except OSError:
+    if launch_args.parent_roslaunch_argv() is None:
         return False
-    if not any(os.path.basename(a) == b'roslaunch' for a in argv[:2]):
-        return False
-    os.kill(parent, signal.SIGINT)
+    os.kill(os.getppid(), signal.SIGINT)
     return True
 
 

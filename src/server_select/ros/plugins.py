@@ -17,7 +17,7 @@ import rospy
 
 from server_select.core.config.params import ParamError
 from server_select.ros.graph import publisher_of
-from server_select.ros import seal
+from server_select.ros import params_in_force, seal
 from server_select.ros.endpoints import ServerEndpoint
 
 
@@ -86,6 +86,7 @@ def load(spec, robot_id, name='~task_plugins'):
     if not (isinstance(cls, type) and issubclass(cls, TaskPlugin)):
         raise ParamError('%s: %r is not a TaskPlugin' % (name, spec))
     seal.require_sealable(cls.result_type, "the result of task type '%s'" % cls.kind)
+    params_in_force.reads_namespace(cls.kind)
     settings = rospy.get_param('~' + cls.kind, {})
     if not isinstance(settings, dict):
         raise ParamError('~%s: expected a mapping of settings, got %r' % (cls.kind, settings))

@@ -13,7 +13,7 @@ from server_select.core.flow.task_flow import HEDGE_QUANTILE
 from server_select.core.selection import probing
 from server_select.core.selection import robot_parts
 from server_select.core.selection.effect import ineffective, refusal
-from server_select.ros import seal
+from server_select.ros import params_in_force, seal
 from server_select.ros.load import load_of
 from server_select.ros.membership import ProbeAddresses
 from server_select.ros.node import param
@@ -26,7 +26,7 @@ def robot_selection(robot_id, servers, mode):
     """``(Selection, ServerHealth, Policy)`` of a robot from its parameters (a parameter
     set that is not for setting with the others is refused:
     :mod:`~server_select.core.selection.effect`)."""
-    refused = refusal(ineffective(param, lambda name: rospy.has_param('~' + name)))
+    refused = refusal(ineffective(param, params_in_force.set_here))
     if refused:
         raise ParamError(refused)
     fixed = param('fixed_server', default=servers[0] if servers else None,

@@ -9,7 +9,8 @@ import rospy
 
 from server_select.core.config import names
 from server_select.core.config.params import ParamError
-from server_select.ros import seal
+from server_select.core.settings import PARAMS
+from server_select.ros import launch_args, params_in_force, seal
 from server_select.ros.master_watch import MasterWatch
 from server_select.ros.node import _LIVE, fleet, param, quiet_logging
 
@@ -37,6 +38,7 @@ def run(node_name, node_class, argv=None):
     """
     rospy.init_node(node_name, argv=argv)
     quiet_logging()
+    params_in_force.take_back_leftovers()
     try:
         # a key that cannot be used, or none with ~require_key, ends the node here
         seal.announce(rospy.get_name(), getattr(node_class, 'SEAL_ROLE', None))
@@ -52,5 +54,8 @@ def run(node_name, node_class, argv=None):
     start = getattr(node, 'start', None)
     if start is not None:
         start()
+    params_in_force.warn_unknown(PARAMS)
+    launch_args.warn_undeclared(rospy.get_name(), rospy.logwarn)
+    params_in_force.record()
     watch.start()
     rospy.spin()

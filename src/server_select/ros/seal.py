@@ -11,6 +11,7 @@ every :class:`~server_select.ros.senders.SenderGate`; :func:`answer_refusal`). W
 receives signed messages warns that it should have the key.
 """
 
+import copy
 import io
 import threading
 
@@ -64,8 +65,9 @@ def announce(who, role=None):
     elif param('require_key'):
         raise ParamError('~require_key: no ~fleet_key given (make one with make_key and '
                          'give every node of the fleet a copy)')
-    else:       # a warning where the fleet is deployed, a note in the paper's set-up
-        log = rospy.logwarn if param('profile') == 'fleet' else rospy.loginfo
+    else:       # a warning where the fleet is deployed (once: by its manager), else a note
+        log = rospy.logwarn if param('profile') == 'fleet' and role == 'manager' else \
+            rospy.loginfo
         log('%s: fleet key off: signs nothing and checks nothing, so any node on this '
             'master can steer it (give every node ~fleet_key)', who)
 
@@ -124,10 +126,14 @@ def refusal(msg, sender):
 
 
 def sealed(msg, sealer, channel):
-    """``msg`` sealed by ``sealer`` (a :class:`~server_select.core.trust.seal.Sealer`; None:
-    unchanged) for topic or service ``channel``."""
+    """A copy of ``msg`` sealed by ``sealer`` (a
+    :class:`~server_select.core.trust.seal.Sealer`; None: ``msg`` unchanged) for topic or
+    service ``channel``. A copy: one message published on two topics keeps each topic's
+    seal (a latched publisher keeps the object it was given, not its bytes)."""
     if sealer is None or not hasattr(msg, 'seal'):
         return msg
+    msg = copy.copy(msg)
+    msg.seal = copy.copy(msg.seal)
     msg.seal.seq = sealer.next_seq()
     msg.seal.mac = b''
     msg.seal.mac = sealer.mac(msg.seal.seq, _payload(msg), core.context(channel, msg._type))

@@ -13,7 +13,7 @@ from server_select.core.config import names
 from server_select.core.util.pacer import Pacer
 from server_select.core.util.stats import format_ms, summarize
 from server_select.core.flow.outcome import STOPPED
-from server_select.core.flow.task_flow import ENDED, RETRIED, TaskFlow
+from server_select.core.flow.task_flow import ENDED, OUTRUN, RETRIED, TaskFlow
 from server_select.msg import TaskReport
 from server_select.ros.graph import publisher_of, unheard
 from server_select.ros.senders import SenderGate
@@ -170,6 +170,9 @@ class TaskStream(object):
             rospy.logwarn('robot %d: %s task %d failed on server %d (%s): sent to the next '
                           'server', self.robot_id, self.flow.kind, result.task_id,
                           result.server_id, result.error)
+        elif status == OUTRUN:      # a hedge's losing copy: expected, and counted
+            rospy.logdebug('robot %d: %s task %d answered by server %d after another copy',
+                           self.robot_id, self.flow.kind, result.task_id, result.server_id)
         elif status != ENDED:
             rospy.logwarn_throttle(
                 5.0, 'robot %d: ignored %s %s result for task %d from server %d (%s)'
@@ -191,14 +194,16 @@ class TaskStream(object):
 
     def summary(self):
         flow = self.flow
-        ignored = sum(flow.ignored.values())
+        outrun = flow.ignored[OUTRUN]
+        ignored = sum(flow.ignored.values()) - outrun
         overload = ', '.join('%d %s' % (n, what) for n, what in (
             (flow.busy, 'busy answers'), (flow.skipped, 'skipped for a newer task'),
             (flow.superseded, 'dropped for a newer task'),
             (flow.unfunded, 'extra sends over the retry budget')) if n)
-        return '%s: %d sent, %d ok, %d failed, %d pending, %d re-sent%s%s%s, round trip %s' % (
+        return '%s: %d sent, %d ok, %d failed, %d pending, %d re-sent%s%s%s%s, round trip %s' % (
             flow.kind, flow.sent, flow.ok, flow.failed, len(flow), flow.resent,
             ', %d hedged' % flow.hedged if flow.hedge is not None else '',
+            ', %d copies answered after the first' % outrun if outrun else '',
             ', %d results ignored' % ignored if ignored else '',
             ', ' + overload if overload else '',
             format_ms(summarize(list(flow.rtts)), ('median', 'p99', 'max')))

@@ -25,33 +25,43 @@ the first server it was sent to, ``rtt`` None when no answer arrived."""
 # busy answer, the task went to the next candidate; the others resolve nothing (ignored).
 ENDED, RETRIED = 'ended', 'retried'
 DUPLICATE, LATE, UNKNOWN, FOREIGN = 'duplicate', 'late', 'unknown', 'foreign'
+# a copy of an answered task (a hedge, a re-send) answered by another server it was sent to:
+# expected, and no fault of anyone's
+OUTRUN = 'outrun'
 
 Resolution = collections.namedtuple('Resolution', 'status outcome')
-Resolution.__doc__ = """What an answer did: ``status`` (ENDED, RETRIED, DUPLICATE, LATE,
-UNKNOWN or FOREIGN) and, when ENDED, the task's ``outcome`` (else None)."""
+Resolution.__doc__ = """What an answer did: ``status`` (ENDED, RETRIED, DUPLICATE, OUTRUN,
+LATE, UNKNOWN or FOREIGN) and, when ENDED, the task's ``outcome`` (else None)."""
 
 
 class EndedTasks(object):
-    """The last ``remember`` tasks that ended, and whether an answer ended each: what a
-    later answer for a task id is (:meth:`why`)."""
+    """The last ``remember`` tasks that ended: who answered each and the servers it was
+    sent to, so that a later answer for a task id says what it is (:meth:`why`)."""
 
     def __init__(self, remember):
         self.remember = remember
-        self._answered = collections.OrderedDict()     # task id -> answered (bool)
+        self._ended = collections.OrderedDict()     # task id -> (answered by, sent to)
 
-    def add(self, task_id, answered):
-        self._answered[task_id] = answered
-        while len(self._answered) > self.remember:
-            self._answered.popitem(last=False)
+    def add(self, task_id, answered_by, sent_to=()):
+        """``answered_by``: the server whose answer ended the task (NO_SERVER: none did);
+        ``sent_to``: the servers it was sent to."""
+        self._ended[task_id] = (answered_by, frozenset(sent_to))
+        while len(self._ended) > self.remember:
+            self._ended.popitem(last=False)
 
     def __len__(self):
-        return len(self._answered)
+        return len(self._ended)
 
-    def why(self, task_id):
-        """DUPLICATE (it was answered), LATE (it failed) or UNKNOWN (not remembered)."""
-        if task_id not in self._answered:
+    def why(self, task_id, server):
+        """An answer from ``server`` for an ended task: OUTRUN (another copy of it was
+        answered first), DUPLICATE (answered already, and not a copy's answer), LATE (it
+        failed) or UNKNOWN (not remembered)."""
+        if task_id not in self._ended:
             return UNKNOWN
-        return DUPLICATE if self._answered[task_id] else LATE
+        answered_by, sent_to = self._ended[task_id]
+        if answered_by == NO_SERVER:
+            return LATE
+        return OUTRUN if server != answered_by and server in sent_to else DUPLICATE
 
 
 class Pending(object):
@@ -104,6 +114,10 @@ class Pending(object):
         first, sent = self.attempts[0]
         wait = delay(first)
         return None if wait is None else sent + wait
+
+    def servers(self):
+        """The servers this task was sent to."""
+        return frozenset(s for s, _ in self.attempts)
 
     def sent_at(self, server):
         return next((t for s, t in reversed(self.attempts) if s == server), None)

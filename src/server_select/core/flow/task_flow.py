@@ -30,7 +30,8 @@ import time
 from server_select.core.flow.attempts import AttemptClock
 from server_select.core.flow.timing import Timing
 from server_select.core.flow.outcome import (DUPLICATE, ENDED, FOREIGN, LATE,  # noqa: F401
-                                             LOCAL, NO_SERVER, RETRIED, UNKNOWN, EndedTasks,
+                                             LOCAL, NO_SERVER, OUTRUN, RETRIED, UNKNOWN,
+                                             EndedTasks,
                                              Outcome, Pending, Resolution)
 
 # a hedged copy goes after this quantile of a server's round trips, plus their median
@@ -101,7 +102,7 @@ class TaskFlow(Timing):
         self.sent = self.ok = self.failed = self.resent = self.switches = self.hedged = 0
         self.busy = self.skipped = self.superseded = self.unfunded = self.replicated = 0
         self._last_first = None
-        self.ignored = collections.Counter()          # DUPLICATE / LATE / UNKNOWN / FOREIGN
+        self.ignored = collections.Counter()   # DUPLICATE / OUTRUN / LATE / UNKNOWN / FOREIGN
         self.rtts = collections.deque(maxlen=keep_rtts)   # recent answered round trips
 
     def candidates(self):
@@ -174,13 +175,13 @@ class TaskFlow(Timing):
     def resolve(self, task_id, answered_by, ok, error='', result=None, busy=False):
         """An answer for ``task_id`` from ``answered_by``: a :class:`Resolution`, ENDED with
         the task's Outcome, RETRIED (an error or ``busy`` answer, the task went to the next
-        candidate), or DUPLICATE / LATE / UNKNOWN / FOREIGN (ignored: not from a server the
-        task was sent to). A ``busy`` answer blames nobody."""
+        candidate), or DUPLICATE / OUTRUN / LATE / UNKNOWN / FOREIGN (ignored: the task
+        ended, or it was not sent there). A ``busy`` answer blames nobody."""
         now = self._clock()
         with self._lock:
             pending = self._pending.get(task_id)
             if pending is None:
-                why = self._ended.why(task_id)
+                why = self._ended.why(task_id, answered_by)
                 self.ignored[why] += 1
                 return Resolution(why, None)
             sent_at = pending.sent_at(answered_by)
@@ -213,7 +214,8 @@ class TaskFlow(Timing):
             if len(pending.attempts) == 1:    # the winner of a race is no fair sample
                 self._on_answer(answered_by, answer_rtt)
         return Resolution(ENDED, self._end(pending.outcome(self.kind, answered_by, ok, error,
-                                                           now - pending.started)))
+                                                           now - pending.started),
+                                           pending.servers()))
 
     def abandon(self, why):
         """Report every task still waiting for an answer failed, with ``why`` (the robot is
@@ -224,9 +226,9 @@ class TaskFlow(Timing):
                 self._drop(each)
         return [self._end(p.unanswered(self.kind, why)) for p in pending]
 
-    def _end(self, outcome):
+    def _end(self, outcome, sent_to=()):
         with self._lock:
-            self._ended.add(outcome.task_id, outcome.answered_by != NO_SERVER)
+            self._ended.add(outcome.task_id, outcome.answered_by, sent_to)
             if outcome.ok:
                 self.ok += 1
                 self.rtts.append(outcome.rtt)
