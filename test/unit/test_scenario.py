@@ -90,6 +90,16 @@ def test_bad_hosts(hosts, message):
         Scenario({'hosts': hosts})
 
 
+@pytest.mark.parametrize('key, message', [
+    ('duraton', r"\['duraton'\] \(did you mean duration\?\)"),
+    ('link', r"\['link'\] \(did you mean links\?\)"),
+    ('zzz', 'zzz is not one of name, duration, hosts, default, links, suite')])
+def test_an_unknown_key_at_top_level_is_named_with_the_nearest_known_one(key, message):
+    hosts = {'m': {'role': 'manager'}, 'r1': {'role': 'robot', 'id': 1}}
+    with pytest.raises(ScenarioError, match=message):
+        Scenario({'hosts': hosts, key: 30})
+
+
 def test_shipped_scenarios_load(tmp_path):
     import os
     config = os.path.join(os.path.dirname(__file__), '..', '..', 'config')

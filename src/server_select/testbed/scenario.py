@@ -1,6 +1,7 @@
 """Testbed scenarios: hosts and time-varying per-pair link conditions (no rospy).
 
-A scenario is a YAML mapping::
+A scenario is a YAML mapping (a host may also start late, hang, get slower, have a CPU
+share, a memory limit or work of its own: docs/evaluation.md has every key)::
 
     name: paper_moving_robots
     duration: 120               # seconds the experiment runs
@@ -8,7 +9,6 @@ A scenario is a YAML mapping::
       manager: {role: manager}
       server1: {role: server, id: 1}
       robot1:  {role: robot, id: 1}
-      server9: {role: server, id: 9, start: 20, stop: 60}   # runs from t=20 s to 60 s
     default: {delay: 1.0}       # link state of pairs not listed: one-way delay in ms, ...
     links:                      # per unordered pair of hosts "a b", events in time order
       robot1 server1:
@@ -16,25 +16,14 @@ A scenario is a YAML mapping::
         - {at: 30, ramp: 20, over: 40}      # linear from the value at t=30 to 20 ms at t=70
         - {at: 80, down: true}              # every packet dropped
         - {at: 90, delay: 5, jitter: 0.5, loss: 0.01}   # up again
-    # a server host may also hang (every process in it stopped with SIGSTOP, then
-    # SIGCONT) and get slower (each task takes this many ms more, at run time):
-    #   server2: {role: server, id: 2, hang: [[40, 55]], work: [{at: 40, delay: 25}]}
-    # and a server or robot host may have a CPU share of one core (a cgroup quota on
-    # every process of the host: real, finite capacity), given per cpu_period ms (100 by
-    # default; a few ms slow it evenly), a memory limit (MiB), and work of its own (busy:
-    # a process using that share of the host's CPU, as a robot's SLAM would); "like: pi3"
-    # is a Raspberry Pi 3 (testbed/cpu.py PI3: its calibration):
-    #   server3: {role: server, id: 3, cpu: 0.25}
-    #   robot1:  {role: robot, id: 1, like: pi3, busy: 0.5}
 
-Each event may set ``delay`` (ms, a step), ``ramp`` + ``over`` (ms, s: linear change),
-``jitter`` (ms: a packet's delay is uniform in delay +- jitter), ``loss`` (0..1),
-``down`` (true/false) and ``rate`` (MB/s each way, 0 = unlimited: a packet leaves after the
-ones before it have, at that rate); what an event does not set carries over. Delays are one way and
-apply to both directions of the pair: a round trip takes twice the delay.
+An event may set ``delay`` (ms, a step), ``ramp`` + ``over`` (ms, s: linear), ``jitter``
+(ms, uniform), ``loss`` (0..1), ``down`` and ``rate`` (MB/s each way, 0: unlimited); what
+it does not set carries over. Delays are one way: a round trip takes twice the delay.
 """
 
 import bisect
+import difflib
 import collections
 
 import yaml
@@ -121,12 +110,25 @@ class LinkProfile(object):
         return state
 
 
+TOP_KEYS = ('name', 'duration', 'hosts', 'default', 'links', 'suite')
+
+
+def _nearest(key):
+    near = difflib.get_close_matches(key, TOP_KEYS, 1)
+    return 'did you mean %s?' % near[0] if near else '%s is not one of %s' % (key, ', '.join(
+        TOP_KEYS))
+
+
 class Scenario(object):
     """Hosts and link profiles of one testbed run."""
 
     def __init__(self, data, source='scenario'):
         if not isinstance(data, dict):
             raise ScenarioError('%s: expected a mapping at top level' % source)
+        unknown = sorted(set(map(str, data)) - set(TOP_KEYS))
+        if unknown:
+            raise ScenarioError('unknown keys at top level %s (%s)' % (
+                unknown, '; '.join(_nearest(key) for key in unknown)))
         self.source = source
         self.name = str(data.get('name', 'scenario'))
         self.duration = _number(data.get('duration', 60), 'duration', minimum=1.0)
