@@ -13,6 +13,7 @@ import argparse
 import os
 import re
 import sys
+import textwrap
 import xml.etree.ElementTree as ET
 
 from server_select.core.settings import PARAMS, PROFILES, REQUIRED
@@ -165,6 +166,36 @@ def render(top=TOP):
     for node, params in OTHER_NODES.items():
         out += [row(p).replace('| ', '| `%s` | ' % node, 1) for p in params]
     return '\n'.join(out) + '\n'
+
+
+def node_params(node, top=TOP):
+    """The parameters node type ``node`` (``robot``, ``report``, ...) reads, in the order
+    its launch file (or node list) gives them."""
+    if node in OTHER_NODES:
+        return list(OTHER_NODES[node])
+    return list(read_launch(launch_path(node + '.launch', top))[1])
+
+
+def usage(node, summary='', top=TOP):
+    """What ``rosrun server_select <node> --help`` prints: the node's parameters with
+    their defaults in both profiles and their meaning."""
+    out = ['usage: rosrun server_select %s [_parameter:=value ...] [__name:=name]' % node,
+           '       roslaunch server_select %s.launch [argument:=value ...]' % node
+           if node not in OTHER_NODES else '', '',
+           ' '.join((summary or '').split('\n\n')[0].split()), '',
+           'parameters (default; with ~profile fleet, when another):']
+    for name in node_params(node, top):
+        spec = PARAMS[name]
+        default = value(spec.default).strip('`')
+        fleet = PROFILES['fleet'].get(name, spec.default)
+        if fleet != spec.default:
+            default += '; fleet: ' + value(fleet).strip('`')
+        out.append('  ~%-22s %s' % (name, default))
+        out += textwrap.wrap(spec.doc, 96, initial_indent=' ' * 26,
+                             subsequent_indent=' ' * 26)
+    out += ['', 'docs/parameters.md has them all; every launch argument of a launch file: '
+            'roslaunch server_select <file>.launch --ros-args']
+    return '\n'.join(line for i, line in enumerate(out) if line or i != 1)
 
 
 def main(argv=None):

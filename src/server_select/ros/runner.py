@@ -9,6 +9,7 @@ import rospy
 
 from server_select.core.config import names
 from server_select.core.config.params import ParamError
+from server_select import paramdoc
 from server_select.core.settings import PARAMS
 from server_select.ros import launch_args, params_in_force, seal
 from server_select.ros.master_watch import MasterWatch
@@ -36,6 +37,9 @@ def run(node_name, node_class, argv=None):
     says ``MASTER_WATCHER`` (the manager) checks every ``~master_watch`` s and tells the
     others on ``master_pid``, which check every ``~master_check`` s by themselves.
     """
+    if {'-h', '--help'} & set(rospy.myargv(sys.argv if argv is None else argv)[1:]):
+        print(paramdoc.usage(node_name, node_class.__doc__ or ''))
+        sys.exit(0)
     rospy.init_node(node_name, argv=argv)
     quiet_logging()
     params_in_force.take_back_leftovers()
