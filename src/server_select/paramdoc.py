@@ -16,6 +16,7 @@ import sys
 import textwrap
 import xml.etree.ElementTree as ET
 
+from server_select.core.selection.policy import POLICIES
 from server_select.core.settings import PARAMS, PROFILES, REQUIRED
 from server_select.ros.paths import package_file
 
@@ -39,6 +40,8 @@ LAUNCH_ONLY = {
     'settings': 'a YAML file of more private parameters (e.g. a plug-in\'s settings), '
                 'loaded with find and arg substitution',
 }
+# words of the policy argument's doc that are not policies
+POLICY_DOC_WORDS = {'the', 'paper', 'fleet', 'or', 'peer', 'per', 'task', 'rule', 'rules'}
 ARG = re.compile(r'\$\(arg ([A-Za-z_][A-Za-z0-9_]*)\)')
 EVAL_ARG = re.compile(r"arg\('([A-Za-z_][A-Za-z0-9_]*)'\)")
 
@@ -85,12 +88,34 @@ def problems(top=TOP):
                                  % (name, param, arg))
         for arg in sorted(set(args) - used):
             found.append('%s: argument %r reaches no parameter of the node' % (name, arg))
+        found += default_problems(name, args, params)
     for params in OTHER_NODES.values():
         named.update(params)
         found += ['node list: %r is not in the table' % p for p in params if p not in PARAMS]
     found += ['table: %r is set by no launch file and read by no listed node' % p
               for p in sorted(set(PARAMS) - named)]
     return found + listing_problems(top)
+
+
+def default_problems(name, args, params):
+    """A launch default that is not the node's: an argument is ``-`` (the node's default,
+    in either profile), has none (the parameter is required), or is the table's default.
+    The policy argument's doc names exactly the policies there are."""
+    found = []
+    for param, arg in sorted(params.items()):
+        default = args.get(arg, ('-', ''))[0] if arg else '-'
+        table = PARAMS[param].default if param in PARAMS else None
+        if default == '-' or (default is None and table is REQUIRED) or \
+                default == str(table):
+            continue
+        found.append('%s: argument %r defaults to %r, the node to %s' % (
+            name, arg, default, value(table)))
+    if 'policy' in args:
+        named = set(re.findall(r'[a-z][a-z0-9_]+', args['policy'][1])) - POLICY_DOC_WORDS
+        if named != set(POLICIES):
+            found.append('%s: argument \'policy\' names %s; the policies are %s' % (
+                name, sorted(named), sorted(POLICIES)))
+    return found
 
 
 def listing_problems(top=TOP):

@@ -43,3 +43,22 @@ def test_a_launch_file_that_disagrees_is_named(tmp_path):
     assert "server.launch: argument 'unused' defaults to \"\" (roslaunch --ros-args lists " \
         "it as required): \"-\" leaves the node's default" in found
     assert len(found) == 5, found
+
+
+def test_a_launch_default_other_than_the_nodes_and_a_stale_policy_list_are_named(tmp_path):
+    """robot.launch once defaulted robot_id to 1 and servers to 1,2,3 (the table: required;
+    the fleet's []), and offered policies that no longer exist."""
+    shutil.copytree(os.path.join(paramdoc.TOP, 'launch'), str(tmp_path / 'launch'))
+    path = tmp_path / 'launch' / 'robot.launch'
+    text = path.read_text().replace('<arg name="robot_id" doc=', '<arg name="robot_id" '
+                                    'default="1" doc=')
+    text = text.replace('<arg name="servers" default="-"', '<arg name="servers" '
+                        'default="1,2,3"')
+    text = text.replace('least_latency (the fleet)', 'bound')
+    path.write_text(text)
+    found = paramdoc.problems(str(tmp_path))
+    assert "robot.launch: argument 'robot_id' defaults to '1', the node to required" in found
+    assert "robot.launch: argument 'servers' defaults to '1,2,3', the node to required" in found
+    assert any(f.startswith("robot.launch: argument 'policy' names ['bound', 'hysteresis'")
+               and "'least_latency'" in f for f in found), found
+    assert len(found) == 3, found
