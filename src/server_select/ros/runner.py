@@ -8,12 +8,12 @@ import rosgraph
 import rospy
 
 from server_select.core.config import names
+from server_select.core.util import interrupts
 from server_select.core.config.params import ParamError
-from server_select import paramdoc
 from server_select.core.settings import PARAMS
 from server_select.ros import launch_args, params_in_force, seal
 from server_select.ros.master_watch import MasterWatch
-from server_select.ros.node import _LIVE, fleet, param, quiet_logging
+from server_select.ros.node import _LIVE, end_parent_launch, fleet, param, quiet_logging
 
 
 def _follow_again(what):
@@ -31,16 +31,32 @@ def _follow_again(what):
 def run(node_name, node_class, argv=None):
     """Initialise the node, build ``node_class()``, start it and spin until shutdown.
 
-    A ParamError becomes one ``logfatal`` line and exit status 2, so that a launch file
-    with a bad ``<arg>`` fails loudly instead of running half-configured. Every node
+    A ParamError becomes one ``logfatal`` line and exit status 2, and ends the roslaunch
+    that started the node, so that a launch file with a bad ``<arg>`` fails loudly instead
+    of running half-configured. Every node
     registers again with a restarted roscore (:class:`MasterWatch`): a node whose class
     says ``MASTER_WATCHER`` (the manager) checks every ``~master_watch`` s and tells the
     others on ``master_pid``, which check every ``~master_check`` s by themselves.
     """
     if {'-h', '--help'} & set(rospy.myargv(sys.argv if argv is None else argv)[1:]):
+        from server_select import paramdoc      # (finds the package's launch files: slow)
         print(paramdoc.usage(node_name, node_class.__doc__ or ''))
         sys.exit(0)
-    rospy.init_node(node_name, argv=argv)
+    # rospy's signal handler would deadlock on a master call of the starting node
+    with interrupts.deferred():
+        rospy.init_node(node_name, argv=argv, disable_signals=True)
+        watch = None if interrupts.held() else _start(node_class)
+    if interrupts.held():           # Ctrl-C while it was starting: end as Ctrl-C ends it
+        rospy.signal_shutdown('signal %s while starting' % interrupts.held()[0])
+        return
+    interrupts.on_signal(lambda signum: rospy.signal_shutdown('signal-%d' % signum))
+    watch.start()
+    rospy.spin()
+
+
+def _start(node_class):
+    """The node built and started; its MasterWatch (not started yet). A ParamError ends
+    the node (and its launch)."""
     quiet_logging()
     params_in_force.take_back_leftovers()
     try:
@@ -53,6 +69,9 @@ def run(node_name, node_class, argv=None):
                             topic=fleet(names.MASTER_PID_TOPIC))
     except ParamError as error:
         rospy.logfatal('invalid parameter: %s', error)
+        if end_parent_launch():     # no launch runs on half started, without this node
+            rospy.logfatal('%s: the launch ends, this node\'s parameter being invalid',
+                           rospy.get_name())
         rospy.signal_shutdown('invalid parameter')
         sys.exit(2)
     start = getattr(node, 'start', None)
@@ -61,5 +80,4 @@ def run(node_name, node_class, argv=None):
     params_in_force.warn_unknown(PARAMS)
     launch_args.warn_undeclared(rospy.get_name(), rospy.logwarn)
     params_in_force.record()
-    watch.start()
-    rospy.spin()
+    return watch
