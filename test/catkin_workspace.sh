@@ -6,7 +6,8 @@
 #   launch-level rostest, once, and catkin_test_results;
 #   catkin_make (the README's order);
 #   the timed demo launched from the workspace's devel space, recorded with plain
-#   rosbag record -a, and analyze on that bag.
+#   rosbag record -a, and analyze on that bag;
+#   the example task type in a keyed fleet (the README's recipe with a key).
 # Prints "catkin: N passed, N failed" last; exit status non-zero on any failure.
 set -u
 repo=$(cd "$(dirname "$0")/.." && pwd)
@@ -50,6 +51,13 @@ step demo "source devel/setup.bash && (roscore -p $port > roscore.out 2>&1 &) \
   rosnode kill /recorder; within 30 '[ -f plain.bag ]'; pkill -INT -f 'roscore -p $port'; \
   grep -q '| R1 | S' demo.out && grep -q '| R2 | S' demo.out \
   && rosrun server_select analyze plain.bag | tee analyze.out && grep -q '^| plain | [1-9]' analyze.out"
+# the example task type, as the README has it, in a keyed fleet: its results carry seals
+step keyed_task "source devel/setup.bash && (roscore -p $port > roscore2.out 2>&1 &) \
+  && within 30 'rosnode list' && rosrun server_select make_key $ws/fleet.key \
+  && (timeout -s INT 25 roslaunch wordcount_task wordcount.launch fleet_key:=$ws/fleet.key \
+      > keyed.out 2>&1; true) && pkill -INT -f 'roscore -p $port'; cat keyed.out \
+  && grep -q 'wordcount: [1-9][0-9]* sent, [1-9][0-9]* ok, 0 failed' keyed.out \
+  && grep -q 'fleet key on' keyed.out && ! grep -q 'ignored' keyed.out"
 # what failed, last (CI shows the end of the output): each failed test case, its first line,
 # and what the nodes launched beside that test logged (its launch's log directory)
 /usr/bin/python3 - "$ws/build/test_results" "$ws/ros_home/log" <<'PY'

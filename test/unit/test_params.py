@@ -110,3 +110,14 @@ def test_probe_services_name_their_server(service, expected):
 def test_probe_services_in_a_fleet_namespace():
     assert names.probe_server_id('/fleet/latency_S4', '/fleet/') == 4
     assert names.probe_server_id('/latency_S4', '/fleet/') is None
+
+
+def test_a_path_with_a_tilde_is_the_users_home(monkeypatch):
+    """roslaunch passes ``fleet_key:=~/.ros/robot.key`` as it is: the node expands it."""
+    from server_select.core.config.params import parse_path
+    monkeypatch.setenv('HOME', '/home/pi')
+    assert parse_path('~fleet_key', '~/.ros/robot.key') == '/home/pi/.ros/robot.key'
+    assert parse_path('~fleet_key', '/etc/fleet.key') == '/etc/fleet.key'
+    assert parse_path('~image_source', 'search:a.yaml') == 'search:a.yaml'
+    with pytest.raises(ParamError, match='expected a string'):
+        parse_path('~fleet_key', [1])

@@ -16,7 +16,7 @@ from server_select.core.config.params import (one_of, parse_bool, parse_count, p
                                               parse_node_names, parse_non_negative,
                                               parse_node_pattern, parse_number,
                                               parse_plugins, parse_positive, parse_positive_int,
-                                              parse_publisher, parse_text)
+                                              parse_path, parse_publisher, parse_text)
 
 REQUIRED = object()
 
@@ -82,7 +82,7 @@ PARAMS = {
                               'recorder that must see every task; empty: start at once)'),
     'summary_period': Param(10.0, parse_positive, 'period of the log summary (s)'),
     'seed': Param(None, parse_id, 'task data random seed (default: the robot id)'),
-    'image_source': Param('', parse_text, 'folder, video file or search:<area.yaml>'),
+    'image_source': Param('', parse_path, 'folder, video file or search:<area.yaml>'),
     'frame_rate': Param(10.0, parse_positive, 'camera frames offloaded per second (Hz)'),
     'image_encoding': Param('bgr8', one_of('bgr8', 'rgb8', 'mono8'), 'encoding of sent frames'),
     'robot_index': Param(0, parse_count, "this robot's strip of a search area"),
@@ -92,7 +92,7 @@ PARAMS = {
                          '(epoch s; 0: at the node\'s start), to share a clock with others'),
     'merge_radius': Param(150.0, parse_positive, 'detections this close are one target (px)'),
     'detector': Param('haar', one_of('haar', 'hog'), 'Haar cascade or HOG people detector'),
-    'cascade': Param(DEFAULT_CASCADE, parse_text, 'cascade file name or path'),
+    'cascade': Param(DEFAULT_CASCADE, parse_path, 'cascade file name or path'),
     'scale_factor': Param(1.2, parse_positive, 'cascade scale step'),
     'min_neighbors': Param(5, parse_positive_int, 'cascade neighbours for a detection'),
     'min_size': Param(24, parse_positive_int, 'smallest target (px)'),
@@ -172,9 +172,9 @@ PARAMS = {
                         'node or its namespace (/name{id}), or from any (*)'),
     'task_plugins': Param('', parse_plugins, 'task types added by plug-in (module:Class ...)'),
     'fleet_ns': Param('/', parse_text, 'namespace of the fleet-level topics and services'),
-    'fleet_key': Param('', parse_text, 'the fleet key, or this role\'s key file (make_key '
+    'fleet_key': Param('', parse_path, 'the fleet key, or this role\'s key file (make_key '
                        '[--role]): messages leave signed, only signed ones count (empty: off)'),
-    'fleet_key_next': Param('', parse_text, 'a second key file also accepted (rotation)'),
+    'fleet_key_next': Param('', parse_path, 'a second key file also accepted (rotation)'),
     'require_key': Param(False, parse_bool, 'refuse to start without ~fleet_key (a fleet '
                          'that must not run unsigned)'),
     'fleet_key_max_age': Param(30.0, parse_positive, 'a signed message older or newer than '
@@ -183,14 +183,14 @@ PARAMS = {
                           'roscore (s, +-20 %); it checks at once when the watcher says so'),
     'master_watch': Param(1.0, parse_positive, 'the watcher\'s (the manager\'s) period of the '
                           'check for a restarted roscore (s); it tells the others'),
-    'scenario': Param(REQUIRED, parse_text, 'scenario YAML file'),
+    'scenario': Param(REQUIRED, parse_path, 'scenario YAML file'),
     't0': Param(REQUIRED, parse_number, 'scenario time zero (epoch s)'),
     'duration': Param(30.0, parse_positive, 'how long to listen or measure (s)'),
-    'output': Param('', parse_text, 'also write the result as JSON here'),
+    'output': Param('', parse_path, 'also write the result as JSON here'),
     'end_launch': Param(False, parse_bool, 'when done, end the roslaunch that started the node'),
     'nodes': Param(REQUIRED, parse_names, 'node names to measure'),
     'delay': Param(5.0, parse_positive, 'wait this long before measuring (s)'),
-    'area': Param(REQUIRED, parse_text, 'search area YAML file'),
+    'area': Param(REQUIRED, parse_path, 'search area YAML file'),
     'radius': Param(150.0, parse_positive, 'a report this close to a target finds it (px)'),
     'timeout': Param(180.0, parse_positive, 'give up after this long (s)'),
 }

@@ -8,6 +8,7 @@ parameter otherwise.
 """
 
 import math
+import os
 import re
 
 MODES = ('select', 'fixed', 'local')      # a robot's ~mode
@@ -149,6 +150,12 @@ def parse_text(name, value):
     if isinstance(value, (list, dict)) or value is None:
         raise ParamError('%s: expected a string, got %r' % (name, value))
     return str(value)
+
+
+def parse_path(name, value):
+    """A file path; a leading ``~`` is the user's home (``fleet_key:=~/.ros/robot.key``:
+    roslaunch passes the text as it is)."""
+    return os.path.expanduser(parse_text(name, value))
 
 
 def parse_names(name, value):
