@@ -78,7 +78,8 @@ class BadInputTest(unittest.TestCase):
             # select mode with servers that do not include the (old) default fixed server 1
             good = launches.submit(self.roslaunch, 'probing servers', 'robot_id:=5',
                                    'servers:=2,3')
-            bad = launches.submit(self.roslaunch, 'exit code', 'robot_id:=6', 'task_rate:=fast')
+            bad = launches.submit(self.roslaunch, 'processing monitor complete', 'robot_id:=6',
+                                  'servers:=1,2,3', 'task_rate:=fast')
         out = good.result()
         self.assertNotIn('invalid parameter', out)
         self.assertIn('robot 5: mode select, probing servers [2, 3]', out)
@@ -86,7 +87,7 @@ class BadInputTest(unittest.TestCase):
         lines = [x for x in out.splitlines() if 'invalid parameter' in x]
         self.assertEqual(len(lines), 1, out)
         self.assertIn('~task_rate: expected a positive number', lines[0])
-        self.assertIn('exit code 2', out)
+        self.assertIn("/robot6: the launch ends, this node's parameter being invalid", out)
 
     def send(self, task_id, data, server_id=1):
         task = SortTask(robot_id=77, task_id=task_id, server_id=server_id,
