@@ -73,3 +73,17 @@ def test_alerts_for_a_robot_deciding_alone_ignored_messages_and_a_clean_leave():
                       '-1 s  manager ignored a sample on latency_R1S1 from /spoofer',
                       '+0 s  server 3 left the fleet (clean shutdown)'], alerts
     assert row(lines, 'SERVER', 3)[1] == 'GONE'
+
+
+def test_a_switch_the_log_did_not_explain_shows_the_flags_reason():
+    """A per-task robot's flag carries its own reason: top shows it at the switch, whether
+    the flag or the first task there is heard first."""
+    view = FleetView()
+    view.task(1, 2, 2, True, 0.0)
+    view.flag(1, 3, [1, 3, 2], 1.0, 'server 3 faster than 2 by 0.4 ms')
+    view.task(1, 3, 3, True, 1.1)
+    assert view.robots[1].switch == (1.1, 2, 3, 'server 3 faster than 2 by 0.4 ms')
+    view.task(1, 1, 1, True, 5.0)
+    view.flag(1, 1, [1, 3, 2], 5.1, 'server 1 faster than 3 by 0.2 ms')
+    assert view.robots[1].switch == (5.0, 3, 1, 'server 1 faster than 3 by 0.2 ms')
+    assert any('5 s ago, 3 -> 1: server 1 faster' in line for line in view.lines(10.0))

@@ -229,6 +229,7 @@ def test_least_latency_ranks_and_plans_probes_by_the_estimates_it_chooses_by():
     assert view.ranking == [2, 3, 1] and view.excluded == [4, 5]
     assert view.means == [decision.estimates[s].latency for s in view.ranking]
     assert view.selected == first
+    assert view.reason.startswith('the fastest (2 within the noise: one at random)'), view
     # contenders: near the best by those estimates, and those not heard from in the window
     assert rule.contenders([1, 2, 3, 4, 5]) == {2, 3, 4, 5}
     rule.started(1, 'image')                # where tasks go is one too

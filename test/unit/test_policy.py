@@ -195,3 +195,28 @@ def test_probes_a_busy_cpu_capped_server_answers_late_do_not_move_a_load_aware_r
         return switches(chosen)
     assert moves(aware=True) <= 25
     assert moves(aware=False) > 100     # the same samples, their wait not said
+
+
+def test_every_choice_says_why_in_the_words_the_views_show():
+    """What the flag's ``reason`` carries: the manager policy's words, or the robot's own
+    when it chooses per task (its ranking's reason, passed through)."""
+    from server_select.core.selection.rank import Ranking
+    ranking = Ranking(selected=2, ranking=[2, 1], means=[0.001, 0.0015], counts=[5, 5],
+                      excluded=[3])
+    chooser = Chooser(Policy('mean', margin=0.001))
+    assert chooser.choose(ranking, 0.0) == 2 and chooser.reason == 'the fastest'
+    chooser = Chooser(Policy('mean', margin=0.001))
+    assert chooser.choose(ranking, 0.0, current=1) == 1
+    assert chooser.reason == 'kept: within the margin of server 2'
+    chooser = Chooser(Policy('mean'))
+    assert chooser.choose(ranking, 0.0, current=1) == 2
+    assert chooser.reason == 'server 2 faster than 1 by 0.5 ms'
+    chooser = Chooser(Policy('mean'))
+    assert chooser.choose(ranking, 0.0, current=3) == 2
+    assert chooser.reason == 'the fastest (server 3 left the ranking)'
+    empty = Ranking(NO_SERVER, [], [], [], [1, 2])
+    assert Chooser(Policy('mean')).policy.explain(empty, 1, NO_SERVER) == \
+        'no server answered in the window'
+    own = ranking._replace(selected=1, reason='kept: within the noise of server 2')
+    chooser = Chooser(Policy('least_latency'))
+    assert chooser.choose(own, 0.0) == 1 and chooser.reason == own.reason

@@ -69,6 +69,7 @@ class ManagerNode(object):
         - ``fleet_servers`` (server_select/FleetServers, latched; with ``~discover``)
     """
     SEAL_ROLE = 'manager'  # what it signs as with a fleet key (core/trust/seal.py)
+    DIAGNOSTICS = 'manager'  # its statuses on /diagnostics (ros/diagnostics.py)
 
     MASTER_WATCHER = True     # checks for a restarted roscore and tells the fleet
 
@@ -190,7 +191,8 @@ class ManagerNode(object):
             ranking = self.rankings.rank(robot, now)
             chooser = self._chooser(robot)
             if self.flags.offer(robot, ranking, only_on_change,
-                                lambda previous: chooser.choose(ranking, now, previous)):
+                                lambda previous: chooser.choose(ranking, now, previous),
+                                lambda: chooser.reason):
                 self.rankings.selected(robot, self.flags.selected(robot))
 
     def _chooser(self, robot):

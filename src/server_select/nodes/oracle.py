@@ -60,7 +60,8 @@ class OracleNode(object):
             servers = [s for _, s in ranked]
             self.flags.offer(robot, Ranking(
                 selected=servers[0] if servers else NO_SERVER, ranking=servers,
-                means=[2e-3 * d for d, _ in ranked], counts=[0] * len(ranked), excluded=down),
+                means=[2e-3 * d for d, _ in ranked], counts=[0] * len(ranked), excluded=down,
+                reason='the nearest by the scenario' if servers else 'every server down'),
                 only_on_change)
 
 

@@ -42,7 +42,8 @@ class Feed(object):
             if kind == 'task_report':
                 self.view.task(msg.robot_id, msg.server_id, msg.answered_by, msg.ok, now)
             elif kind == 'server_select_flag':
-                self.view.flag(msg.robot_id, msg.server_id, msg.ranking, now)
+                self.view.flag(msg.robot_id, msg.server_id, msg.ranking, now,
+                               getattr(msg, 'reason', ''))   # (older bags: none)
             elif kind == 'latency_samples':
                 for server, ok, rtt in zip(msg.server_id, msg.ok, msg.rtt):
                     self.view.sample(msg.robot_id, server, ok, rtt, now)

@@ -46,12 +46,12 @@ class FlagPublisher(object):
                 flag_topic(robot, self.stream), SelectionFlag, queue_size=2, latch=True))
         return pub
 
-    def offer(self, robot, ranking, only_on_change, choose=None):
+    def offer(self, robot, ranking, only_on_change, choose=None, why=None):
         """Publish ``robot``'s flag for ``ranking`` (a
         :class:`~server_select.core.selection.rank.Ranking`) unless ``only_on_change`` and nothing
         changed; True if published. ``choose(previous)`` picks the server given the one
-        published before (None at first); default: the ranking's best.
-        :meth:`selected` then tells the server chosen."""
+        published before (None at first), ``why()`` then says why; default: the ranking's
+        best, for the ranking's reason. :meth:`selected` then tells the server chosen."""
         ranked = frozenset(ranking.ranking)
         own = self._robot_pub(robot) if self.stream == 'robot' else None
         with self._lock:
@@ -60,17 +60,19 @@ class FlagPublisher(object):
             if only_on_change and (previous, previous_ranked) == (selected, ranked):
                 return False
             self._published[robot] = (selected, ranked)
+            reason = why() if why else ranking.reason
             flag = SelectionFlag(robot_id=robot, server_id=selected, ranking=ranking.ranking,
                                  mean_latency=ranking.means, sample_count=ranking.counts,
-                                 excluded=ranking.excluded)
+                                 excluded=ranking.excluded, reason=reason)
             flag.header.stamp = rospy.Time.now()
             if own is not None:
                 own.publish(flag)
             self.pub.publish(flag)      # (robot stream: for recorders; free without one)
         if previous != selected:
-            rospy.loginfo('%s: robot %d -> server %s (ranking %s, ms %s)', self.source, robot,
-                          selected if selected != SelectionFlag.NO_SERVER else 'none',
-                          ranking.ranking, ['%.2f' % (m * 1e3) for m in ranking.means])
+            rospy.loginfo('%s: robot %d -> server %s (%s; ranking %s, ms %s)', self.source,
+                          robot, selected if selected != SelectionFlag.NO_SERVER else 'none',
+                          reason or 'the ranking\'s first', ranking.ranking,
+                          ['%.2f' % (m * 1e3) for m in ranking.means])
         return True
 
     def selected(self, robot):

@@ -42,7 +42,8 @@ class SampleIntake(object):
         why = self.refuse(msg, robot)
         try:
             ranking = from_view(msg.ranking, msg.mean_latency, msg.error, msg.sample_count,
-                                msg.wait, msg.excluded, msg.selected) if why is None else None
+                                msg.wait, msg.excluded, msg.selected, msg.reason) \
+                if why is None else None
         except ValueError as error:
             why = str(error)
         if why:

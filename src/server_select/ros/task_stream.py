@@ -12,7 +12,7 @@ import rospy
 from server_select.core.config import names
 from server_select.core.util.pacer import Pacer
 from server_select.core.util.stats import format_ms, summarize
-from server_select.core.flow.outcome import STOPPED
+from server_select.core.flow.outcome import STOPPED, cut_off
 from server_select.core.flow.task_flow import ENDED, OUTRUN, RETRIED, TaskFlow
 from server_select.msg import TaskReport
 from server_select.ros.graph import publisher_of, unheard
@@ -173,7 +173,7 @@ class TaskStream(object):
         elif status == OUTRUN:      # a hedge's losing copy: expected, and counted
             rospy.logdebug('robot %d: %s task %d answered by server %d after another copy',
                            self.robot_id, self.flow.kind, result.task_id, result.server_id)
-        elif status != ENDED:
+        elif status != ENDED and not rospy.is_shutdown():     # (stopping: tasks cut off)
             rospy.logwarn_throttle(
                 5.0, 'robot %d: ignored %s %s result for task %d from server %d (%s)'
                 % (self.robot_id, status, self.flow.kind, result.task_id, result.server_id,
@@ -185,7 +185,7 @@ class TaskStream(object):
                          ok=outcome.ok, error=outcome.error, attempts=outcome.attempts,
                          rtt=outcome.rtt if outcome.rtt is not None else math.nan)
         msg.header.stamp = outcome.stamp
-        if not outcome.ok:
+        if not outcome.ok and not cut_off(outcome.error):   # (a stop's cut is no fault)
             rospy.logerr_throttle(1.0, 'robot %d: %s task %d (server %d) failed: %s (%d failed '
                                   'so far)' % (self.robot_id, outcome.kind, outcome.task_id,
                                                outcome.server_id, outcome.error,

@@ -59,13 +59,14 @@ class RankingSender(object):
                 return
             self._key = key
             self.selection.viewed(key[2])
+            chooses = self.policy.per_task and ranking.selected in ranking.ranking
             msg = RobotRanking(robot_id=self.robot_id, ranking=ranking.ranking,
                                mean_latency=ranking.means, error=ranking.errors,
                                sample_count=ranking.counts, excluded=ranking.excluded,
                                wait=[float('nan') if w is None else w for w in ranking.waits]
                                if any(w is not None for w in ranking.waits) else [],
-                               selected=ranking.selected if self.policy.per_task and
-                               ranking.selected in ranking.ranking else 0)
+                               selected=ranking.selected if chooses else 0,
+                               reason=ranking.reason if chooses else '')
             msg.header.stamp = rospy.Time.now()
             self.pub.publish(msg)
             self.sent += 1

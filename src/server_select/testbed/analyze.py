@@ -15,7 +15,7 @@ import sys
 
 from rosbag import ROSBagException
 
-from server_select.testbed import bag_analysis, bag_tables
+from server_select.testbed import bag_analysis, bag_tables, switch_table
 from server_select.testbed.scenario import Scenario, ScenarioError
 
 
@@ -49,6 +49,10 @@ def main(argv=None):
                                   'Bags: %s.' % ', '.join('`%s`' % b for b in args.bags))
     first = 'mode' if all(run.meta.get('mode') for run in runs.values()) else 'run'
     print('%s\n\n%s' % (bag_tables.table(summaries, first), bag_tables.legend(summaries)))
+    for name, run in runs.items():
+        found = switch_table.switches(run.reports, run.flags)
+        shown = switch_table.table(found, 20 if args.out else None) if found else ''
+        print('\nswitches of %s: %d%s' % (name, len(found), '\n\n' + shown if shown else ''))
     if args.out:
         print('report: %s (plots beside it)' % os.path.join(args.out, 'report.md'))
     return 0

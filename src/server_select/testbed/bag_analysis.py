@@ -14,9 +14,11 @@ from server_select.core.flow.outcome import cut_off
 from server_select.core.observe.summary import switch_count
 from server_select.core.settings import default
 from server_select.core.util.stats import summarize
+from server_select.testbed import switch_table
 from server_select.testbed.bag_tables import compare, table
 
-Flag = collections.namedtuple('Flag', 't robot server ranking means')
+Flag = collections.namedtuple('Flag', 't robot server ranking means reason')
+Flag.__new__.__defaults__ = ('',)       # reason: why (bags of older versions: none)
 Report = collections.namedtuple('Report', 't robot task ok rtt server answered_by error attempts')
 Report.__new__.__defaults__ = (1,)      # attempts: servers the task went to
 Sample = collections.namedtuple('Sample', 't robot server ok rtt')
@@ -46,7 +48,7 @@ def load(bag_path):
             name = topic.rsplit('/', 1)[-1]
             if name == 'server_select_flag':
                 flags.append(Flag(t, msg.robot_id, msg.server_id, list(msg.ranking),
-                                  list(msg.mean_latency)))
+                                  list(msg.mean_latency), getattr(msg, 'reason', '')))
             elif name == 'task_report' and not cut_off(msg.error):
                 reports.append(Report(t, msg.robot_id, msg.task_id, msg.ok, msg.rtt,
                                       msg.server_id, msg.answered_by, msg.error, msg.attempts))
@@ -184,6 +186,11 @@ def write_report(runs, summaries, out_dir, title, description):
     text = ['# %s' % title, '', description, '', table(summaries), '',
             '![task round trip](task_rtt.png)', '']
     text += ['![latency %s](latency_%s.png)' % (m, m) for m in runs]
+    for name, run in runs.items():
+        found = switch_table.switches(run.reports, run.flags)
+        text += ['', '## Switches: %s' % name, '', 'Where a robot\'s tasks went next, and why '
+                 '(the reason of the flag that named the new server).', '',
+                 switch_table.table(found) if found else 'None.']
     report = '\n'.join(text) + '\n'
     with open(os.path.join(out_dir, 'report.md'), 'w') as stream:
         stream.write(report)

@@ -77,7 +77,8 @@ def plot_task_rtt(runs, path):
         ax.set_xlabel(time_label(next(iter(runs.values()))))
         ax.set_ylabel('task round trip (ms, log)')
         ax.set_yscale('log')
-        plain_log_ticks(ax)
+        low, high = ax.get_ylim()
+        plain_log_ticks(ax, minor=high < 20 * low)   # within a decade: 2, 3, 4, ... too
         ax.grid(True, alpha=0.3)
         legend_beside(ax)
     fig.tight_layout()

@@ -27,10 +27,10 @@ _IGNORED = re.compile(r'^(.*?): ignored (.*?) published by (\S+)')
 
 
 class _Robot(object):
-    __slots__ = ('server', 'ranking', 'flagged', 'tasks', 'switch', 'rtt', 'alone')
+    __slots__ = ('server', 'ranking', 'flagged', 'reason', 'tasks', 'switch', 'rtt', 'alone')
 
     def __init__(self):
-        self.server, self.ranking, self.flagged = None, [], None
+        self.server, self.ranking, self.flagged, self.reason = None, [], None, ''
         self.tasks = collections.deque()       # (time, ok, answered by)
         self.switch = None                     # (time, from, to, why)
         self.rtt = {}                          # server -> its newest good round trip
@@ -64,15 +64,20 @@ class FleetView(object):
         if server is not None and server >= 0:
             if r.server is not None and server != r.server and (
                     r.switch is None or r.switch[0] < now - 1.0 or r.switch[2] != server):
-                r.switch = (now, r.server, server, '')
+                why = r.reason if r.flagged == server else ''
+                r.switch = (now, r.server, server, why)
             r.server = server
         r.tasks.append((now, ok, answered_by))
         if ok and answered_by is not None and answered_by >= 0:
             self.servers[answered_by].answers.append(now)
 
-    def flag(self, robot, server, ranking, now):
+    def flag(self, robot, server, ranking, now, reason=''):
+        """A flag: ``server`` selected for ``reason`` (the robot's own words when it
+        chooses per task)."""
         r = self.robots[robot]
-        r.ranking, r.flagged, r.alone = list(ranking), server, False
+        r.ranking, r.flagged, r.reason, r.alone = list(ranking), server, reason, False
+        if r.switch is not None and r.switch[2] == server and not r.switch[3] and reason:
+            r.switch = r.switch[:3] + (reason,)
 
     def sample(self, robot, server, ok, rtt, now):
         if ok:

@@ -38,6 +38,7 @@ class Balancer(object):
         self.out = collections.Counter()     # server -> this robot's attempts out there
         self.probes = {}                     # server -> its newest ProbeAnswer
         self.last = None                     # where the last task went
+        self.why = ''                        # why tasks go there (the move's reason)
         self.reasons = {}                    # server -> why the last ask named it
         self.on_move = None                  # on_move(server, why): the rule moved, why
 
@@ -65,7 +66,7 @@ class Balancer(object):
             self._started(server, kind, self._clock())
             if first and server != self.last:
                 moved = self.reasons.get(server)     # (a peer's moves go unexplained)
-                self.last = server
+                self.last, self.why = server, moved or ''
         if moved is not None and self.on_move is not None:
             self.on_move(server, moved)
 

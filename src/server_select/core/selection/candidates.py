@@ -117,13 +117,14 @@ class Selection(object):
         """The robot's own ranking: by its rule's estimates when it chooses per task with
         a rule that keeps them, else as the manager ranks a robot from its samples (what
         ``~sample_stream view`` sends it); choosing per task, ``selected`` is where its
-        tasks go now (when ranked)."""
+        tasks go now (when ranked), and the servers it ejected are among those left out."""
         if self.balancer is not None and self.balancer.own_view:
-            return self.balancer.view(self._usable())
+            ranking = self.balancer.view(self._usable())
+            return ranking._replace(excluded=sorted(set(self._servers()) - set(ranking.ranking)))
         ranking = self.rankings.rank(self.robot_id, self._clock())
         last = self.balancer.last if self.balancer is not None else None
         if last is not None and last in ranking.ranking:
-            ranking = ranking._replace(selected=last)
+            ranking = ranking._replace(selected=last, reason=self.balancer.why)
         return ranking
 
     def contenders(self):

@@ -173,4 +173,4 @@ class LeastLatency(Balancer):
         """The robot's servers ranked by the estimates the choice uses (for its manager
         and its views)."""
         with self._lock:
-            return by_estimate(self._estimates(servers, self._clock()), self.last)
+            return by_estimate(self._estimates(servers, self._clock()), self.last, self.why)

@@ -75,6 +75,24 @@ class Policy(object):
                 else best
         return current if self.margin > 0 and here - ranking.means[0] <= self.margin else best
 
+    def explain(self, ranking, current, selected):
+        """Why :meth:`choose` picked ``selected`` with ``current`` selected before, in the
+        words the robot's log, the flag, ``top`` and ``analyze`` show."""
+        if self.per_task and ranking.reason:
+            return ranking.reason
+        if selected == NO_SERVER or selected not in ranking.ranking:
+            return 'no server answered in the window'
+        best = ranking.ranking[0]
+        if selected != best:
+            return 'kept: within the margin of server %d' % best
+        if current in ranking.ranking and current != selected:
+            return 'server %d faster than %d by %.3g ms' % (
+                selected, current, 1e3 * (ranking.means[ranking.ranking.index(current)] -
+                                          ranking.means[0]))
+        if current not in (None, NO_SERVER, selected):
+            return 'the fastest (server %d left the ranking)' % current
+        return 'the fastest'
+
     def _margin(self, ranking, current):
         errors = ranking.errors
         if not self.z or errors is None:
@@ -96,6 +114,7 @@ class Chooser(object):
 
     def __init__(self, policy):
         self.policy, self.current, self.since = policy, None, None
+        self.reason = ''        # why the current choice (Policy.explain)
 
     def choose(self, ranking, now, current=None):
         """The server to select now (``current``: what was last published, if the caller
@@ -103,6 +122,8 @@ class Chooser(object):
         if current is not None and current != self.current:
             self.current, self.since = current, None
         selected = self.policy.choose(ranking, self.current, self.since, now)
+        if selected != self.current or self.policy.per_task or not self.reason:
+            self.reason = self.policy.explain(ranking, self.current, selected)
         if selected != self.current:
             self.current, self.since = selected, now
         return selected

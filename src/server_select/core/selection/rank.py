@@ -5,13 +5,13 @@ import collections
 from server_select.core.config.names import NO_SERVER  # noqa: F401 (re-exported)
 
 Ranking = collections.namedtuple('Ranking',
-                                 'selected ranking means counts excluded errors waits')
-Ranking.__new__.__defaults__ = (None, None)
+                                 'selected ranking means counts excluded errors waits reason')
+Ranking.__new__.__defaults__ = (None, None, '')
 Ranking.__doc__ = """A robot's servers, best first: ``means`` holds each ranked server's
 latency statistic (the window mean in the paper; what ``SelectionFlag.mean_latency``
 carries), ``errors`` the standard errors of their means (None: not known), ``waits`` the
 part of each statistic that is the server's wait (None: a server's, or all, not
-load-aware)."""
+load-aware), ``reason`` why ``selected`` (a robot's rule's words; empty: the best)."""
 
 
 def latency(stats):
@@ -46,17 +46,18 @@ def rank_servers(pair_stats, fail_fast=0):
     )
 
 
-def by_estimate(estimates, selected=None):
+def by_estimate(estimates, selected=None, reason=''):
     """A :class:`Ranking` of ``{server: estimate or None}`` (a rule's own: ``latency``,
-    ``error``, ``wait``, ``answers``), ``selected`` where tasks go (when ranked; else the
-    best); servers with no estimate left out."""
+    ``error``, ``wait``, ``answers``), ``selected`` where tasks go and ``reason`` why (when
+    ranked; else the best); servers with no estimate left out."""
     ranked = sorted((s for s, e in estimates.items() if e is not None),
                     key=lambda s: (estimates[s].latency, s))
     return Ranking(selected if selected in ranked else ranked[0] if ranked else NO_SERVER,
                    ranked, [estimates[s].latency for s in ranked],
                    [estimates[s].answers for s in ranked],
                    sorted(s for s, e in estimates.items() if e is None),
-                   [estimates[s].error for s in ranked], [estimates[s].wait for s in ranked])
+                   [estimates[s].error for s in ranked], [estimates[s].wait for s in ranked],
+                   reason if selected in ranked else '')
 
 
 def view_key(ranking, policy, current):
@@ -69,10 +70,11 @@ def view_key(ranking, policy, current):
             policy.choose(ranking, current))
 
 
-def from_view(ranking, means, errors, counts, waits, excluded, selected=0):
+def from_view(ranking, means, errors, counts, waits, excluded, selected=0, reason=''):
     """A :class:`Ranking` from a robot's message (parallel arrays; ``waits`` may be empty,
     NaN: not known; ``selected``: where a robot that chooses per task sends its tasks, 0:
-    the first ranked). ValueError says what is wrong with it."""
+    the first ranked; ``reason``: its words for why). ValueError says what is wrong with
+    it."""
     ranking = [int(s) for s in ranking]
     if selected and selected not in ranking:
         raise ValueError('it selects server %d, which its ranking %s lacks' % (selected, ranking))
@@ -95,15 +97,17 @@ def from_view(ranking, means, errors, counts, waits, excluded, selected=0):
         raise ValueError('waits %s are not finite and >= 0 (or NaN: not known)' % waits)
     return Ranking(selected=selected or (ranking[0] if ranking else NO_SERVER),
                    ranking=ranking, means=means, counts=[int(c) for c in counts],
-                   excluded=[int(s) for s in excluded], errors=errors, waits=waits)
+                   excluded=[int(s) for s in excluded], errors=errors, waits=waits,
+                   reason=str(reason) if selected else '')
 
 
 def only(ranking, wanted):
     """``ranking`` with only the servers for which ``wanted(server)`` is true."""
     keep = [i for i, s in enumerate(ranking.ranking) if wanted(s)]
     first = ranking.ranking[keep[0]] if keep else NO_SERVER
-    return Ranking(selected=ranking.selected if ranking.selected in ranking.ranking and
-                   wanted(ranking.selected) else first,
+    kept = ranking.selected in ranking.ranking and wanted(ranking.selected)
+    return Ranking(selected=ranking.selected if kept else first,
+                   reason=ranking.reason if kept else '',
                    ranking=[ranking.ranking[i] for i in keep],
                    means=[ranking.means[i] for i in keep],
                    counts=[ranking.counts[i] for i in keep],
