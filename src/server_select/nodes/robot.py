@@ -58,6 +58,7 @@ class RobotNode(object):
     :ROS Services: ``~known_targets`` (server_select/KnownTargets); calls ``latency_S<s>``
     """
     SEAL_ROLE = 'robot'  # what it signs as with a fleet key (core/trust/seal.py)
+    DIAGNOSTICS = 'robot'  # its statuses on /diagnostics (ros/diagnostics.py)
 
     def __init__(self):
         self.robot_id = param('robot_id')

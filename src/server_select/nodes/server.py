@@ -79,6 +79,7 @@ class ServerNode(object):
           the frame's header (its stamp and frame_id).
     """
     SEAL_ROLE = 'server'  # what it signs as with a fleet key (core/trust/seal.py)
+    DIAGNOSTICS = 'server'  # its statuses on /diagnostics (ros/diagnostics.py)
 
     def __init__(self):
         self.server_id = param('server_id')

@@ -11,7 +11,7 @@ from server_select.core.config import names
 from server_select.core.util import interrupts
 from server_select.core.config.params import ParamError
 from server_select.core.settings import PARAMS
-from server_select.ros import launch_args, params_in_force, seal
+from server_select.ros import diagnostics, launch_args, params_in_force, seal
 from server_select.ros.master_watch import MasterWatch
 from server_select.ros.node import _LIVE, end_parent_launch, fleet, param, quiet_logging
 
@@ -77,7 +77,8 @@ def _start(node_class):
     start = getattr(node, 'start', None)
     if start is not None:
         start()
-    params_in_force.warn_unknown(PARAMS)
+    diagnostics.start_for(node, getattr(node_class, 'DIAGNOSTICS', None))
+    params_in_force.warn_unknown(set(PARAMS) | {'diagnostic_period'})
     launch_args.warn_undeclared(rospy.get_name(), rospy.logwarn)
     params_in_force.record()
     return watch
