@@ -45,7 +45,7 @@ def take_back_leftovers():
     if not isinstance(left, dict) or left.get('pid') == os.getpid():
         return
     _take_back(left.get('values') or {})
-    rospy.delete_param('~' + RECORD)
+    _delete(RECORD)
 
 
 def record():
@@ -62,18 +62,24 @@ def take_back():
         mine = rospy.get_param('~' + RECORD, {}).get('pid') == os.getpid()
         if mine:
             _take_back(_WRITTEN)
-            rospy.delete_param('~' + RECORD)
+            _delete(RECORD)
     except Exception:       # the master is gone: nothing is left to take back
         pass
 
 
 def _take_back(values):
     for name, value in sorted(values.items()):
-        try:
-            if rospy.get_param('~' + name) == value:
-                rospy.delete_param('~' + name)
-        except KeyError:
-            pass
+        if rospy.get_param('~' + name, None) == value:
+            _delete(name)
+
+
+def _delete(name):
+    """``~name`` off the parameter server; gone already is as good (another copy of the
+    node, starting or ending, may take back the same at the same time)."""
+    try:
+        rospy.delete_param('~' + name)
+    except KeyError:
+        pass
 
 
 def unknown(known):
