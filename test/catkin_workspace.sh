@@ -54,7 +54,7 @@ step demo "source devel/setup.bash && (roscore -p $port > roscore.out 2>&1 &) \
 # the example task type, as the README has it, in a keyed fleet: its results carry seals
 step keyed_task "source devel/setup.bash && (roscore -p $port > roscore2.out 2>&1 &) \
   && within 30 'rosnode list' && rosrun server_select make_key $ws/fleet.key \
-  && (timeout -s INT 25 roslaunch wordcount_task wordcount.launch fleet_key:=$ws/fleet.key \
+  && (timeout -s INT 15 roslaunch wordcount_task wordcount.launch fleet_key:=$ws/fleet.key \
       > keyed.out 2>&1; true) && pkill -INT -f 'roscore -p $port'; cat keyed.out \
   && grep -q 'wordcount: [1-9][0-9]* sent, [1-9][0-9]* ok, 0 failed' keyed.out \
   && grep -q 'fleet key on' keyed.out && ! grep -q 'ignored' keyed.out"
