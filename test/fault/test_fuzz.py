@@ -9,6 +9,7 @@ publishers. No exception may escape, and afterwards each node still serves a goo
 import io
 import math
 import os
+import time
 
 import numpy as np
 import pytest
@@ -315,8 +316,32 @@ def test_plugin_tasks(nodes, robot, server, fmt, data, features):
 
 
 def test_direct_results_go_to_a_bounded_number_of_robots(ros):
-    """Tasks under made-up robot ids cannot make a server open result topics without end."""
+    """Tasks or probes under made-up robot ids cannot make a server open result topics
+    without end, nor lock out a robot it has not met: the least recently used goes."""
     routes = ResultRoutes('bounded_results', SortResult, connect_wait=0.0, most=2)
-    assert routes.publish(1, SortResult()) and routes.publish(2, SortResult())
-    assert not routes.publish(3, SortResult())
-    assert routes.publish(1, SortResult()) and len(routes.pubs) == 2
+    for robot in (1, 2, 3):
+        routes.publish(robot, SortResult())
+    assert list(routes.pubs) == [2, 3] and routes.evicted == 1
+    routes.publish(2, SortResult())
+    routes.publish(1, SortResult())          # robot 1 is back: robot 3 was used longest ago
+    assert list(routes.pubs) == [2, 1] and routes.evicted == 2
+
+
+def test_a_result_waits_for_its_robot_without_holding_the_worker(ros):
+    """A reply to a robot with no subscriber yet returns at once; the result goes out when
+    the robot connects within ``connect_wait``, and a robot that never does costs nothing
+    more (before: the worker waited 1 s for each such reply)."""
+    routes = ResultRoutes('held_results', SortResult, connect_wait=5.0)
+    start = time.monotonic()
+    for task in range(20):
+        routes.publish(7, SortResult(task_id=task))
+    took = time.monotonic() - start
+    got = []
+    sub = rospy.Subscriber('/robot_7/held_results', SortResult, lambda m: got.append(m.task_id))
+    try:
+        arrived = wait_until(lambda: len(got) == 20, 10.0)
+    finally:
+        sub.unregister()
+    print('20 replies to a robot not yet connected: %.1f ms in the worker, %d delivered once '
+          'it connected' % (1e3 * took, len(got)))
+    assert took < 0.5 and arrived and sorted(got) == list(range(20))

@@ -1,5 +1,6 @@
 """Compute server: answers latency probes, and the tasks of every type addressed to it."""
 
+import collections
 import concurrent.futures
 import threading
 import time
@@ -17,6 +18,8 @@ from server_select.ros.plugins import PluginHandler
 from server_select.ros.server_work import ServerWork
 from server_select.tasks.kinds import server_kinds
 from server_select.srv import LatencyProbe, LatencyProbeResponse
+
+KNOWN_ROBOTS = 4096     # robots whose probes prepared their result topics, remembered
 
 
 class ServerNode(object):
@@ -88,7 +91,7 @@ class ServerNode(object):
         workers = param('workers') or usable_cpus()
         self.work = ServerWork(self.server_id, workers, param('max_queue'))
         self.direct = direct = param('routing') == 'direct'
-        self._known_robots = set()
+        self._known_robots = collections.OrderedDict()   # robots prepared for, newest last
         self._pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='routes')
         # every task type, built in or plug-in, is served the same way
         self.announcer = ServerAnnouncer(self.server_id, param('announce_period'))
@@ -101,7 +104,8 @@ class ServerNode(object):
         return next(h for h in self.handlers if h.plugin.kind == kind)
 
     def start(self):
-        self._unwarmed = set(h.plugin.kind for h in self.handlers)   # no probe named them
+        self._kinds = frozenset(h.plugin.kind for h in self.handlers)
+        self._unwarmed = set(self._kinds)   # no probe named them yet
         self.test_knobs = param('test_knobs')
         if self.test_knobs:      # from now on as the master says: any node may change it
             self.work_delay = live_param('work_delay')
@@ -143,12 +147,15 @@ class ServerNode(object):
 
     def on_probe(self, req):
         if self.direct and req.robot_id and req.robot_id not in self._known_robots:
-            self._known_robots.add(req.robot_id)   # its result publishers, off this path
+            self._known_robots[req.robot_id] = True   # its result publishers, off this path
+            while len(self._known_robots) > KNOWN_ROBOTS:
+                self._known_robots.popitem(last=False)
             self._pool.submit(self._prepare, req.robot_id)
         elif self.direct and any(h.endpoint.stalled(req.robot_id) for h in self.handlers):
             self._pool.submit(self._renew, req.robot_id)   # it is back after an outage
-        if req.task_kinds:
-            self.work.announce(req.robot_id, zip(req.task_kinds, req.task_rates))
+        if req.task_kinds:      # (kinds it does not serve: nothing to keep)
+            rates = zip(req.task_kinds, req.task_rates)
+            self.work.announce(req.robot_id, [(k, r) for k, r in rates if k in self._kinds])
             for kind in self._unwarmed.intersection(req.task_kinds):   # before its 1st task
                 self._unwarmed.discard(kind)
                 threading.Thread(target=self._warm, args=(kind,), name='warm ' + kind,

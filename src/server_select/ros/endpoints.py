@@ -1,13 +1,14 @@
 """Server side of routing (:mod:`server_select.ros.routing` has both layouts): a task
 kind's endpoint, and a result publisher per robot for the direct layout."""
 
+import collections
 import threading
 import time
 
 import rospy
 
 from server_select.core.config import names
-from server_select.ros.graph import publisher_of, stalled
+from server_select.ros.graph import stalled
 from server_select.ros.node import fleet
 from server_select.ros.routing import kind_name, renew
 from server_select.ros.seal import SealedPublisher
@@ -19,30 +20,40 @@ class ResultRoutes(object):
     A fresh publisher has no subscriber yet (the robot, and any recorder, connect once the
     master tells them), so the server makes a robot's publishers when the robot first
     probes it (:meth:`prepare`, off the probe's path), well before its first task. A
-    result for a robot without a connected publisher still waits up to ``connect_wait`` s
-    for one instead of being lost. At most ``most`` robots get a publisher (a node sending
-    tasks under made-up robot ids must not exhaust the server): None beyond.
+    result for a robot whose publisher has no subscriber yet is handed to one sender
+    thread that waits up to ``connect_wait`` s for one (at most ``held`` results wait;
+    beyond, they go at once): a worker never waits for a listener, and a robot that is
+    gone costs its tasks' work, nothing more. At most ``most`` robots keep a publisher:
+    the least recently used one goes for a new robot (a node probing or sending under
+    made-up robot ids must not exhaust the server, nor lock out a robot it has not met).
     """
 
-    def __init__(self, topic, msg_type, connect_wait=1.0, most=4096):
+    def __init__(self, topic, msg_type, connect_wait=1.0, most=4096, held=64):
         self.topic, self.msg_type, self.connect_wait = topic, msg_type, connect_wait
-        self.most = most
+        self.most, self.held = most, held
         self._lock = threading.Lock()
-        self.pubs = {}
+        self.pubs = collections.OrderedDict()      # robot -> publisher, oldest use first
+        self.evicted = 0
+        self._waiting = collections.deque()         # (until, robot, result)
+        self._wake = threading.Condition(self._lock)
+        self._sender = None
 
     def _pub(self, robot):
         """(the lock held) :meth:`prepare`."""
         pub = self.pubs.get(robot)
-        if pub is None and len(self.pubs) >= self.most:
-            return None
-        if pub is None:
-            pub = self.pubs[robot] = SealedPublisher(
-                fleet(names.robot_topic(robot, self.topic)), self.msg_type, queue_size=100)
+        if pub is not None:
+            self.pubs.move_to_end(robot)
+            return pub
+        while len(self.pubs) >= self.most:
+            _, old = self.pubs.popitem(last=False)
+            old.unregister()
+            self.evicted += 1
+        pub = self.pubs[robot] = SealedPublisher(
+            fleet(names.robot_topic(robot, self.topic)), self.msg_type, queue_size=100)
         return pub
 
     def prepare(self, robot):
-        """The publisher of ``robot``'s results (made now if it is not there yet; None
-        when ``most`` robots have one already)."""
+        """The publisher of ``robot``'s results (made now if it is not there yet)."""
         with self._lock:
             return self._pub(robot)
 
@@ -60,20 +71,34 @@ class ResultRoutes(object):
             return renew(self.pubs, robot, lambda: self._pub(robot))
 
     def publish(self, robot, result):
-        """Send ``result`` to ``robot``; False when it has no publisher (see ``most``)."""
-        pub = self.prepare(robot)
-        if pub is None:
-            return False
-        if not pub.get_num_connections():
-            end = time.monotonic() + self.connect_wait
-            while not pub.get_num_connections() and time.monotonic() < end \
-                    and not rospy.is_shutdown():
-                time.sleep(0.005)
-        with self._lock:      # (the one renew() may have made since)
+        """Send ``result`` to ``robot`` now, or (no subscriber yet) by the sender thread
+        once one connects, within ``connect_wait`` s; never blocks."""
+        with self._lock:
             pub = self._pub(robot)
-            if pub is not None:
+            if pub.get_num_connections() or len(self._waiting) >= self.held:
                 pub.publish(result)
-        return pub is not None
+                return
+            self._waiting.append((time.monotonic() + self.connect_wait, robot, result))
+            if self._sender is None:
+                self._sender = threading.Thread(target=self._send_held, daemon=True,
+                                                name='held results')
+                self._sender.start()
+            self._wake.notify()
+
+    def _send_held(self):
+        """The results waiting for their robot's subscriber, each sent once it connects
+        or at its time (rospy drops it if nobody listens by then)."""
+        with self._lock:
+            while not rospy.is_shutdown():
+                now = time.monotonic()
+                for entry in list(self._waiting):
+                    until, robot, result = entry
+                    pub = self.pubs.get(robot)
+                    if pub is None or pub.get_num_connections() or now >= until:
+                        self._waiting.remove(entry)
+                        if pub is not None:
+                            pub.publish(result)
+                self._wake.wait(0.005 if self._waiting else 1.0)
 
 
 class ServerEndpoint(object):
@@ -137,12 +162,7 @@ class ServerEndpoint(object):
     def reply(self, task, direct, result):
         """Send ``result`` back the way ``task`` came."""
         if direct:
-            if not self.direct.publish(task.robot_id, result):
-                rospy.logwarn_throttle(5.0, 'server %d: no answer to %s task %d of robot %d '
-                                       '(published by %s): already %d robots have result '
-                                       'topics here' % (self.server_id, self.kind_name,
-                                                        task.task_id, task.robot_id,
-                                                        publisher_of(task), self.direct.most))
+            self.direct.publish(task.robot_id, result)
         else:
             self.pub.publish(result)
 
