@@ -26,8 +26,8 @@ def test_a_launch_file_that_disagrees_is_named(tmp_path):
     shutil.copytree(os.path.join(paramdoc.TOP, 'launch'), str(tmp_path / 'launch'))
     path = tmp_path / 'launch' / 'server.launch'
     text = path.read_text().replace(
-        '<param name="server_id" value="$(arg server_id)"/>',
-        '<param name="server_id" value="$(arg server_id)"/>\n'
+        'name="server_id" value="$(arg server_id)"/>',
+        'name="server_id" value="$(arg server_id)"/>\n'
         '    <param name="bogus" value="$(arg bogus)"/>')
     text = text.replace('<arg name="detector" default="-" doc="haar or hog"/>',
                         '<arg name="detector" default="-" doc="haar or hog"/>\n'
@@ -50,8 +50,8 @@ def test_a_launch_default_other_than_the_nodes_and_a_stale_policy_list_are_named
     the fleet's []), and offered policies that no longer exist."""
     shutil.copytree(os.path.join(paramdoc.TOP, 'launch'), str(tmp_path / 'launch'))
     path = tmp_path / 'launch' / 'robot.launch'
-    text = path.read_text().replace('<arg name="robot_id" doc=', '<arg name="robot_id" '
-                                    'default="1" doc=')
+    text = path.read_text().replace('<arg name="robot_id" default="-"', '<arg name="robot_id" '
+                                    'default="1"')
     text = text.replace('<arg name="servers" default="-"', '<arg name="servers" '
                         'default="1,2,3"')
     text = text.replace('least_latency (the fleet)', 'bound')
