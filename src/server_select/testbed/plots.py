@@ -1,5 +1,6 @@
 """Plots of evaluation runs (matplotlib, imported only here)."""
 
+import math
 import warnings
 
 
@@ -42,11 +43,16 @@ def _changes(flags):
 
 
 def plain_log_ticks(ax, minor=False):
-    """Plain labels on a log y axis (1, 10, 100), on its minor ticks too when ``minor`` (an
-    axis that spans less than a decade)."""
+    """Plain labels on a log y axis (1, 10, 100), on its minor ticks too when ``minor``
+    (True: all of them, for an axis within about a decade; or the leading digits to label,
+    e.g. ``(2, 5)``)."""
     from matplotlib.ticker import FuncFormatter
+
+    def label(v, _):
+        digit = round(v / 10 ** math.floor(math.log10(v))) if v > 0 else 0
+        return '%g' % v if minor is True or (minor and digit in minor) else ''
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: '%g' % v))
-    ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: '%g' % v if minor else ''))
+    ax.yaxis.set_minor_formatter(FuncFormatter(label))
 
 
 def plot_task_rtt(runs, path):
@@ -77,14 +83,32 @@ def plot_task_rtt(runs, path):
         ax.set_xlabel(time_label(next(iter(runs.values()))))
         ax.set_ylabel('task round trip (ms, log)')
         ax.set_yscale('log')
-        low, high = ax.get_ylim()
-        plain_log_ticks(ax, minor=high < 20 * low)   # within a decade: 2, 3, 4, ... too
+        low, high = ax.get_ylim()       # within a decade: 2, 3, 4, ... too; else 2 and 5
+        plain_log_ticks(ax, minor=True if high < 20 * low else (2, 5))
         ax.grid(True, alpha=0.3)
         legend_beside(ax)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return _labels(axes[:, 0])
+
+
+def _cut(ax, probes, ranked):
+    """The round trip axis up to 1.5 x the larger of the ``probes``' 99th and the
+    ``ranked`` statistics' 90th percentile (ms): a start-up spike would flatten the
+    milliseconds that decide; the label says where it was cut."""
+    tops = [t for t in (_quantile(probes, 0.99), _quantile(ranked, 0.9)) if t]
+    top = 1.5 * max(tops) if tops else None
+    clipped = top is not None and top < ax.get_ylim()[1]
+    if clipped:
+        ax.set_ylim(0, top)
+    ax.set_ylabel('round trip (ms%s)' % ('; above %.3g cut' % top if clipped else ''))
+
+
+def _quantile(values, q):
+    """The ``q`` quantile of ``values`` (None for none)."""
+    values = sorted(v for v in values if v == v)
+    return values[int(q * (len(values) - 1))] if values else None
 
 
 def plot_latency(run, path, title):
@@ -128,7 +152,8 @@ def plot_latency(run, path, title):
             labels.append('shaded: the server the flag selects (its colour)')
         ax.set_title('%s: robot %d' % (title, robot))
         ax.set_xlabel(time_label(run))
-        ax.set_ylabel('round trip (ms)')
+        _cut(ax, [s.rtt * 1e3 for s in samples if s.ok],
+             [m * 1e3 for f in flags for m in f.means])
         ax.grid(True, alpha=0.3)
         legend_beside(ax, handles, labels)
     fig.tight_layout()
