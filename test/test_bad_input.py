@@ -3,6 +3,7 @@
 results and the server keeps serving."""
 
 import concurrent.futures
+import os
 import subprocess
 import sys
 import threading
@@ -56,9 +57,11 @@ class BadInputTest(unittest.TestCase):
     def roslaunch(self, until, *args):
         """Output of ``roslaunch server_select robot.launch ARGS`` until a line contains
         ``until`` (then it is stopped) or it ends by itself (within 30 s)."""
+        # unbuffered: a node's lines reach the pipe when written, not at its end
         proc = subprocess.Popen(['roslaunch', 'server_select', 'robot.launch', 'output:=screen']
                                 + list(args), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                universal_newlines=True, start_new_session=True)
+                                universal_newlines=True, start_new_session=True,
+                                env=dict(os.environ, PYTHONUNBUFFERED='1'))
         lines = []
         timer = threading.Timer(30.0, stop_group, (proc,))
         timer.start()
