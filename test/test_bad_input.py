@@ -3,10 +3,8 @@
 results and the server keeps serving."""
 
 import concurrent.futures
-import os
 import subprocess
 import sys
-import threading
 import time
 import unittest
 
@@ -16,9 +14,10 @@ import rostest
 from rospy.numpy_msg import numpy_msg
 
 from server_select.core.config import names
-from server_select.core.util.procs import stop_group, wait_until
+from server_select.core.util.procs import wait_until
 from server_select.msg import SortResult, SortTask
 
+from support.output import output_until
 from support.record import until_answered
 
 # One case per node: that a refused parameter ends the node with one clear line and exit
@@ -57,24 +56,8 @@ class BadInputTest(unittest.TestCase):
     def roslaunch(self, until, *args):
         """Output of ``roslaunch server_select robot.launch ARGS`` until a line contains
         ``until`` (then it is stopped) or it ends by itself (within 30 s)."""
-        # unbuffered: a node's lines reach the pipe when written, not at its end
-        proc = subprocess.Popen(['roslaunch', 'server_select', 'robot.launch', 'output:=screen']
-                                + list(args), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                universal_newlines=True, start_new_session=True,
-                                env=dict(os.environ, PYTHONUNBUFFERED='1'))
-        lines = []
-        timer = threading.Timer(30.0, stop_group, (proc,))
-        timer.start()
-        try:
-            for line in proc.stdout:
-                lines.append(line)
-                if until in line:
-                    break
-        finally:
-            timer.cancel()
-            stop_group(proc)
-            lines += proc.stdout.readlines()
-        return ''.join(lines)
+        return output_until(['roslaunch', 'server_select', 'robot.launch', 'output:=screen']
+                            + list(args), until, 30.0)
 
     def test_launch_arguments_are_checked_by_the_node(self):
         with concurrent.futures.ThreadPoolExecutor(2) as launches:     # at once, as above

@@ -3,7 +3,6 @@ node OK in a healthy fleet profile run; a server killed (SIGKILL) shows as an er
 stale, in the manager's status of it within 3 s, and its robots name it."""
 
 import signal
-import subprocess
 import sys
 import threading
 import time
@@ -11,9 +10,10 @@ import time
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 
-from server_select.core.util.procs import stop_group, wait_until
+from server_select.core.util.procs import wait_until
 
 from support.fleet import Fleet
+from support.output import output_until
 from test_faults import show, warm_up
 
 LEVELS = {DiagnosticStatus.OK: 'OK', DiagnosticStatus.WARN: 'WARN',
@@ -85,20 +85,7 @@ def test_a_killed_server_is_an_error_on_diagnostics_within_3_s(ros):
 def rosdiagnostic(*args, until='[ ERROR ]', timeout=10.0):
     """What Debian's rosdiagnostic prints of /diagnostics (``--follow``) until a line holds
     ``until``, at most ``timeout`` s (Debian ships its module without a script: its main)."""
-    proc = subprocess.Popen(
+    return output_until(
         [sys.executable, '-c', 'import sys, rosdiagnostic; rosdiagnostic.rosdiagnosticmain('
          'sys.argv)', '--topic', '/diagnostics', '--nocolor', '--follow'] + list(args),
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
-        start_new_session=True)
-    lines = []
-    timer = threading.Timer(timeout, stop_group, (proc,))
-    timer.start()
-    try:
-        for line in proc.stdout:
-            lines.append(line)
-            if until in line:
-                break
-    finally:
-        timer.cancel()
-        stop_group(proc)
-    return ''.join(lines)
+        until, timeout)
