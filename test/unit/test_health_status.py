@@ -27,6 +27,8 @@ def test_a_robot_says_where_its_tasks_go_and_warns_of_failures_and_servers_out()
     level, message, _ = robot_status(2, 'the fastest', 10, 3, {}, False)
     assert (level, message) == (WARN, '3 of 10 tasks failed since the last status')
     assert robot_status(None, '', 0, 0, {}, False)[0] == ERROR
+    assert robot_status('the robot itself', 'mode local', 5, 0, {}, False)[1] == \
+        'tasks go to the robot itself (mode local)'
 
 
 def test_the_manager_marks_a_server_no_robot_can_reach_as_an_error():

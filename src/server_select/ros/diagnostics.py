@@ -5,7 +5,7 @@ that ``rosdiagnostic``, ``rqt_robot_monitor`` and ``rqt_runtime_monitor`` show t
 import diagnostic_updater
 import rospy
 
-from server_select.core.config.names import NO_SERVER
+from server_select.core.config.names import LOCAL, NO_SERVER
 from server_select.core.observe import health_status
 from server_select.ros import params_in_force, seal
 
@@ -77,7 +77,8 @@ def _robot(node, diag):
     def status():
         target = node.selection.heading()
         return health_status.robot_status(
-            target if target not in (NO_SERVER, None) else None,
+            None if target in (NO_SERVER, None) else 'the robot itself' if target == LOCAL
+            else target,
             balancer.why if balancer is not None else 'the manager\'s flag', sent(),
             failed(), dict((s, node.health.state(s)) for s in node.prober.servers
                            if not node.health.usable(s)),

@@ -22,10 +22,11 @@ def server_status(load, busy, done):
 
 
 def robot_status(server, reason, sent, failed, unusable, keyed):
-    """A robot: tasks go to ``server`` (None: none usable) for ``reason``; ``sent`` and
-    ``failed`` tasks since the last status; ``unusable`` {server: its health state} of
-    the servers tasks may not go to now."""
+    """A robot: tasks go to ``server`` (an id; a text such as ``'the robot itself'``;
+    None: none usable) for ``reason``; ``sent`` and ``failed`` tasks since the last status;
+    ``unusable`` {server: its health state} of the servers tasks may not go to now."""
     out = sorted(unusable)
+    where = 'server %s' % server if isinstance(server, int) else server
     values = [('server', server if server is not None else 'none'), ('reason', reason or '-'),
               ('tasks sent since last', sent), ('failed since last', failed),
               ('servers not in use', ', '.join('%s (%s)' % (s, unusable[s]) for s in out)
@@ -35,9 +36,9 @@ def robot_status(server, reason, sent, failed, unusable, keyed):
     if failed:
         return WARN, '%d of %d tasks failed since the last status' % (failed, sent), values
     if out:
-        return WARN, 'server %s not answering; tasks go to server %s' % (
-            ', '.join(map(str, out)), server), values
-    return OK, 'tasks go to server %s (%s)' % (server, reason or 'selected'), values
+        return WARN, 'server %s not answering; tasks go to %s' % (
+            ', '.join(map(str, out)), where), values
+    return OK, 'tasks go to %s (%s)' % (where, reason or 'selected'), values
 
 
 def fleet_statuses(views, servers):
