@@ -6,10 +6,11 @@ The launch is read the way roslaunch reads it (its own option parser and XML loa
 the command line of the roslaunch process that started this node.
 """
 
-import difflib
 import os
 
 import rosgraph.names
+
+from server_select.core.config.params import nearest
 
 ROSLAUNCH = b'roslaunch'
 
@@ -59,11 +60,6 @@ def undeclared(argv):
     return first, [(name, nearest(name, declared)) for name in given if name not in declared]
 
 
-def nearest(name, valid):
-    """The valid name closest to ``name`` (a typo's intended name), or None."""
-    return next(iter(difflib.get_close_matches(name, sorted(valid), 1)), None)
-
-
 def warn_undeclared(node_name, log):
     """If this node is the launch's first of the package: ``log`` one line per launch
     argument no launch file declares. Quiet (and no cost) when not started by roslaunch;
@@ -77,7 +73,7 @@ def warn_undeclared(node_name, log):
         return
     if first != node_name:
         return
-    for name, nearest in unknown:
+    for name, near in unknown:
         log('%s: launch argument %s:= is declared by no launch file of this launch, so it '
-            'sets nothing%s' % (node_name, name, '; did you mean %s:=?' % nearest
-                                if nearest else ''))
+            'sets nothing%s' % (node_name, name, '; did you mean %s:=?' % near
+                                if near else ''))

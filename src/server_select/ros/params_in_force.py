@@ -12,7 +12,7 @@ import os
 
 import rospy
 
-from server_select.ros.launch_args import nearest
+from server_select.core.config.params import nearest
 
 RECORD = 'defaults_written'     # {'pid': pid, 'values': {name: value}} of the copy running
 _WRITTEN = {}                   # name -> the default this node wrote back

@@ -3,6 +3,8 @@
 import math
 import warnings
 
+from server_select.core.util.stats import percentile
+
 
 def pyplot():
     """matplotlib's pyplot, drawing to files. Where Debian's python3-matplotlib is installed
@@ -97,18 +99,13 @@ def _cut(ax, probes, ranked):
     """The round trip axis up to 1.5 x the larger of the ``probes``' 99th and the
     ``ranked`` statistics' 90th percentile (ms): a start-up spike would flatten the
     milliseconds that decide; the label says where it was cut."""
-    tops = [t for t in (_quantile(probes, 0.99), _quantile(ranked, 0.9)) if t]
-    top = 1.5 * max(tops) if tops else None
+    tops = [percentile(sorted(values), q) for values, q in ((probes, 99), (ranked, 90))
+            if values]
+    top = 1.5 * max(tops) if tops and max(tops) > 0 else None
     clipped = top is not None and top < ax.get_ylim()[1]
     if clipped:
         ax.set_ylim(0, top)
     ax.set_ylabel('round trip (ms%s)' % ('; above %.3g cut' % top if clipped else ''))
-
-
-def _quantile(values, q):
-    """The ``q`` quantile of ``values`` (None for none)."""
-    values = sorted(v for v in values if v == v)
-    return values[int(q * (len(values) - 1))] if values else None
 
 
 def plot_latency(run, path, title):

@@ -23,11 +23,11 @@ it does not set carries over. Delays are one way: a round trip takes twice the d
 """
 
 import bisect
-import difflib
 import collections
 
 import yaml
 
+from server_select.core.config.params import nearest
 from server_select.core.selection.rank import NO_SERVER
 from server_select.testbed.fields import (DEFAULT_CPU_PERIOD_MS, ScenarioError,  # noqa: F401
                                           hang_times, number as _number, resources,
@@ -114,8 +114,8 @@ TOP_KEYS = ('name', 'duration', 'hosts', 'default', 'links', 'suite')
 
 
 def _nearest(key):
-    near = difflib.get_close_matches(key, TOP_KEYS, 1)
-    return 'did you mean %s?' % near[0] if near else '%s is not one of %s' % (key, ', '.join(
+    near = nearest(key, TOP_KEYS)
+    return 'did you mean %s?' % near if near else '%s is not one of %s' % (key, ', '.join(
         TOP_KEYS))
 
 

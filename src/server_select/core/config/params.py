@@ -7,6 +7,7 @@ user can reasonably type and raises :class:`ParamError` with a message naming th
 parameter otherwise.
 """
 
+import difflib
 import math
 import os
 import re
@@ -210,3 +211,8 @@ def one_of(*choices):
             raise ParamError('%s: %r is not one of %s' % (name, value, ', '.join(choices)))
         return value
     return parse
+
+
+def nearest(name, valid):
+    """The name in ``valid`` closest to ``name`` (what a typo meant), or None."""
+    return next(iter(difflib.get_close_matches(name, sorted(valid), 1)), None)
