@@ -32,13 +32,17 @@ def test_a_leaving_server_is_gone_at_once_and_leaving_twice_changes_nothing():
     assert leases.expire(100.0) == []
 
 
-def test_two_nodes_claiming_one_id_are_named_and_only_the_holder_can_leave():
+def test_an_id_is_its_first_nodes_until_it_leaves_or_its_lease_ends():
     leases = Leases()
     leases.renew(2, '/server2', 0.0, 1.5)
     assert leases.renew(2, '/other', 0.5, 1.5) == (False, '/server2')
-    # the old node, shutting down, says it leaves: the id stays with the newer one
-    assert leases.renew(2, '/server2', 0.6, 0.0) == (False, '/other')
-    assert leases.members() == [2]
+    assert leases.renew(2, '/other', 0.6, 0.0) == (False, '/server2')   # nor end it
+    assert (leases.members(), leases.holder(2)) == ([2], '/server2')
+    assert leases.renew(2, '/server2', 0.7, 0.0) == (True, None)         # its own leave
+    assert leases.renew(2, '/other', 0.8, 1.5) == (True, None)
+    assert leases.renew(2, '/server2', 1.0, 1.5) == (False, '/other')
+    assert leases.renew(2, '/server2', 2.4, 1.5) == (False, None)         # lease ended
+    assert leases.holder(2) == '/server2'
 
 
 @pytest.mark.parametrize('lease', [-1.0, float('nan')])

@@ -23,6 +23,9 @@ REQUIRED = object()
 Param = collections.namedtuple('Param', 'default parse doc')
 
 DEFAULT_CASCADE = 'haarcascade_frontalface_default.xml'
+# the largest frame taken by default: 1920x1080 fits, and a Raspberry Pi 3 server holds a
+# few (16.7 MP frames took one past 1 GB, with 22 s of detection each)
+MAX_IMAGE_PIXELS = 1 << 21
 
 # Every node parameter: default (REQUIRED: none), parser, meaning. A flat table.
 PARAMS = {
@@ -96,7 +99,9 @@ PARAMS = {
     'scale_factor': Param(1.2, parse_positive, 'cascade scale step'),
     'min_neighbors': Param(5, parse_positive_int, 'cascade neighbours for a detection'),
     'min_size': Param(24, parse_positive_int, 'smallest target (px)'),
-    'max_task_len': Param(1000000, parse_positive_int, 'larger sort tasks get an error result'),
+    'max_task_len': Param(100000, parse_positive_int, 'longer sort tasks are refused from '
+                          'their length, unread (a Raspberry Pi 3 holds a 1e5-value task in '
+                          '4 MB)'),
     'work_delay': Param(0.0, parse_non_negative, 'each task takes this much longer (s): a '
                         'slower or busier machine; with ~test_knobs, rosparam set changes '
                         'it at run time'),
@@ -108,6 +113,8 @@ PARAMS = {
                      "use, its cgroup's CPU quota rounded up)"),
     'max_queue': Param(100, parse_positive_int, 'tasks waiting for a worker; more are answered '
                        'busy'),
+    'max_queue_bytes': Param(32 << 20, parse_positive_int, 'memory the tasks waiting for a '
+                             'worker may hold (bytes); one more is answered busy'),
     'load_aware': Param(False, parse_bool, 'rank servers by round trip + mean wait at the '
                         "server's utilization + work per task (from its probe answers), "
                         'announce its task rate in probes, give each task its deadline, and '
@@ -121,7 +128,8 @@ PARAMS = {
                           'cannot start in time is refused busy (0: the task timeout)'),
     'retry_budget': Param(0.1, parse_non_negative, 're-sends and hedges: at most this share '
                           'of the tasks sent in the last 10 s, plus 2 (0: no limit)'),
-    'max_image_pixels': Param(1 << 24, parse_positive_int, 'larger frames get an error result'),
+    'max_image_pixels': Param(MAX_IMAGE_PIXELS, parse_positive_int, 'larger frames are '
+                              'refused (a raw one from its length, unread); 1920x1080 fits'),
     'image_topic': Param('', parse_text, 'camera frames from this sensor_msgs/Image or '
                          'CompressedImage topic (newest frame wins)'),
     'image_transport': Param('raw', one_of('raw', 'compressed'), 'how frames travel'),

@@ -12,7 +12,7 @@ from server_select.core.observe.summary import RunReport
 from server_select.msg import LatencySample, LatencySamples, SelectionFlag, TaskReport
 from server_select.ros.node import end_parent_launch, fleet, param
 from server_select.ros.runner import run
-from server_select.ros.senders import SenderGate
+from server_select.ros.senders import FIRST, SenderGate, robot_senders
 
 
 class ReportNode(object):
@@ -40,6 +40,7 @@ class ReportNode(object):
         self.end_launch = param('end_launch')
         self.report = RunReport(param('task_timeout'))
         self.gate = SenderGate('report', 'a node of the fleet')   # with a key: sealed only
+        self.robots = robot_senders('report', FIRST)       # a robot's reports: its own
         self.flag_sub = rospy.Subscriber(fleet(names.SELECTION_TOPIC), SelectionFlag, self.on_flag,
                                          queue_size=100)
         self.task_sub = rospy.Subscriber(fleet(names.TASK_REPORT_TOPIC), TaskReport, self.on_task,
@@ -55,17 +56,23 @@ class ReportNode(object):
         rospy.loginfo('report: listening for %.3g s', duration)
 
     def on_flag(self, flag):
+        if not self.gate.admits(flag, 'a flag'):
+            return
         self.report.add_flag(flag.robot_id, flag.server_id, flag.ranking, flag.mean_latency)
 
     def on_probe(self, sample):
+        if not self.robots.admits(sample, 'a probe sample', sample.robot_id):
+            return
         self.report.add_probe(sample.robot_id, sample.server_id, sample.ok, sample.rtt)
 
     def on_probes(self, batch):
+        if not self.robots.admits(batch, 'probe samples', batch.robot_id):
+            return
         for server, ok, rtt in zip(batch.server_id, batch.ok, batch.rtt):
             self.report.add_probe(batch.robot_id, server, ok, rtt)
 
     def on_task(self, report):
-        if not self.gate.admits(report, 'a task report'):
+        if not self.robots.admits(report, 'a task report', report.robot_id):
             return
         if cut_off(report.error):       # a robot stopped with it out: not the fleet's doing
             return

@@ -30,12 +30,11 @@ class RobotNode(object):
     """A robot of the fleet: a prober, a selection follower and one or two task streams.
 
     Tasks go to the selected server (``~mode`` ``select``), to ``~fixed_server``
-    (``fixed``, the paper's baseline), or are processed by the robot itself (``local``,
-    the no-offloading reference). Two streams, each optional: sort tasks (``~task_size``
-    random int32 at ``~task_rate``) and camera frames (``~image_source`` at
-    ``~frame_rate``). Each task ends in exactly one ``task_report``: a checked result, an
-    error result, or a timeout after ``~task_timeout``. With camera frames, it takes part
-    in the cooperative search (targets shared through ``found_targets``).
+    (``fixed``, the paper's baseline), or are processed by the robot itself (``local``).
+    Two streams, each optional: sort tasks (``~task_size`` random int32 at ``~task_rate``)
+    and camera frames (``~image_source`` at ``~frame_rate``). Each task ends in exactly one
+    ``task_report``: a checked result, an error result, or a timeout after
+    ``~task_timeout``. With camera frames it takes part in the cooperative search.
 
     :ROS Parameters: (all, with defaults: docs/parameters.md, made from ``core/settings.py``)
         - ``~robot_id``; ``~servers`` (may be empty with ``~discover`` or
@@ -55,7 +54,7 @@ class RobotNode(object):
           ``processed_data``, ``processed_image``, or
           ``robot_<robot_id>/processed_data``, ... (fleet); ``detections``,
           ``found_targets``; ``fleet_servers`` (``~discover``) or ``group_assignments``
-    :ROS Services: ``~known_targets`` (server_select/KnownTargets); calls ``latency_S<s>``
+    :ROS Services: ``~known_targets`` (KnownTargets); calls ``latency_S<s>``
     """
     SEAL_ROLE = 'robot'  # what it signs as with a fleet key (core/trust/seal.py)
     DIAGNOSTICS = 'robot'  # its statuses on /diagnostics (ros/diagnostics.py)
@@ -144,10 +143,11 @@ class RobotNode(object):
                 and self.selection.ready(self.prober.answered))
 
     def server_node(self, server, refresh=False):
-        """The node serving ``latency_S<server>`` (the only one whose results count)."""
-        return self.providers.node(fleet(names.probe_service(server)), refresh)
-
-    # -- evidence ----------------------------------------------------------------------------
+        """The node that is server ``server``, whose results alone count: with a fleet key
+        the one its sealed announcement names, else the master's for its probe service."""
+        announced = self.addresses and self.addresses.of(server)
+        return announced[1] if announced else self.providers.node(
+            fleet(names.probe_service(server)), refresh)
 
     def on_sample(self, server, ok, rtt, error, wait=None):
         try:   # load-aware: the expected completion, round trip + wait

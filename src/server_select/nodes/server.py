@@ -10,7 +10,7 @@ import rospy
 from server_select.core.config import names
 from server_select.core.config.params import ParamError
 from server_select.core.util.procs import usable_cpus
-from server_select.ros import seal
+from server_select.ros import bounded_read, seal
 from server_select.ros.membership import ServerAnnouncer
 from server_select.ros.node import fleet, live_param, param
 from server_select.ros.runner import run
@@ -20,6 +20,7 @@ from server_select.tasks.kinds import server_kinds
 from server_select.srv import LatencyProbe, LatencyProbeResponse
 
 KNOWN_ROBOTS = 4096     # robots whose probes prepared their result topics, remembered
+MAX_PROBE_BYTES = 1 << 16   # a probe request: ids and the kinds a robot sends (~100 B each)
 
 
 class ServerNode(object):
@@ -51,11 +52,12 @@ class ServerNode(object):
     :ROS Parameters:
         - ``~server_id`` (int, required): this server's id.
         - ``~profile`` (``paper``), ``~routing`` (``broadcast``; fleet: ``direct``)
-        - ``~max_task_len`` (int, 1000000): larger sort tasks get an error result.
+        - ``~max_task_len`` (int, 100000): longer sort tasks are refused, unread.
         - ``~queue_size`` (int, 100): task subscriber queues.
         - ``~workers`` (int, 0: the cores this process may use, its cgroup's CPU quota
           rounded up): tasks worked on at once.
         - ``~max_queue`` (int, 100): tasks waiting for a worker; more are answered busy.
+        - ``~max_queue_bytes`` (int, 32 MiB): memory those tasks may hold; more: busy.
         - ``~summary_period`` (s, 10): period of the log line of what it has done.
         - ``~work_delay`` (s, 0): each task takes this much longer (a slower machine).
         - ``~test_knobs`` (bool, false): follow ``~work_delay`` at run time (``rosparam
@@ -63,7 +65,7 @@ class ServerNode(object):
         - ``~detector`` (str, ``haar``): ``haar`` or ``hog``.
         - ``~cascade`` (str, ``haarcascade_frontalface_default.xml``)
         - ``~scale_factor`` (1.2), ``~min_neighbors`` (5), ``~min_size`` (24 px): cascade settings.
-        - ``~max_image_pixels`` (int, 16777216): larger frames get an error result.
+        - ``~max_image_pixels`` (int, 2097152): larger frames are refused (raw: unread).
         - ``~jpeg_quality`` (80): of the annotated frame sent back for a compressed task.
         - ``~announce_period`` (s, 2): period of its announcement on
           ``server_announcements`` (latched; a lease of 3 periods; "leaving" at shutdown).
@@ -89,7 +91,8 @@ class ServerNode(object):
         self.queue_size = param('queue_size')
         self.work_delay = param('work_delay')
         workers = param('workers') or usable_cpus()
-        self.work = ServerWork(self.server_id, workers, param('max_queue'))
+        self.work = ServerWork(self.server_id, workers, param('max_queue'),
+                               param('max_queue_bytes'))
         self.direct = direct = param('routing') == 'direct'
         self._known_robots = collections.OrderedDict()   # robots prepared for, newest last
         self._pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='routes')
@@ -117,6 +120,7 @@ class ServerNode(object):
         # Advertised last: a robot that can probe us finds our task topics wired already.
         self.probe_srv = rospy.Service(
             fleet(names.probe_service(self.server_id)), LatencyProbe, self.on_probe)
+        bounded_read.limit(self.probe_srv.resolved_name, MAX_PROBE_BYTES)
         self.announcer.probe_uri = self.probe_srv.uri
         self.announcer.start()
         rospy.loginfo('server %d: probe service %s, tasks on %s',

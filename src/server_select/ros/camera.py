@@ -20,7 +20,7 @@ class TopicSource(object):
 
     world = None   # frames carry no position in a search area
 
-    def __init__(self, topic, max_pixels=1 << 24):
+    def __init__(self, topic, max_pixels=image_codec.MAX_PIXELS):
         self.topic, self.max_pixels = topic, max_pixels
         self._lock = threading.Lock()
         self._newest = None

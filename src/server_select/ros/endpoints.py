@@ -8,6 +8,7 @@ import time
 import rospy
 
 from server_select.core.config import names
+from server_select.ros import bounded_read
 from server_select.ros.graph import stalled
 from server_select.ros.node import fleet
 from server_select.ros.routing import kind_name, renew
@@ -131,6 +132,8 @@ class ServerEndpoint(object):
         self.subs = [rospy.Subscriber(topic, kind.task_type, self.on_task, callback_args=direct,
                                       queue_size=queue, tcp_nodelay=True, buff_size=1 << 24)
                      for topic, direct in topics]
+        for sub in self.subs:
+            bounded_read.limit(sub.resolved_name, kind.max_bytes())
 
     def prepare(self, robot):
         """Make ``robot``'s result publisher (direct routing; nothing otherwise)."""

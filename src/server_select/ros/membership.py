@@ -91,8 +91,9 @@ class ServerRegistry(object):
                                    '%s' % (msg.server_id, node, error))
             return
         if other is not None:
-            rospy.logwarn_throttle(5.0, 'manager: server %d announced by %s and by %s: the '
-                                   'latest counts' % (msg.server_id, other, node))
+            rospy.logwarn_throttle(5.0, 'manager: ignored an announcement of server %d by %s: '
+                                   'the id is %s\'s until it leaves or its lease ends'
+                                   % (msg.server_id, node, other))
         if changed:
             self.publish()
 
@@ -201,30 +202,3 @@ class GroupFollower(object):
         if (group, servers) != (self.group, self.servers):
             self.group, self.servers = group, servers
             self.on_group(group, servers)
-
-
-class ProbeAddresses(object):
-    """Robot side, with a fleet key: where each server serves its probe service, and under
-    which node name, as its sealed announcements say (ROS 1 lets any node register any
-    service at the master, at its own address and under another node's name; a server's
-    announcement, sealed with the fleet key, is the witness instead). Thread-safe."""
-
-    def __init__(self, who):
-        self.gate = SenderGate(who, 'a server')
-        self._lock = threading.Lock()
-        self._known = {}         # server -> (probe uri, node)
-        self.sub = None
-
-    def start(self):
-        self.sub = rospy.Subscriber(fleet(names.ANNOUNCE_TOPIC), ServerAnnouncement,
-                                    self.on_announcement, queue_size=100)
-
-    def on_announcement(self, msg):
-        if msg.probe_uri and msg.lease > 0 and self.gate.admits(msg, 'a server announcement'):
-            with self._lock:
-                self._known[msg.server_id] = (msg.probe_uri, publisher_of(msg))
-
-    def of(self, server):
-        """``(probe uri, node)`` server ``server`` announced last, or None."""
-        with self._lock:
-            return self._known.get(server)

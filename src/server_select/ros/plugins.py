@@ -75,6 +75,38 @@ class TaskPlugin(object):
         """Fill ``result`` for ``task`` on a server; raise ValueError to reject the task."""
         raise NotImplementedError
 
+    def max_bytes(self):
+        """Server side: the longest task message taken, bytes (setting ``max_bytes``,
+        default 4 MiB); a longer one is refused from its length, unread
+        (:mod:`server_select.ros.bounded_read`)."""
+        return int(self.settings.get('max_bytes', 4 << 20))
+
+    def held_bytes(self, task):
+        """Server side: about how much memory ``task`` holds while queued (what the queue's
+        ``~max_queue_bytes`` counts; :func:`held_bytes`)."""
+        return held_bytes(task)
+
+
+MESSAGE_SLACK = 4096   # a task message's bytes besides its payload: header, ids, names
+PER_NUMBER = 36     # bytes of one deserialized number of an array: its object and pointer
+
+
+def held_bytes(msg):
+    """About the memory a deserialized message holds: its strings' and byte arrays'
+    lengths, ``PER_NUMBER`` for each number of an array (genpy reads ``int32[]`` into a
+    tuple of Python ints), nested messages alike."""
+    total = 0
+    for name in getattr(msg, '__slots__', ()):
+        value = getattr(msg, name, None)
+        if isinstance(value, (bytes, str, bytearray)):
+            total += len(value)
+        elif isinstance(value, (list, tuple)):
+            total += sum(held_bytes(item) if hasattr(item, '__slots__') else PER_NUMBER
+                         for item in value)
+        elif hasattr(value, '__slots__'):
+            total += held_bytes(value)
+    return total
+
 
 def load(spec, robot_id, name='~task_plugins'):
     """An instance of the plug-in ``module:Class``, with its settings (ParamError if not)."""

@@ -1,16 +1,25 @@
-"""Which answers to a robot's probes are its servers' own, by the fleet key (a part of
-the :class:`~server_select.ros.prober.Prober`)."""
+"""Which node is which server, and which answers to a robot's probes are its servers' own,
+by the fleet key (parts of the :class:`~server_select.ros.prober.Prober`)."""
+
+import threading
 
 import rospy
 
+from server_select.core.config import names
+from server_select.core.fleet.leases import Leases
 from server_select.core.trust.senders import Throttle
+from server_select.msg import ServerAnnouncement
 from server_select.ros import seal
+from server_select.ros.graph import publisher_of
+from server_select.ros.node import fleet
+from server_select.ros.senders import SenderGate
 
 
 class ProbeSeal(object):
-    """``node_of(server, refresh)`` names the node the master says serves a server's probe
-    service; ``addresses`` (a :class:`~server_select.ros.membership.ProbeAddresses`, with a
-    key, or None) the address and node its sealed announcement names, which win."""
+    """``node_of(server, refresh)`` names the node that is a server (with a key, the one its
+    sealed announcement names; else the one the master lists for its probe service);
+    ``addresses`` (a :class:`ProbeAddresses`, with a key, or
+    None) the address its sealed announcement names, which is probed."""
 
     def __init__(self, robot_id, node_of=None, addresses=None):
         self.robot_id, self.addresses = robot_id, addresses
@@ -37,9 +46,8 @@ class ProbeSeal(object):
         return warn
 
     def node(self, server, refresh=False):
-        """The node whose seal a probe answer of ``server`` must carry."""
-        announced = self.addresses.of(server) if self.addresses is not None else None
-        return announced[1] if announced else self.node_of(server, refresh)
+        """The node whose seal a probe answer of ``server`` must carry (``node_of``'s)."""
+        return self.node_of(server, refresh)
 
     def forgery(self, server, response, proxy, request):
         """Why the answer is not the server's, by the fleet key (None: it is, or no key)."""
@@ -60,3 +68,58 @@ class ProbeSeal(object):
                                   self.robot_id, proxy.resolved_name, node, proxy.uri, forged,
                                   server, '; %d more before' % held if held else ''))
         return forged
+
+
+class ProbeAddresses(object):
+    """Robot side, with a fleet key: where each server serves its probe service, and under
+    which node name, as its sealed announcements say (ROS 1 lets any node register any
+    service at the master, at its own address and under another node's name; a server's
+    announcement, sealed with the fleet key, is the witness instead). A server id is the
+    first announcing node's until that node leaves or its lease ends (:class:`Leases`):
+    another node's announcement meanwhile is refused, named in a throttled line.
+    Thread-safe."""
+
+    def __init__(self, who, clock=None):
+        self.who = who
+        self.gate = SenderGate(who, 'a server')
+        self.leases = Leases()
+        self._clock = clock or rospy.get_time
+        self._lock = threading.Lock()
+        self._uri = {}         # server -> the probe uri its holder announced
+        self._refused = Throttle(5.0)
+        self.sub = None
+
+    def start(self):
+        self.sub = rospy.Subscriber(fleet(names.ANNOUNCE_TOPIC), ServerAnnouncement,
+                                    self.on_announcement, queue_size=100)
+
+    def on_announcement(self, msg):
+        if not self.gate.admits(msg, 'a server announcement'):
+            return
+        node, now = publisher_of(msg), self._clock()
+        try:
+            _changed, holder = self.leases.renew(msg.server_id, node, now, msg.lease)
+        except ValueError:
+            return
+        if holder is not None:
+            due, held = self._refused.due()
+            if due:
+                rospy.logwarn('%s: ignored an announcement of server %d by %s: the id is '
+                              '%s\'s until it leaves or its lease ends%s' % (
+                                  self.who, msg.server_id, node, holder,
+                                  '; %d more before' % held if held else ''))
+            return
+        with self._lock:
+            if msg.lease > 0 and msg.probe_uri:
+                self._uri[msg.server_id] = msg.probe_uri
+            else:
+                self._uri.pop(msg.server_id, None)
+
+    def of(self, server):
+        """``(probe uri, node)`` of server ``server``'s holder while its lease lasts, or
+        None."""
+        self.leases.expire(self._clock())
+        node = self.leases.holder(server)
+        with self._lock:
+            uri = self._uri.get(server)
+        return (uri, node) if node is not None and uri else None

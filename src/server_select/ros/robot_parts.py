@@ -15,7 +15,7 @@ from server_select.core.selection import robot_parts
 from server_select.core.selection.effect import ineffective, refusal
 from server_select.ros import params_in_force, seal
 from server_select.ros.load import load_of
-from server_select.ros.membership import ProbeAddresses
+from server_select.ros.probe_seal import ProbeAddresses
 from server_select.ros.node import param
 from server_select.ros.prober import Prober
 from server_select.ros.routing import ROUTES

@@ -34,6 +34,10 @@ class SenderGate(object):
         a string, or a function making it (then only made for a refused message: results
         and samples are a hot path)."""
         sender = publisher_of(msg)
+        unsealed = seal.refusal(msg, sender)     # first: an unsigned message claims nothing
+        if unsealed is not None:
+            self._warn(what, sender, '%s, by the fleet key' % unsealed)
+            return False
         expected = self.rule.refusal(sender, key)
         if expected is not None:
             fix = self.hint(sender, key) if self.hint is not None else None
@@ -41,10 +45,6 @@ class SenderGate(object):
                 self.role.format(key=key), expected,
                 ' or a node in its namespace' if self.rule.within else '',
                 '; %s' % fix if fix else ''))
-            return False
-        unsealed = seal.refusal(msg, sender)
-        if unsealed is not None:
-            self._warn(what, sender, '%s, by the fleet key' % unsealed)
             return False
         return True
 
@@ -75,9 +75,11 @@ FIRST = 'first'         # ~robot_node: a robot is the first node that sends for 
 def robot_senders(who, pattern, hint=None):
     """The gate of robots' messages: robot ``{key}`` is the node ``pattern`` names
     (``/robot{id}``), or with :data:`FIRST` the first node that sent for it while that node
-    answers (:class:`~server_select.ros.graph.Liveness`), or any node (None); nodes in its
-    namespace count too."""
+    answers (:class:`~server_select.ros.graph.Liveness`), or any node (None). Without a
+    fleet key nodes in its namespace count too; with one, only the node itself (any node
+    may take a name in a robot's namespace)."""
+    within = not seal.enabled()
     if pattern == FIRST:
-        return SenderGate(who, 'robot {key}', within=True, alive=Liveness())
-    return SenderGate(who, 'robot {key}', within=True,
+        return SenderGate(who, 'robot {key}', within=within, alive=Liveness())
+    return SenderGate(who, 'robot {key}', within=within,
                       lookup=node_pattern(pattern) if pattern else None, hint=hint)

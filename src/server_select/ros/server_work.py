@@ -16,9 +16,9 @@ class ServerWork(object):
     the deadline its robot gave (``budget``), or the queue is full; a task whose deadline
     passed while it waited is answered busy too, without doing the work."""
 
-    def __init__(self, server_id, workers, max_queue):
+    def __init__(self, server_id, workers, max_queue, max_queue_bytes=None):
         self.server_id = server_id
-        self.queue = WorkQueue(workers, max_queue)
+        self.queue = WorkQueue(workers, max_queue, max_bytes=max_queue_bytes)
         self._lock = threading.Lock()
         self.busy = 0
 
@@ -31,7 +31,7 @@ class ServerWork(object):
         budget = getattr(task, 'budget', 0.0)
         deadline = time.monotonic() + budget if budget > 0 else None
         why = self.queue.offer(endpoint.kind_name, (endpoint, task, direct), deadline,
-                               owner=task.robot_id)
+                               owner=task.robot_id, size=endpoint.kind.held_bytes(task))
         if why is not None:
             self._busy(endpoint, task, direct, why)
 

@@ -17,7 +17,7 @@ from std_msgs.msg import Header
 from server_select.core.config import names
 from server_select.msg import Detection, Detections, ImageResult, ImageTask
 from server_select.ros.node import fleet
-from server_select.ros.plugins import TaskPlugin
+from server_select.ros.plugins import MESSAGE_SLACK, TaskPlugin
 from server_select.ros.seal import SealedPublisher
 from server_select.vision import image_codec
 from server_select.vision.detection import search_frame
@@ -43,7 +43,7 @@ class Frames(TaskPlugin):
         self.encoding = settings.get('encoding', 'bgr8')
         self.transport = settings.get('transport', 'raw')
         self.quality = int(settings.get('quality', 80))
-        self.max_pixels = int(settings.get('max_pixels', 1 << 24))
+        self.max_pixels = int(settings.get('max_pixels', image_codec.MAX_PIXELS))
         self.source, self.search = source, search
         self.detectors = queue.Queue()
         for detector in detectors:
@@ -129,6 +129,10 @@ class Frames(TaskPlugin):
     def start(self):
         self.detections_pub = SealedPublisher(fleet(names.DETECTIONS_TOPIC), Detections,
                                               queue_size=100)
+
+    def max_bytes(self):
+        """A raw 3-channel frame of ``max_pixels`` (a compressed one is shorter)."""
+        return 3 * self.max_pixels + MESSAGE_SLACK
 
     def handle(self, task, result):
         img, packed = task.image, task.compressed

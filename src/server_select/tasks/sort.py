@@ -10,7 +10,7 @@ import random
 from server_select.core.config import names
 from server_select.core.flow.sort_kernel import check_sorted, fingerprint, make_values, sort_values
 from server_select.msg import SortResult, SortTask
-from server_select.ros.plugins import TaskPlugin
+from server_select.ros.plugins import MESSAGE_SLACK, TaskPlugin
 
 
 class Sort(TaskPlugin):
@@ -23,7 +23,7 @@ class Sort(TaskPlugin):
     def __init__(self, robot_id, settings):
         super(Sort, self).__init__(robot_id, settings)
         self.size = int(settings.get('size', 1000))
-        self.max_len = int(settings.get('max_len', 1000000))
+        self.max_len = int(settings.get('max_len', 100000))
         self.rng = random.Random(settings.get('seed', robot_id))
 
     def make(self, task_id, stamp):
@@ -41,3 +41,6 @@ class Sort(TaskPlugin):
 
     def handle(self, task, result):
         result.data = sort_values(task.data, self.max_len)     # TaskError is a ValueError
+
+    def max_bytes(self):
+        return 4 * self.max_len + MESSAGE_SLACK

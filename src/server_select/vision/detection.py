@@ -7,7 +7,7 @@ import threading
 
 from server_select.core.settings import default
 from server_select.core.util.lazy import deferred
-from server_select.vision.image_codec import task_frame, to_gray
+from server_select.vision.image_codec import MAX_PIXELS, task_frame, to_gray
 
 np = deferred('numpy')
 
@@ -144,7 +144,7 @@ def iou(a, b):
     return inter / float(union) if union else 0.0
 
 
-def search_frame(detector, raw, compressed=('', b''), max_pixels=1 << 24):
+def search_frame(detector, raw, compressed=('', b''), max_pixels=MAX_PIXELS):
     """The work of one image task: decode the frame (see
     :func:`~server_select.vision.image_codec.task_frame`), detect, annotate.
 

@@ -6,12 +6,14 @@ JPEG and PNG (``format`` as image_transport's compressed plugin writes it, e.g.
 add up, raise :class:`ImageError` with the reason.
 """
 
+from server_select.core.settings import MAX_IMAGE_PIXELS
 from server_select.core.util.lazy import deferred
 
 np = deferred('numpy')
 
 
 CHANNELS = {'bgr8': 3, 'rgb8': 3, 'mono8': 1}
+MAX_PIXELS = MAX_IMAGE_PIXELS      # the largest frame taken by default
 
 
 class ImageError(ValueError):
@@ -89,7 +91,7 @@ def encode(array, quality=80, kind='jpeg'):
     return '%s; %s compressed %s' % (encoding, kind, encoding), data.tobytes()
 
 
-def decode(fmt, data, max_pixels=1 << 24):
+def decode(fmt, data, max_pixels=MAX_PIXELS):
     """The BGR array of a compressed frame (JPEG or PNG); a frame that does not decode, or
     decodes to more than ``max_pixels``, raises ImageError."""
     import cv2
@@ -110,7 +112,7 @@ def decode(fmt, data, max_pixels=1 << 24):
     return frame
 
 
-def task_frame(raw, compressed, max_pixels=1 << 24):
+def task_frame(raw, compressed, max_pixels=MAX_PIXELS):
     """The array of a task's frame: ``compressed`` = ``(format, data)`` when it has data,
     else ``raw`` = ``(encoding, height, width, step, data)``. ImageError when it cannot be
     had or has more than ``max_pixels``."""

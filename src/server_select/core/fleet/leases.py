@@ -1,5 +1,6 @@
 """Fleet membership by leases (no rospy): a server is a member from its announcement
-until its lease runs out, unless it announces again or says it leaves.
+until its lease runs out, unless it announces again or says it leaves; its id is bound to
+the node that announced it meanwhile.
 
 Each server announces itself every ``~announce_period`` s with a lease of a few periods;
 the manager keeps the table and publishes the members. A server that stops cleanly says
@@ -22,22 +23,31 @@ class Leases(object):
 
     def renew(self, server, node, now, lease):
         """``node`` announced ``server`` at ``now`` for ``lease`` s (0: it leaves).
-        Returns ``(changed, other)``: whether the members changed, and the node that held
-        ``server``'s lease until now when it is not ``node`` (two nodes claim one id)."""
+        Returns ``(changed, holder)``: whether the members changed, and the node that holds
+        ``server`` when that is not ``node``: an id is one node's from its first
+        announcement until it leaves or its lease ends, and another node's claim meanwhile
+        is refused (changes nothing)."""
         if not lease >= 0.0:
             raise ValueError('lease %r s is not a duration' % (lease,))
         with self._lock:
+            holder = self._holder.get(server)
+            if holder is not None and holder != node:
+                if self._until[server] > now:
+                    return False, holder
+                holder = None             # its lease ended: ``node`` may take the id
             known = server in self._until
-            other = self._holder.get(server) if known else None
             if lease == 0.0:
-                if other is not None and other != node:
-                    return False, other       # not the holder's own leaving: ignored
                 self._until.pop(server, None)
                 self._holder.pop(server, None)
                 return known, None
             self._until[server] = now + lease
             self._holder[server] = node
-            return not known, other if other != node else None
+            return not known, None
+
+    def holder(self, server):
+        """The node ``server`` is bound to (None: no lease is held)."""
+        with self._lock:
+            return self._holder.get(server)
 
     def expire(self, now):
         """The servers whose lease ended by ``now``, removed (ascending)."""

@@ -44,16 +44,18 @@ Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per t
 class Job(object):
     """A task in a :class:`WorkQueue`: what the worker needs, its kind, deadline and
     owner (who sent it: a robot's id, or None)."""
-    __slots__ = ('kind', 'item', 'deadline', 'queued_at', 'started', 'owner')
+    __slots__ = ('kind', 'item', 'deadline', 'queued_at', 'started', 'owner', 'size')
 
-    def __init__(self, kind, item, deadline, queued_at, owner=None):
+    def __init__(self, kind, item, deadline, queued_at, owner=None, size=0):
         self.kind, self.item, self.deadline, self.queued_at = kind, item, deadline, queued_at
-        self.owner = owner
+        self.owner, self.size = owner, size
         self.started = None
 
 
 class WorkQueue(object):
-    """Tasks waiting for ``workers`` workers, at most ``max_queue`` of them (thread-safe).
+    """Tasks waiting for ``workers`` workers, at most ``max_queue`` of them holding at most
+``max_bytes`` (None: any; a task alone in the queue is taken whatever its size)
+(thread-safe).
 
     :meth:`offer` queues a task or says at once why not (full, or it cannot be done by its
     deadline: busy); workers :meth:`take` the oldest (None once closed), ask
@@ -65,11 +67,12 @@ class WorkQueue(object):
     """
 
     def __init__(self, workers, max_queue, times=None, clock=time.monotonic, horizon=10.0,
-                 announce_age=3.0):
+                 announce_age=3.0, max_bytes=None):
         if workers < 1 or max_queue < 1:
             raise ValueError('workers and max_queue must be >= 1, got %r, %r'
                              % (workers, max_queue))
         self.workers, self.max_queue = int(workers), int(max_queue)
+        self.max_bytes, self.queued_bytes = max_bytes, 0
         self.times = times or ServiceTimes(clock=clock)
         self.demand = Demand(horizon, announce_age)
         self._clock = clock
@@ -101,15 +104,20 @@ class WorkQueue(object):
             return known
         return max([now - job.started for job in self._running if job.kind == kind] or [0.0])
 
-    def offer(self, kind, item, deadline=None, owner=None):
+    def offer(self, kind, item, deadline=None, owner=None, size=0):
         """Queue ``item`` (a task of ``kind`` wanted by ``deadline``, None: whenever, sent
-        by ``owner``). Returns None when queued, else why it is refused (it was not queued)."""
+        by ``owner``, holding ``size`` bytes). Returns None when queued, else why it is
+        refused (it was not queued)."""
         with self._cond:
             now = self._clock()
             if self._closed:
                 why = 'the server is shutting down'
             elif len(self._queue) >= self.max_queue:
                 why = 'busy: %d tasks queued already' % len(self._queue)
+            elif self._queue and self.max_bytes is not None and \
+                    self.queued_bytes + size > self.max_bytes:
+                why = 'busy: the tasks queued hold %d bytes; %d more is over %d' % (
+                    self.queued_bytes, size, self.max_bytes)
             else:
                 why = None
                 if deadline is not None:
@@ -120,7 +128,8 @@ class WorkQueue(object):
             if why is not None:
                 self.refused += 1
                 return why
-            self._queue.append(Job(kind, item, deadline, now, owner))
+            self._queue.append(Job(kind, item, deadline, now, owner, size))
+            self.queued_bytes += size
             self.demand.arrived(owner, kind, now)
             self._cond.notify()
             return None
@@ -133,6 +142,7 @@ class WorkQueue(object):
             if self._closed:
                 return None
             job = self._queue.popleft()
+            self.queued_bytes -= job.size
             job.started = self._clock()
             self._running.add(job)
             return job
@@ -192,5 +202,6 @@ class WorkQueue(object):
         with self._cond:
             self._closed = True
             dropped, self._queue = list(self._queue), collections.deque()
+            self.queued_bytes = 0
             self._cond.notify_all()
             return dropped

@@ -1,0 +1,159 @@
+"""What this node reads from a connection is bounded before it is read.
+
+rospy reads a whole connection header, and a whole message, into memory before anything
+can look at it: a header claiming 4 GB makes it copy its buffer on every read, a 40 MB task
+is stored, deserialized and queued before its kind can refuse it. Both are preceded by a
+4-byte length, checked here first (the way gRPC checks ``max_receive_message_length``):
+
+- :func:`install` (every node, at start): a connection header longer than
+  :data:`MAX_HEADER_BYTES` ends its connection, read no further.
+- :func:`limit` (a topic this node subscribes to, a service it serves): a message longer
+  than the limit is read past without being kept (the connection stays usable for the
+  sender's next message), counted by sender, and named in a line at most every 5 s.
+"""
+
+import collections
+import socket
+import struct
+import threading
+
+import rospy
+from rosgraph.network import ROSHandshakeException, decode_ros_handshake_header
+from rospy.impl import tcpros_base
+from rospy.impl.tcpros_pubsub import TCPROSSub
+from rospy.impl.tcpros_service import TCPService
+
+from server_select.core.trust.senders import Throttle
+
+MAX_HEADER_BYTES = 1 << 20    # the fleet's largest header is 5 KB (ImageResult's definition)
+_SCRATCH = 1 << 16            # read size while reading past a refused message
+_LIMITS = {}                  # resolved topic or service name -> largest message, bytes
+_LOCK = threading.Lock()
+_REFUSED = collections.Counter()      # (sender, name) -> messages refused
+_THROTTLE = Throttle(5.0)
+_ORIGINAL = {}
+
+
+def _recv_exactly(sock, count):
+    chunks = []
+    while count:
+        chunk = sock.recv(min(count, _SCRATCH))
+        if not chunk:
+            raise ROSHandshakeException('connection closed inside its header')
+        chunks.append(chunk)
+        count -= len(chunk)
+    return b''.join(chunks)
+
+
+def read_header(sock, buffer, _buff_size, most=MAX_HEADER_BYTES):
+    """rosgraph's ``read_ros_handshake_header`` with the header's length checked before it
+    is read (ROSHandshakeException naming the peer and the limit); bytes after the header
+    stay in ``buffer``, as there."""
+    held = buffer.getvalue()
+    if len(held) < 4:
+        held += _recv_exactly(sock, 4 - len(held))
+    (size,) = struct.unpack('<I', held[:4])
+    if size > most:
+        try:
+            peer = '%s:%d' % sock.getpeername()[:2]
+        except (OSError, TypeError):
+            peer = 'an unknown peer'
+        raise ROSHandshakeException('connection header of %d bytes from %s refused: more '
+                                    'than %d' % (size, peer, most))
+    if len(held) < size + 4:
+        held += _recv_exactly(sock, size + 4 - len(held))
+    buffer.seek(0)
+    buffer.truncate()
+    buffer.write(held[size + 4:])
+    return decode_ros_handshake_header(held[:size + 4])
+
+
+def limit(name, most):
+    """Messages on ``name`` (a resolved topic this node subscribes to or a service it
+    serves) longer than ``most`` bytes are refused unread."""
+    install()
+    with _LOCK:
+        _LIMITS[name] = int(most)
+
+
+def refused():
+    """Messages refused so far, by (sender, topic or service)."""
+    with _LOCK:
+        return dict(_REFUSED)
+
+
+def _length(buffer):
+    with buffer.getbuffer() as view:
+        return struct.unpack_from('<I', view)[0]
+
+
+def _read_past(transport, size):
+    """Drop the message of ``size`` bytes at the start of the transport's buffer, reading
+    from its socket what has not arrived yet into a scratch buffer."""
+    buffer, sock = transport.read_buff, transport.socket
+    held = buffer.tell()
+    with buffer.getbuffer() as view:
+        rest = bytes(view[size + 4:held]) if held > size + 4 else b''
+    missing = max(0, size + 4 - held)
+    scratch = bytearray(_SCRATCH)
+    while missing:
+        got = sock.recv_into(scratch, min(missing, _SCRATCH))
+        if not got:
+            raise tcpros_base.TransportTerminated('closed inside a refused message')
+        missing -= got
+    buffer.seek(0)
+    buffer.truncate()
+    buffer.write(rest)
+
+
+def _refuse(transport, name, size, most):
+    """Count and name the message just read past; a service client is answered with the
+    reason (its call fails at once, with it)."""
+    sender = (transport.header or {}).get('callerid', 'an unknown node')
+    why = 'a message of %d bytes on %s from %s: more than its limit of %d' % (
+        size, name, sender, most)
+    if isinstance(transport.protocol, TCPService):
+        error = ('request refused: %s' % why).encode('utf-8')
+        transport.write_data(struct.pack('<BI', 0, len(error)) + error)
+    with _LOCK:
+        _REFUSED[(sender, name)] += 1
+        total = sum(_REFUSED.values())
+    due, held = _THROTTLE.due()
+    if due:
+        rospy.logwarn('%s: refused %s%s' % (
+            rospy.get_name(), why, ' (%d refused in all)' % total if held else ''))
+
+
+def _receive_once(transport):
+    """rospy's, but a message over its topic's limit is read past and refused first
+    (then nothing is returned: rospy's loops ask again)."""
+    protocol = transport.protocol
+    most = _LIMITS.get(getattr(protocol, 'resolved_name', None))
+    if most is not None and isinstance(protocol, (TCPROSSub, TCPService)) and \
+            transport.socket is not None:
+        buffer = transport.read_buff
+        try:
+            transport.socket.setblocking(1)
+            while buffer.tell() < 4:
+                tcpros_base.recv_buff(transport.socket, buffer, protocol.buff_size)
+            size = _length(buffer)
+            if size > most:
+                _read_past(transport, size)
+                _refuse(transport, protocol.resolved_name, size, most)
+                return []
+        except socket.error as error:
+            raise tcpros_base.TransportException('receive_once[%s]: %s'
+                                                 % (transport.name, error))
+    return _ORIGINAL['receive_once'](transport)
+
+
+def install():
+    """Bound every connection header this node reads, and make :func:`limit` effective
+    (idempotent)."""
+    with _LOCK:
+        if _ORIGINAL:
+            return
+        _ORIGINAL['receive_once'] = tcpros_base.TCPROSTransport.receive_once
+        _ORIGINAL['read_header'] = tcpros_base.read_ros_handshake_header
+        tcpros_base.TCPROSTransport.receive_once = _receive_once
+        tcpros_base.read_ros_handshake_header = read_header

@@ -1,0 +1,188 @@
+"""A server fed inputs made to exhaust it, each from this process: a sort task of 1e7
+values (40 MB), 4096 x 4096 frames (50 MB each), a connection header claiming 4 GB
+followed by 40 MB of junk, probes naming 500,000 made-up task kinds.
+
+Each is refused from the length that precedes it, before it is read: the server stays
+under 150 MiB, its probe answers under 1 ms, a good task sent after it is answered, and
+its log names the sender and the limit. (Before: 814 MB after two such tasks, 1,287 MB
+after three frames, 89 CPU-s burnt on the header.)
+"""
+
+import os
+import socket
+import statistics
+import struct
+import subprocess
+import time
+import urllib.parse
+
+import numpy as np
+import pytest
+import rosgraph
+import rospy
+from rospy.numpy_msg import numpy_msg
+from sensor_msgs.msg import Image
+
+from server_select.core.util.procs import stat_fields, stop_group, wait_until
+from server_select.msg import ImageTask, SortResult, SortTask
+from server_select.srv import LatencyProbe, LatencyProbeRequest
+
+from test_faults import show
+
+SERVER = 7
+MAX_RSS = 150 << 20
+MAX_PROBE = 1e-3
+
+
+def rss(pid):
+    with open('/proc/%d/status' % pid) as stream:
+        return next(int(line.split()[1]) << 10 for line in stream if line.startswith('VmRSS'))
+
+
+def cpu_seconds(pid):
+    fields = stat_fields('/proc/%d/stat' % pid)
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+class Server(object):
+    """Server 7 run by rosrun (its log in ``log``), a probe client, and a publisher of
+    each task kind on the topics it subscribes to."""
+
+    def __init__(self, log):
+        self.log = log
+        with open(log, 'w') as stream:
+            self.proc = subprocess.Popen(
+                ['rosrun', 'server_select', 'server', '_server_id:=%d' % SERVER,
+                 '__name:=server%d' % SERVER], stdout=stream, stderr=subprocess.STDOUT,
+                start_new_session=True, env=dict(os.environ, PYTHONUNBUFFERED='1'))
+        self.service = '/latency_S%d' % SERVER
+        rospy.wait_for_service(self.service, 30.0)
+        self.probe = rospy.ServiceProxy(self.service, LatencyProbe, persistent=True)
+        self.sort = rospy.Publisher('/data', numpy_msg(SortTask), queue_size=10)
+        self.image = rospy.Publisher('/task_image', ImageTask, queue_size=10)
+        self.results = []
+        self.sub = rospy.Subscriber('/processed_data', SortResult, self.results.append)
+        assert wait_until(lambda: self.sort.get_num_connections() and
+                          self.image.get_num_connections() and
+                          self.sub.get_num_connections(), 20.0)
+
+    def probe_times(self, count=50):
+        times = []
+        for seq in range(count):
+            start = time.perf_counter()
+            self.probe(LatencyProbeRequest(robot_id=1, seq=seq))
+            times.append(time.perf_counter() - start)
+        return times
+
+    def answers_a_task(self, task_id):
+        self.sort.publish(numpy_msg(SortTask)(robot_id=1, task_id=task_id, server_id=SERVER,
+                                              data=np.array([3, 1, 2], np.int32)))
+        return wait_until(lambda: any(r.task_id == task_id and r.ok for r in self.results),
+                          10.0)
+
+    def lines(self, text):
+        with open(self.log) as stream:
+            return [line.strip() for line in stream if text in line]
+
+    def tcpros_address(self):
+        uri = rosgraph.Master(rospy.get_name()).lookupService(self.service)
+        parsed = urllib.parse.urlparse(uri)
+        return parsed.hostname, parsed.port
+
+    def close(self):
+        self.probe.close()
+        for endpoint in (self.sort, self.image, self.sub):
+            endpoint.unregister()
+        stop_group(self.proc)
+
+
+@pytest.fixture
+def server(ros):
+    started = Server(os.path.join(os.path.dirname(ros['log']), 'server7.log'))
+    yield started
+    started.close()
+
+
+def attack(server, name, send):
+    """Figures before and after ``send()``; the server must keep them within bounds."""
+    pid = server.proc.pid
+    before = statistics.median(server.probe_times())
+    rss_before, cpu_before = rss(pid), cpu_seconds(pid)
+    sent = send()
+    time.sleep(1.0)          # what the server does with it, seen by its figures after
+    after = server.probe_times()
+    figures = {'input': name, 'sent': sent, 'RSS MiB before': rss_before >> 20,
+               'RSS MiB after': rss(pid) >> 20,
+               'server CPU s meanwhile': round(cpu_seconds(pid) - cpu_before, 2),
+               'probe median ms before': round(1e3 * before, 3),
+               'probe median ms after': round(1e3 * statistics.median(after), 3),
+               'probe max ms after': round(1e3 * max(after), 3)}
+    show('server %d attacked:' % SERVER, [figures])
+    assert rss(pid) < MAX_RSS, figures
+    assert statistics.median(after) < MAX_PROBE, figures
+    assert server.answers_a_task(len(name)), 'no good task answered after it'
+    return figures
+
+
+def test_oversized_sort_tasks_are_refused_unread(server):
+    values = np.arange(10 ** 7, 0, -1, dtype=np.int32)
+
+    def send():
+        for task_id in (101, 102):
+            server.sort.publish(numpy_msg(SortTask)(robot_id=66, task_id=task_id,
+                                                    server_id=SERVER, data=values))
+        return '2 tasks of 1e7 values'
+    attack(server, 'sort tasks of 40 MB', send)
+    assert wait_until(lambda: server.lines('refused a message of 40000'), 5.0)
+    line = server.lines('refused a message of 40000')[0]
+    assert rospy.get_name() in line and 'limit of 404096' in line, line
+
+
+def test_oversized_frames_are_refused_unread(server):
+    frame = Image(height=4096, width=4096, encoding='bgr8', step=3 * 4096,
+                  data=bytes(3 * 4096 * 4096))
+
+    def send():
+        for task_id in (201, 202, 203):
+            server.image.publish(ImageTask(robot_id=66, task_id=task_id, server_id=SERVER,
+                                           image=frame))
+        return '3 frames of 4096 x 4096'
+    attack(server, 'frames of 16.7 MP', send)
+    assert wait_until(lambda: server.lines('on /task_image from %s' % rospy.get_name()), 5.0)
+
+
+def test_a_header_claiming_4_gb_ends_its_connection(server):
+    def send():
+        sock = socket.create_connection(server.tcpros_address(), 5.0)
+        sent = 0
+        try:
+            sock.sendall(struct.pack('<I', 2 ** 32 - 1))
+            junk = bytes(1 << 20)
+            for _ in range(40):
+                sock.sendall(junk)
+                sent += len(junk)
+        except OSError:        # closed by the server: what is wanted
+            pass
+        finally:
+            sock.close()
+        return '%d MB of the 40 MB of junk taken before the server closed' % (sent >> 20)
+    figures = attack(server, 'a header of 4 GB', send)
+    assert figures['server CPU s meanwhile'] < 1.0, figures
+    assert server.lines('connection header of 4294967295 bytes')
+
+
+def test_probes_naming_made_up_kinds_cost_nothing(server):
+    kinds = ['kind%d' % i for i in range(5000)]
+
+    def send():
+        probe, refused = rospy.ServiceProxy(server.service, LatencyProbe), 0
+        for seq in range(100):
+            try:
+                probe(LatencyProbeRequest(robot_id=1, seq=seq, task_kinds=kinds,
+                                          task_rates=[1e6] * len(kinds)))
+            except rospy.ServiceException as error:
+                refused += 'request refused' in str(error)
+        assert refused == 100, '%d of 100 probes refused' % refused
+        return '100 probes of 5,000 kinds each, each refused with the reason'
+    attack(server, 'probes with 500,000 made-up kinds', send)
+    assert server.lines('on %s from %s' % (server.service, rospy.get_name()))
