@@ -15,6 +15,7 @@ from server_select.ros.membership import ServerAnnouncer
 from server_select.ros.node import fleet, live_param, param
 from server_select.ros.runner import run
 from server_select.ros.plugins import PluginHandler
+from server_select.ros.robot_admission import RobotAdmission
 from server_select.ros.server_work import ServerWork
 from server_select.tasks.kinds import server_kinds
 from server_select.srv import LatencyProbe, LatencyProbeResponse
@@ -98,7 +99,9 @@ class ServerNode(object):
         self._pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='routes')
         # every task type, built in or plug-in, is served the same way
         self.announcer = ServerAnnouncer(self.server_id, param('announce_period'))
-        self.handlers = [PluginHandler(self.server_id, kind, self.work.submit,
+        self.admission = RobotAdmission('server %d' % self.server_id, rospy.resolve_name(
+            fleet(names.probe_service(self.server_id))))
+        self.handlers = [PluginHandler(self.server_id, kind, self._submit,
                                        self.queue_size, direct, work=self._work)
                          for kind in server_kinds(param, workers)]
 
@@ -149,7 +152,25 @@ class ServerNode(object):
         if self.work_delay:
             time.sleep(self.work_delay)
 
+    def _submit(self, endpoint, task, direct):
+        if self.admission.admits(task):
+            self.work.submit(endpoint, task, direct)
+
     def on_probe(self, req):
+        if self.admission.probe(req):
+            self._heard(req)
+        load = self.work.load(req.robot_id)
+        return seal.seal_answer(LatencyProbeResponse(
+            server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),
+            queued=load.queued, in_service=load.in_service, workers=load.workers,
+            backlog=load.backlog, utilization=load.utilization, kinds=list(load.service),
+            service_time=list(load.service.values()),
+            service_error=[load.service_error.get(k, 0.0) for k in load.service]),
+            self.probe_srv.resolved_name,
+            self.probe_srv.uri, req)
+
+    def _heard(self, req):
+        """A robot's own probe: its result topics, and the rates it announces."""
         if self.direct and req.robot_id and req.robot_id not in self._known_robots:
             self._known_robots[req.robot_id] = True   # its result publishers, off this path
             while len(self._known_robots) > KNOWN_ROBOTS:
@@ -164,15 +185,6 @@ class ServerNode(object):
                 self._unwarmed.discard(kind)
                 threading.Thread(target=self._warm, args=(kind,), name='warm ' + kind,
                                  daemon=True).start()
-        load = self.work.load(req.robot_id)
-        return seal.seal_answer(LatencyProbeResponse(
-            server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),
-            queued=load.queued, in_service=load.in_service, workers=load.workers,
-            backlog=load.backlog, utilization=load.utilization, kinds=list(load.service),
-            service_time=list(load.service.values()),
-            service_error=[load.service_error.get(k, 0.0) for k in load.service]),
-            self.probe_srv.resolved_name,
-            self.probe_srv.uri, req)
 
     def _warm(self, kind):
         for handler in self.handlers:

@@ -34,12 +34,16 @@ _THROTTLE = Throttle(5.0)
 _ORIGINAL = {}
 
 
-def _recv_exactly(sock, count):
+def _recv_exactly(sock, count, held=0):
+    """``count`` bytes from ``sock``; ``held`` were read before (for the message)."""
     chunks = []
     while count:
         chunk = sock.recv(min(count, _SCRATCH))
-        if not chunk:
-            raise ROSHandshakeException('connection closed inside its header')
+        if not chunk:       # rosgraph's words (a node's log filter knows the usual case)
+            raise ROSHandshakeException(
+                'connection from sender terminated before handshake header received. %d '
+                'bytes were received. Please check sender for additional details.'
+                % (held + sum(map(len, chunks))))
         chunks.append(chunk)
         count -= len(chunk)
     return b''.join(chunks)
@@ -51,7 +55,7 @@ def read_header(sock, buffer, _buff_size, most=MAX_HEADER_BYTES):
     stay in ``buffer``, as there."""
     held = buffer.getvalue()
     if len(held) < 4:
-        held += _recv_exactly(sock, 4 - len(held))
+        held += _recv_exactly(sock, 4 - len(held), len(held))
     (size,) = struct.unpack('<I', held[:4])
     if size > most:
         try:
@@ -61,7 +65,7 @@ def read_header(sock, buffer, _buff_size, most=MAX_HEADER_BYTES):
         raise ROSHandshakeException('connection header of %d bytes from %s refused: more '
                                     'than %d' % (size, peer, most))
     if len(held) < size + 4:
-        held += _recv_exactly(sock, size + 4 - len(held))
+        held += _recv_exactly(sock, size + 4 - len(held), len(held))
     buffer.seek(0)
     buffer.truncate()
     buffer.write(held[size + 4:])
@@ -147,6 +151,33 @@ def _receive_once(transport):
     return _ORIGINAL['receive_once'](transport)
 
 
+def _whole_within(buffer, most):
+    """How many whole messages start the buffer before the first one longer than
+    ``most`` (None: no such message has begun in it)."""
+    held = buffer.tell()
+    count = pos = 0
+    with buffer.getbuffer() as view:
+        while pos + 4 <= held:
+            size = struct.unpack_from('<I', view, pos)[0]
+            if size > most:
+                return count
+            if pos + 4 + size > held:
+                break
+            count, pos = count + 1, pos + 4 + size
+    return None
+
+
+def _read_messages(protocol, buffer, msg_queue, sock):
+    """rospy's, but a message over the limit in the same buffer as good ones is not
+    deserialized with them: it stays at the buffer's start for :func:`_receive_once`."""
+    most = _LIMITS.get(protocol.resolved_name)
+    whole = _whole_within(buffer, most) if most is not None else None
+    if whole == 0:
+        return
+    tcpros_base.deserialize_messages(buffer, msg_queue, protocol.recv_data_class,
+                                     queue_size=protocol.queue_size, max_msgs=whole)
+
+
 def install():
     """Bound every connection header this node reads, and make :func:`limit` effective
     (idempotent)."""
@@ -157,3 +188,5 @@ def install():
         _ORIGINAL['read_header'] = tcpros_base.read_ros_handshake_header
         tcpros_base.TCPROSTransport.receive_once = _receive_once
         tcpros_base.read_ros_handshake_header = read_header
+        for protocol in (TCPROSSub, TCPService):     # (their base's, shared with others)
+            protocol.read_messages = _read_messages

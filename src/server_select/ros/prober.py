@@ -16,6 +16,7 @@ from server_select.ros.probe_client import TimedServiceProxy
 from server_select.ros.probe_loop import Flight, ProbeLoop
 from server_select.ros.probe_samples import ProbeSamples
 from server_select.ros.probe_seal import ProbeSeal
+from server_select.ros import seal
 from server_select.ros.seal import enabled as keyed
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
@@ -166,7 +167,7 @@ class Prober(object):
                                       nonce=self._nonce.getrandbits(64) if self._keyed else 0)
         if self.announce is not None:
             request.task_kinds, request.task_rates = self.announce(server)
-        return stamp, request
+        return stamp, seal.seal(request, fleet(names.probe_service(server)))
 
     def _then(self, server, seq, stamp, request, proxy, batch):
         return lambda response, rtt, error: self._answered(server, seq, stamp, request, proxy,

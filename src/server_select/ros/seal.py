@@ -183,6 +183,17 @@ def answer_refusal(response, service, uri, request, server_node):
     return check(response, server_node, verifier, _answer_channel(service, uri, request))
 
 
+def request_refusal(request, service):
+    """None when a probe ``request`` to this node's ``service`` is its robot's (no key
+    here, or sealed with it by a robot, on this service, by the node that sent it), else
+    why not."""
+    verifier = _configured()[1]
+    if verifier is None:
+        return None
+    sender = (getattr(request, '_connection_header', None) or {}).get('callerid', '')
+    return check(request, sender, verifier, service)
+
+
 def _answer_channel(service, uri, request):
     return '%s@%s#%d/%d/%d' % (service, uri, request.robot_id, request.seq, request.nonce)
 

@@ -55,7 +55,7 @@ PUBLISHERS = dict(('server_select/' + name, role) for role, names in (
     ('manager', ('SelectionFlag', 'FleetServers', 'GroupAssignments')),
     ('server', ('ServerAnnouncement', 'LatencyProbeResponse', 'Detections')),
     ('robot', ('LatencySample', 'LatencySamples', 'RobotRanking', 'TaskReport',
-               'FoundTarget')))
+               'FoundTarget', 'LatencyProbeRequest')))
     for name in names)
 RESULTS = 'server'
 

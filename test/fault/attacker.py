@@ -1,0 +1,138 @@
+#!/usr/bin/env python3
+"""A node without the fleet key (or with one role's key) attacking a keyed fleet.
+
+    attacker.py MODE SECONDS [ROLE_KEY_FILE]
+
+``tasks``: sort tasks under made-up robot ids, 20 a second to each of servers 1-3.
+``rates``: probes of servers 1-3 under a made-up robot id announcing 1e6 sort tasks a
+second, 20 a second each. ``results``: registers ``/latency_S1..3`` at the master itself
+and publishes a junk result for every task of robot 1, once a second. ``announce`` (a
+server's key): registers ``/latency_S2`` at the master and announces server 2 there, then
+leaves. ``namespace`` (a
+robot's key; run in ``/robot2``, as ``/robot2/attacker``): rankings of robot 2 naming
+server 3 and failed task reports of robot 2, 20 a second.
+
+Prints what it sent as one line of JSON.
+"""
+
+import json
+import sys
+import time
+
+import numpy as np
+import rospy
+from rospy.numpy_msg import numpy_msg
+
+from server_select.core.config import names
+from server_select.core.fleet.leases import LEASE_PERIODS
+from server_select.core.trust.seal import Sealer, load_keys
+from server_select.msg import RobotRanking, ServerAnnouncement, SortResult, SortTask, TaskReport
+from server_select.ros.seal import sealed
+from server_select.srv import LatencyProbe, LatencyProbeRequest, LatencyProbeResponse
+
+SERVERS = (1, 2, 3)
+MADE_UP = 66
+
+
+def tasks(seconds, _sealer):
+    pubs = [rospy.Publisher(names.server_topic(s, names.SORT_TASK_TOPIC), numpy_msg(SortTask),
+                            queue_size=100) for s in SERVERS]
+    time.sleep(1.0)
+    sent, end, task_id = 0, time.monotonic() + seconds, 0
+    while time.monotonic() < end:
+        task_id += 1
+        for server, pub in zip(SERVERS, pubs):
+            pub.publish(numpy_msg(SortTask)(robot_id=MADE_UP + task_id % 50, task_id=task_id,
+                                            server_id=server,
+                                            data=np.arange(1000, 0, -1, dtype=np.int32)))
+            sent += 1
+        time.sleep(0.05)
+    return {'tasks': sent}
+
+
+def rates(seconds, _sealer):
+    proxies = [rospy.ServiceProxy(names.probe_service(s), LatencyProbe, persistent=True)
+               for s in SERVERS]
+    sent, end = 0, time.monotonic() + seconds
+    while time.monotonic() < end:
+        for proxy in proxies:
+            try:
+                proxy(LatencyProbeRequest(robot_id=MADE_UP, seq=sent, task_kinds=['sort'],
+                                          task_rates=[1e6]))
+                sent += 1
+            except rospy.ServiceException:
+                pass
+        time.sleep(0.05)
+    return {'probes': sent}
+
+
+def results(seconds, _sealer):
+    def answer(req):
+        return LatencyProbeResponse(server_id=0, seq=req.seq, stamp=req.stamp)
+    services = [rospy.Service(names.probe_service(s), LatencyProbe, answer) for s in SERVERS]
+    pub = rospy.Publisher(names.robot_topic(1, names.SORT_RESULT_TOPIC), SortResult,
+                          queue_size=10)
+    sent, end = 0, time.monotonic() + seconds
+    while time.monotonic() < end:
+        pub.publish(SortResult(robot_id=1, task_id=sent, server_id=1, ok=True, data=[1]))
+        sent += 1
+        time.sleep(1.0)
+    for service in services:
+        service.shutdown()
+    return {'results': sent}
+
+
+def announce(seconds, sealer):
+    def answer(req):
+        return LatencyProbeResponse(server_id=2, seq=req.seq, stamp=req.stamp)
+    service = rospy.Service(names.probe_service(2), LatencyProbe, answer)   # the master's
+    pub = rospy.Publisher(names.ANNOUNCE_TOPIC, ServerAnnouncement, queue_size=10, latch=True)
+    time.sleep(1.0)
+    sent, end = 0, time.monotonic() + seconds
+    while time.monotonic() < end:
+        msg = ServerAnnouncement(server_id=2, lease=LEASE_PERIODS * 2.0, probe_uri=service.uri)
+        msg.header.stamp = rospy.Time.now()
+        pub.publish(sealed(msg, sealer, pub.resolved_name))
+        sent += 1
+        time.sleep(1.0)
+    leave = ServerAnnouncement(server_id=2, lease=0.0, probe_uri=service.uri)
+    pub.publish(sealed(leave, sealer, pub.resolved_name))
+    service.shutdown()
+    time.sleep(0.5)
+    return {'announcements': sent + 1}
+
+
+def namespace(seconds, sealer):
+    rankings = rospy.Publisher('/' + names.RANKINGS_TOPIC, RobotRanking, queue_size=100)
+    reports = rospy.Publisher('/' + names.TASK_REPORT_TOPIC, TaskReport, queue_size=100)
+    time.sleep(1.0)
+    sent, end = 0, time.monotonic() + seconds
+    while time.monotonic() < end:
+        sent += 1
+        ranking = RobotRanking(robot_id=2, ranking=[3, 1, 2], mean_latency=[1e-6, 1, 1],
+                               error=[0, 0, 0], sample_count=[50, 50, 50], selected=3,
+                               reason='forged')
+        ranking.header.stamp = rospy.Time.now()
+        rankings.publish(sealed(ranking, sealer, rankings.resolved_name))
+        report = TaskReport(robot_id=2, task_id=100000 + sent, kind='sort', server_id=1,
+                            answered_by=-1, ok=False, error='timeout', rtt=float('nan'))
+        report.header.stamp = rospy.Time.now()
+        reports.publish(sealed(report, sealer, reports.resolved_name))
+        time.sleep(0.05)
+    return {'rankings': sent, 'reports': sent}
+
+
+MODES = dict((f.__name__, f) for f in (tasks, rates, results, announce, namespace))
+ROLES = {'announce': 'server', 'namespace': 'robot'}
+
+
+def main():
+    mode, seconds = sys.argv[1], float(sys.argv[2])
+    rospy.init_node('attacker', disable_signals=True)
+    sealer = Sealer(load_keys(sys.argv[3], ROLES[mode]), rospy.get_name()) \
+        if len(sys.argv) > 3 else None
+    print(json.dumps(MODES[mode](seconds, sealer)), flush=True)
+
+
+if __name__ == '__main__':
+    main()

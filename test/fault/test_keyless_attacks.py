@@ -1,0 +1,112 @@
+"""A keyed fleet (fleet profile, ``require_key``) attacked by a node without the key, or
+with one role's key (test/fault/attacker.py), for 8 s while its robots run.
+
+Each attack is measured against the robots' own minute before it: their answered tasks
+a second during and in the 8 s after (within 5 %, less one task for the count's edges),
+no failed task, and nothing steered. Before: made-up robots' tasks made a server answer
+2 of 46 of the robots' tasks; announced rates moved both robots to the slowest server;
+services registered at the master by a keyless node failed 18 of 19 tasks; a server's key
+announcing server 2 and leaving made it unusable for minutes; a robot's key in
+``/robot2/evil`` steered 30 of 48 of robot 2's flags.
+"""
+
+import json
+import os
+import subprocess
+import sys
+import time
+
+import pytest
+import rospy
+
+from server_select.core.trust.keys import make_role_key
+from server_select.srv import LatencyProbe, LatencyProbeRequest
+
+from support.fleet import Fleet
+from test_faults import show, warm_up
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SECONDS = 8.0
+ROBOTS = (1, 2)
+
+
+def answered_rate(rec, since, until):
+    """The robots' own tasks answered a second between ``since`` and ``until``."""
+    done = sum(1 for r in rec.of(rec.reports, None, since) if r.time <= until and r.msg.ok
+               and r.sender in ('/robot1', '/robot2'))
+    return done / (until - since)
+
+
+def failed(rec, since):
+    return [(r.msg.robot_id, r.msg.task_id, r.msg.error) for r in rec.of(rec.reports, None, since)
+            if not r.msg.ok and r.sender in ('/robot1', '/robot2')]
+
+
+def utilization(server):
+    """What server ``server``'s probe answer says the robots' announced rates take (0
+    while the master lists no node for its probe service)."""
+    try:
+        probe = rospy.ServiceProxy('/latency_S%d' % server, LatencyProbe)
+        return probe(LatencyProbeRequest(robot_id=0, seq=1)).utilization
+    except rospy.ServiceException:
+        return 0.0
+
+
+def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None):
+    rec = ros['rec']
+    rec.clear()
+    argv = [sys.executable, os.path.join(HERE, 'attacker.py'), mode, str(SECONDS)]
+    if role is not None:
+        key = str(tmp_path / ('%s.key' % role))
+        make_role_key(fleet_key, role, key)
+        argv.append(key)
+    if namespace is not None:
+        argv.append('__ns:=%s' % namespace)
+    with Fleet(ros['log'], profile='fleet', fleet_key=fleet_key, require_key='true',
+               task_rate=5):
+        warm_up(rec)
+        t_base = time.monotonic()
+        time.sleep(SECONDS)
+        t_start = time.monotonic()
+        busy = []
+        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, universal_newlines=True)
+        while proc.poll() is None:
+            busy.append(max(utilization(s) for s in (1, 2, 3)))
+            time.sleep(0.5)
+        sent = json.loads(proc.stdout.read().strip().splitlines()[-1])
+        t_end = time.monotonic()
+        time.sleep(SECONDS)
+        t_after = time.monotonic()
+        figures = {
+            'sent': sent,
+            'answered a second before': round(answered_rate(rec, t_base, t_start), 2),
+            'during': round(answered_rate(rec, t_start, t_end), 2),
+            'after': round(answered_rate(rec, t_end, t_after), 2),
+            'failed': len(failed(rec, t_base)),
+            'most utilization a server reported': round(max(busy), 3),
+            'flags of robot 2 naming the forged choice': sum(
+                1 for r in rec.of(rec.flags, 2, t_start) if r.msg.reason == 'forged'),
+            'warnings naming the attacker': sum(1 for r in rec.of(rec.logs, None, t_start)
+                                                if r.msg.level >= 4 and 'attacker' in r.msg.msg)}
+    show('keyed fleet, %s attack for %g s:' % (mode, SECONDS), [figures])
+    base = figures['answered a second before']
+    for when in ('during', 'after'):
+        assert figures[when] >= 0.95 * base - 1.0 / SECONDS, figures
+    assert figures['failed'] == 0, failed(rec, t_base)
+    assert figures['most utilization a server reported'] < 1.0, figures
+    assert figures['flags of robot 2 naming the forged choice'] == 0, figures
+    assert figures['warnings naming the attacker'] >= 1, figures
+    return figures
+
+
+@pytest.mark.parametrize('mode', ['tasks', 'rates', 'results'])
+def test_a_keyless_node_neither_loads_nor_steers_the_fleet(ros, fleet_key, mode):
+    attack(ros, fleet_key, mode)
+
+
+def test_a_servers_key_cannot_take_another_servers_id(ros, fleet_key, tmp_path):
+    attack(ros, fleet_key, 'announce', role='server', tmp_path=tmp_path)
+
+
+def test_a_robots_key_in_a_robots_namespace_is_not_that_robot(ros, fleet_key, tmp_path):
+    attack(ros, fleet_key, 'namespace', role='robot', namespace='/robot2', tmp_path=tmp_path)
