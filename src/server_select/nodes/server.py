@@ -48,7 +48,10 @@ class ServerNode(object):
     done). Every probe answer carries the load: tasks queued and in service, the backlog
     in seconds, the utilization (the share of the workers' time the other robots' tasks
     take, at the rates their probes announce or, for robots that announce none, at which
-    they arrive) and the recent work per task of each kind.
+    they arrive) and the recent work per task of each kind. With a fleet key a robot's
+    tasks and announced rates count only from the node whose signed probe named it
+    (:mod:`~server_select.ros.robot_admission`); too long a task or probe is refused from
+    its length, unread (:mod:`~server_select.ros.bounded_read`).
 
     :ROS Parameters:
         - ``~server_id`` (int, required): this server's id.
