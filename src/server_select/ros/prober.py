@@ -16,7 +16,6 @@ from server_select.ros.probe_client import TimedServiceProxy
 from server_select.ros.probe_loop import Flight, ProbeLoop
 from server_select.ros.probe_samples import ProbeSamples
 from server_select.ros.probe_seal import ProbeSeal
-from server_select.ros import seal
 from server_select.ros.seal import enabled as keyed
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
@@ -167,7 +166,7 @@ class Prober(object):
                                       nonce=self._nonce.getrandbits(64) if self._keyed else 0)
         if self.announce is not None:
             request.task_kinds, request.task_rates = self.announce(server)
-        return stamp, seal.seal(request, fleet(names.probe_service(server)))
+        return stamp, self.seal.sign(server, request)
 
     def _then(self, server, seq, stamp, request, proxy, batch):
         return lambda response, rtt, error: self._answered(server, seq, stamp, request, proxy,
@@ -200,6 +199,7 @@ class Prober(object):
     def _answered(self, server, seq, stamp, request, proxy, batch, response, rtt, error):
         """A probe's end: a failed sample, or the answer checked and its sample."""
         if error is not None:
+            self.seal.forget(server)    # a server started again knows it from a sealed one
             self._publish(server, seq, stamp, None, str(error), batch)
             return
         if response.server_id != server or response.seq != seq:

@@ -1,14 +1,14 @@
 """Which node is which robot, at a server with a fleet key: the probes say.
 
 ROS 1 lets any node publish a task under any robot id, and name rates in a probe. With a
-fleet key a robot signs its probe requests (robot role); a signed probe binds its robot id
-to the node that sent it (a lease of :data:`ROBOT_LEASE` s, renewed by each: another
-node's signed claim meanwhile is refused, and a robot restarted under another name is
-bound again once the old one's lease ends). Only a bound robot's probes announce rates and
-prepare its result topics, and only its node's tasks are taken; the others are dropped
-unanswered (an answer to a made-up robot costs a publisher), counted by sender, in a line
-at most every 5 s that also says how many tasks were taken meanwhile. Without a key
-everything counts, as before.
+fleet key a robot seals a probe request (robot role) when what it announces changes, and
+once a second; a sealed probe binds its robot id to the node that sent it for
+:data:`ROBOT_LEASE` s, renewed by each (another node's claim meanwhile is refused; a robot
+restarted under another name is bound again once the old lease ends). Only a bound
+robot's sealed probes announce rates and prepare its result topics, and only its node's
+tasks are taken; the others are dropped unanswered (an answer to a made-up robot costs a
+publisher), counted by sender, in a line at most every 5 s that also says how many tasks
+were taken meanwhile. Without a key everything counts.
 """
 
 import collections
@@ -46,8 +46,10 @@ class RobotAdmission(object):
             return True
         if request.robot_id == 0:
             return False
-        why = seal.request_refusal(request, self.service)
         sender = (getattr(request, '_connection_header', None) or {}).get('callerid', '?')
+        if not request.seal.mac and self.leases.holder(request.robot_id) == sender:
+            return False          # its robot's, between the ones it seals (once a second)
+        why = seal.request_refusal(request, self.service)
         if why is None:
             now = self._clock()
             self._expire(now)
