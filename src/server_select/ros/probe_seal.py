@@ -13,7 +13,7 @@ from server_select.msg import ServerAnnouncement
 from server_select.ros import seal
 from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet
-from server_select.ros.senders import SenderGate
+from server_select.ros.senders import SenderGate, warn
 
 
 SIGN_PERIOD = 1.0     # s between a robot's sealed probes of one server (its lease there: 10)
@@ -60,15 +60,11 @@ class ProbeSeal(object):
         return lambda: (self.addresses.of(server) or (None, None))[0]
 
     def _moved(self, server):
-        def warn(master, pinned):
-            due, held = self._forged.due()
-            if due:
-                rospy.logwarn('robot %d: the master lists %s for the probe service of server '
-                              '%d, but the server\'s sealed announcement says %s: probing '
-                              'that (another node registered the service)%s' % (
-                                  self.robot_id, master, server, pinned,
-                                  '; %d more before' % held if held else ''))
-        return warn
+        def moved(master, pinned):
+            warn(self._forged, 'robot %d: the master lists %s for the probe service of server '
+                 '%d, but the server\'s sealed announcement says %s: probing that (another '
+                 'node registered the service)' % (self.robot_id, master, server, pinned))
+        return moved
 
     def node(self, server, refresh=False):
         """The node whose seal a probe answer of ``server`` must carry (``node_of``'s)."""
@@ -86,12 +82,9 @@ class ProbeSeal(object):
             forged = seal.answer_refusal(response, proxy.resolved_name, proxy.uri, request,
                                          node or '?')
         if forged is not None:
-            due, held = self._forged.due()
-            if due:
-                rospy.logwarn('robot %d: ignored a probe answer of %s from node %s at %s '
-                              '(%s, by the fleet key): not server %d%s' % (
-                                  self.robot_id, proxy.resolved_name, node, proxy.uri, forged,
-                                  server, '; %d more before' % held if held else ''))
+            warn(self._forged, 'robot %d: ignored a probe answer of %s from node %s at %s (%s, '
+                 'by the fleet key): not server %d'
+                 % (self.robot_id, proxy.resolved_name, node, proxy.uri, forged, server))
         return forged
 
 
@@ -127,12 +120,9 @@ class ProbeAddresses(object):
         except ValueError:
             return
         if holder is not None:
-            due, held = self._refused.due()
-            if due:
-                rospy.logwarn('%s: ignored an announcement of server %d by %s: the id is '
-                              '%s\'s until it leaves or its lease ends%s' % (
-                                  self.who, msg.server_id, node, holder,
-                                  '; %d more before' % held if held else ''))
+            warn(self._refused, '%s: ignored an announcement of server %d by %s: the id is '
+                 '%s\'s until it leaves or its lease ends'
+                 % (self.who, msg.server_id, node, holder))
             return
         with self._lock:
             if msg.lease > 0 and msg.probe_uri:

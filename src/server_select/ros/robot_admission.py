@@ -20,6 +20,7 @@ from server_select.core.fleet.leases import Leases
 from server_select.core.trust.senders import Throttle
 from server_select.ros import seal
 from server_select.ros.graph import publisher_of
+from server_select.ros.senders import warn
 
 ROBOT_LEASE = 10.0       # s a signed probe binds its robot id (robots probe every ~0.5 s)
 
@@ -58,12 +59,9 @@ class RobotAdmission(object):
                 return True
             why = 'robot %d is %s\'s until its probes stop for %g s' % (
                 request.robot_id, holder, ROBOT_LEASE)
-        due, held = self._probe_throttle.due()
-        if due:
-            rospy.logwarn('%s: a probe of robot %d from %s announces nothing and prepares '
-                          'nothing (%s, by the fleet key)%s' % (
-                              self.who, request.robot_id, sender, why,
-                              '; %d more before' % held if held else ''))
+        warn(self._probe_throttle, '%s: a probe of robot %d from %s announces nothing and '
+             'prepares nothing (%s, by the fleet key)'
+             % (self.who, request.robot_id, sender, why))
         return False
 
     def _expire(self, now):

@@ -56,6 +56,14 @@ class SenderGate(object):
                 self.who, what, sender, why, '; %d more ignored before' % held if held else ''))
 
 
+def warn(throttle, text):
+    """``text`` as a warning when ``throttle`` (a Throttle) says one is due, with how many
+    were held back since the last."""
+    due, held = throttle.due()
+    if due:
+        rospy.logwarn(text + ('; %d more before' % held if held else ''))
+
+
 def node_pattern(pattern):
     """``lookup(id, refresh)`` of ExpectedSender for a node name pattern with ``{id}``
     (``/robot{id}``), resolved in the caller's namespace once per id."""
