@@ -21,6 +21,9 @@ class Endpoint(object):
         self.clock[0] += next(self.durations)
         return Result(True)
 
+    def held_bytes(self, task):
+        return 0
+
     def reply(self, task, direct, result):
         self.replies.append(result)
 

@@ -24,7 +24,7 @@ def run(module, args, tmp_path):
 
 def test_bytes_per_task_broadcast_and_direct(tmp_path):
     out = run('server_select.bench.routing_bytes',
-              ['--servers', '2', '--kinds', 'sort', '--seconds', '4'], tmp_path)
+              ['--servers', '2', '--kinds', 'sort', '--seconds', '8'], tmp_path)
     rows = json.loads((tmp_path / 'routing_bytes.json').read_text())
     assert [r['routing'] for r in rows] == ['broadcast', 'direct']
     assert all(r['tasks'] > 0 and r['up_kb'] > 0 and r['down_kb'] > 0 for r in rows), rows

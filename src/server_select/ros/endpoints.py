@@ -148,6 +148,10 @@ class ServerEndpoint(object):
         """ResultRoutes.renew (direct routing; [] otherwise)."""
         return self.direct.renew(robot) if self.direct is not None else []
 
+    def held_bytes(self, task):
+        """About the memory ``task`` holds while it waits (its kind's estimate)."""
+        return self.kind.held_bytes(task)
+
     def on_task(self, task, direct):
         if task.server_id == self.server_id:
             self.submit(self, task, direct)

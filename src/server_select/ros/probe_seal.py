@@ -72,8 +72,9 @@ class ProbeSeal(object):
 
     def forgery(self, server, response, proxy, request):
         """Why the answer is not the server's, by the fleet key (None: it is, or no key)."""
-        if not seal.enabled():
-            return None     # no key: nothing to check, no node to look up
+        if not seal.enabled():   # nothing to check, no node to look up; a sealed answer
+            return seal.answer_refusal(    # makes a keyless robot say it lacks the key
+                response, proxy.resolved_name, proxy.uri, request, 'server %d' % server)
         node = self.node(server)
         forged = seal.answer_refusal(response, proxy.resolved_name, proxy.uri, request,
                                      node or '?')

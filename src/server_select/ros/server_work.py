@@ -31,7 +31,7 @@ class ServerWork(object):
         budget = getattr(task, 'budget', 0.0)
         deadline = time.monotonic() + budget if budget > 0 else None
         why = self.queue.offer(endpoint.kind_name, (endpoint, task, direct), deadline,
-                               owner=task.robot_id, size=endpoint.kind.held_bytes(task))
+                               owner=task.robot_id, size=endpoint.held_bytes(task))
         if why is not None:
             self._busy(endpoint, task, direct, why)
 
