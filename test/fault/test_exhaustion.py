@@ -3,9 +3,9 @@ values (40 MB), 4096 x 4096 frames (50 MB each), a connection header claiming 4 
 followed by 40 MB of junk, probes naming 500,000 made-up task kinds.
 
 Each is refused from the length that precedes it, before it is read: the server stays
-under 150 MiB, its probe answers under 1 ms, a good task sent after it is answered, and
-its log names the sender and the limit. (Before: 814 MB after two such tasks, 1,287 MB
-after three frames, 89 CPU-s burnt on the header.)
+under 150 MiB, its probes are answered as fast as before (within 2 ms), a good task sent
+after it is answered, and its log names the sender and the limit. (Before: 805 MiB after
+two such tasks, 1,163 MiB after three frames, 62 CPU-s burnt on the header.)
 """
 
 import os
@@ -31,7 +31,9 @@ from test_faults import show
 
 SERVER = 7
 MAX_RSS = 150 << 20
-MAX_PROBE = 1e-3
+# a probe answered after the attack as before it, within this (s): on a quiet host both are
+# 0.1-0.3 ms; beside the other test streams 1-2 ms. (Before: 14.9 ms after the header.)
+PROBE_SLACK = 2e-3
 
 
 def rss(pid):
@@ -119,7 +121,7 @@ def attack(server, name, send):
                'probe max ms after': round(1e3 * max(after), 3)}
     show('server %d attacked:' % SERVER, [figures])
     assert rss(pid) < MAX_RSS, figures
-    assert statistics.median(after) < MAX_PROBE, figures
+    assert statistics.median(after) < before + PROBE_SLACK, figures
     assert server.answers_a_task(len(name)), 'no good task answered after it'
     return figures
 
