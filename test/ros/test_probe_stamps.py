@@ -6,7 +6,7 @@ import socket
 import time
 
 from server_select.core.util.procs import wait_until
-from server_select.ros.probe_client import arrival, departures, stamp_packets
+from server_select.ros.probe_client import STAMP_SPACE, arrival, departures, stamp_packets
 from server_select.ros.probe_loop import Flight
 
 
@@ -28,7 +28,7 @@ def test_the_kernel_stamps_an_answer_when_it_arrives_not_when_it_is_read():
         server.sendall(b'answer')
         time.sleep(0.15)                      # the robot gets round to it late
         read = time.time()
-        data, ancillary, _, _ = robot.recvmsg(64, socket.CMSG_SPACE(16))
+        data, ancillary, _, _ = robot.recvmsg(64, STAMP_SPACE)
         arrived = arrival(ancillary)
     print('\nanswer sent at 0, arrived at %.2f ms by the kernel\'s stamp, read at %.1f ms'
           % (1e3 * (arrived - sent), 1e3 * (read - sent)))
@@ -40,7 +40,7 @@ def test_no_stamp_without_the_option():
     robot, server = tcp_pair()
     with robot, server:
         server.sendall(b'x')
-        _, ancillary, _, _ = robot.recvmsg(64, socket.CMSG_SPACE(16))
+        _, ancillary, _, _ = robot.recvmsg(64, STAMP_SPACE)
     assert arrival(ancillary) is None
 
 
