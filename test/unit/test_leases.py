@@ -43,6 +43,7 @@ def test_an_id_is_its_first_nodes_until_it_leaves_or_its_lease_ends():
     assert leases.renew(2, '/server2', 1.0, 1.5) == (False, '/other')
     assert leases.renew(2, '/server2', 2.4, 1.5) == (False, None)         # lease ended
     assert leases.holder(2) == '/server2'
+    assert (leases.holder(2, 3.8), leases.holder(2, 3.9)) == ('/server2', None)   # till 3.9
 
 
 @pytest.mark.parametrize('lease', [-1.0, float('nan')])

@@ -134,8 +134,7 @@ class ProbeAddresses(object):
     def of(self, server):
         """``(probe uri, node)`` of server ``server``'s holder while its lease lasts, or
         None."""
-        self.leases.expire(self._clock())
-        node = self.leases.holder(server)
+        node = self.leases.holder(server, self._clock())
         with self._lock:
             uri = self._uri.get(server)
         return (uri, node) if node is not None and uri else None

@@ -84,12 +84,9 @@ class RobotAdmission(object):
                 return True
             self.refused[sender] += 1
             refused, taken = self.refused[sender], self.taken
-        due, held = self._task_throttle.due()
-        if due:
-            rospy.logwarn('%s: dropped a task of robot %d from %s (%s): %d of its tasks '
-                          'dropped, %d robots\' tasks taken so far%s' % (
-                              self.who, task.robot_id, sender,
-                              'no signed probe of robot %d' % task.robot_id if bound is None
-                              else 'robot %d is %s' % (task.robot_id, bound), refused, taken,
-                              '; %d lines held back' % held if held else ''))
+        warn(self._task_throttle, '%s: dropped a task of robot %d from %s (%s): %d of its '
+             'tasks dropped, %d robots\' tasks taken so far'
+             % (self.who, task.robot_id, sender, 'no signed probe of robot %d' % task.robot_id
+                if bound is None else 'robot %d is %s' % (task.robot_id, bound), refused,
+                taken))
         return False

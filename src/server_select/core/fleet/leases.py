@@ -31,10 +31,8 @@ class Leases(object):
             raise ValueError('lease %r s is not a duration' % (lease,))
         with self._lock:
             holder = self._holder.get(server)
-            if holder is not None and holder != node:
-                if self._until[server] > now:
-                    return False, holder
-                holder = None             # its lease ended: ``node`` may take the id
+            if holder not in (None, node) and self._until[server] > now:
+                return False, holder      # (once its lease ended, ``node`` may take the id)
             known = server in self._until
             if lease == 0.0:
                 self._until.pop(server, None)
@@ -44,9 +42,12 @@ class Leases(object):
             self._holder[server] = node
             return not known, None
 
-    def holder(self, server):
-        """The node ``server`` is bound to (None: no lease is held)."""
+    def holder(self, server, now=None):
+        """The node ``server`` is bound to (None: no lease is held, or, given ``now``, none
+        lasts then)."""
         with self._lock:
+            if now is not None and self._until.get(server, now) <= now:
+                return None
             return self._holder.get(server)
 
     def expire(self, now):
