@@ -16,7 +16,7 @@ DEMO_MD := $(BUILD)/demo_summary.md
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
 .PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
-  bench-scale bench-routing bench-hedging bench-capacity league calibrate league-testbed bench-master bench-fleet bench-seal bench-probes bench-top bench-robot \
+  bench-scale bench-routing bench-hedging bench-capacity league calibrate league-testbed soak bench-master bench-fleet bench-seal bench-probes bench-top bench-robot \
   test check unit-test testbed-test fault-test catkin-test rostest lint docs help clean
 all: build
 
@@ -32,6 +32,7 @@ help:
 	@echo 'make league          the fleet profile beside the peer balancers, simulated (~6 min)'
 	@echo 'make calibrate       the simulator beside the testbed league (~4 min)'
 	@echo 'make league-testbed  the league on the testbed, for cells named in LEAGUE_ARGS'
+	@echo 'make soak            the fleet through every fault kind for SOAK_MINUTES (root, TUN)'
 	@echo 'make bench           the papers tables and throughput (bench-scale, bench-routing,'
 	@echo '                     bench-hedging, bench-capacity, bench-master, bench-memory, bench-emulator,'
 	@echo '                     bench-seal, bench-probes, bench-fleet, bench-top, bench-robot)'
@@ -193,6 +194,15 @@ bench-robot: build
 # Link emulator accuracy: configured vs measured round trip (root).
 bench-emulator: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.emulator --out results/bench
+
+# The chaos soak (root, TUN): the keyed fleet on the testbed through a seeded schedule of
+# every fault kind (at least twice each), SOAK_MINUTES long; invariants, recovery and
+# resource slopes from the bags: results/soak/report.md and timeline.png.
+SOAK_MINUTES ?= 30
+SOAK_SEED ?= 1
+soak: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.soak.run --minutes $(SOAK_MINUTES) \
+	  --seed $(SOAK_SEED) --out results/soak
 
 unit-test: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q test/unit test/ros

@@ -1,0 +1,165 @@
+"""The soak's fleet on an up testbed: every node under a name of its own, started, stopped,
+signalled and restarted by name, and the master asked from inside the manager's host.
+
+Each node runs under a ``roslaunch`` of its own in its host's namespace. A node's pid is
+what the master's ``lookupNode`` and the node's XML-RPC ``getPid`` say (roslaunch starts it
+in a process group of its own). Every launch carries the fleet's keys of the moment (the
+key it signs with, and the one also accepted), so a node restarted after a key rotation
+joins on the new key. ``rosbag record`` does not register again with a restarted roscore,
+so each roscore gets a recorder of its own (``soak_<n>.bag``); the analysis merges them.
+"""
+
+import ctypes
+import concurrent.futures
+import os
+import signal
+import sys
+import xmlrpc.client
+
+import rosgraph
+
+from server_select.core.util.procs import stop_group, wait_until
+from server_select.soak import plan
+
+CLONE_NEWNET = 0x40000000
+RECORDED = ('/(task_report|robot_rankings|fleet_servers|rosout|robot_[0-9]+/server_select_flag'
+            '|server_[0-9]+/data)')
+CAMERA_TOPIC = '/camera%d/image_raw/compressed' % plan.CAMERA_ROBOT
+CAMERA_RATE = 1.5          # frames/s of the camera robot (about a quarter of the capacity)
+BURST_RATE = 4.0           # frames/s of each burst robot: 3 of them, about 2x the capacity
+TASK_RATE = 5.0            # sort tasks/s of each robot
+
+
+def _enter_netns(netns):
+    """Move the calling thread into network namespace ``netns`` (its address space)."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    fd = os.open('/run/netns/%s' % netns, os.O_RDONLY)
+    try:
+        if libc.setns(fd, CLONE_NEWNET) != 0:
+            raise OSError(ctypes.get_errno(), 'setns %s' % netns)
+    finally:
+        os.close(fd)
+
+
+class MasterLink(object):
+    """Calls to the master (and to nodes) from a thread inside the manager's namespace."""
+
+    def __init__(self, netns, uri):
+        self.uri = uri
+        self.pool = concurrent.futures.ThreadPoolExecutor(1, initializer=_enter_netns,
+                                                          initargs=(netns,))
+
+    def call(self, function, *args, timeout=10.0):
+        return self.pool.submit(function, *args).result(timeout)
+
+    def pid(self, node):
+        """The pid ``node`` says it has, None when the master or the node does not answer."""
+        def ask():
+            try:
+                uri = rosgraph.Master('/soak', master_uri=self.uri).lookupNode(node)
+                code, _, pid = xmlrpc.client.ServerProxy(uri).getPid('/soak')
+                return pid if code == 1 else None
+            except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
+                return None
+        return self.call(ask)
+
+    def up(self):
+        def ask():
+            try:
+                return bool(rosgraph.Master('/soak', master_uri=self.uri).getPid())
+            except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
+                return False
+        return self.call(ask)
+
+    def close(self):
+        self.pool.shutdown(wait=False)
+
+
+class SoakFleet(object):
+    """The nodes of a soak on ``run`` (a :class:`~server_select.testbed.runner.HostRun`);
+    ``keys``: the key files of the rotations, in order (a :class:`plan.KeyRing`)."""
+
+    def __init__(self, run, keys, frames, out):
+        self.run, self.keys, self.frames, self.out = run, plan.KeyRing(keys), frames, out
+        self.procs = {}             # node name: its roslaunch (or process)
+        self.recorders = []
+        manager = run.scenario.manager.name
+        self.master = MasterLink(run.tb.hosts[manager]['netns'], run.master)
+
+    def key_args(self):
+        sign, other = self.keys.state()
+        return ['fleet_key:=%s' % sign, 'fleet_key_next:=%s' % other, 'require_key:=true']
+
+    def spec(self, name):
+        """(host, launch file, arguments) of node ``name``."""
+        fleet = ['profile:=fleet']
+        if name == 'manager':
+            return 'manager', 'manager.launch', fleet + ['robots:=[]', 'servers:=[]']
+        if name.startswith('server'):
+            return name, 'server.launch', fleet + ['server_id:=%s' % name[6:]]
+        robot = int(name[5:])
+        args = fleet + ['robot_id:=%d' % robot, 'servers:=[]', 'start_delay:=1',
+                        'report_listeners:=%s' % self.recorders[-1][0]]
+        if robot in plan.BURST_ROBOTS:
+            host = 'robot%d' % plan.ROBOTS[plan.BURST_ROBOTS.index(robot)]
+            return host, 'robot.launch', args + [
+                'sort_tasks:=false', 'image_source:=%s' % self.frames,
+                'frame_rate:=%g' % BURST_RATE, 'image_transport:=compressed']
+        args.append('task_rate:=%g' % TASK_RATE)
+        if robot == plan.CAMERA_ROBOT:
+            args += ['image_topic:=%s' % CAMERA_TOPIC, 'frame_rate:=%g' % CAMERA_RATE]
+        return name, 'robot.launch', args
+
+    def start(self, name):
+        host, launch, args = self.spec(name)
+        self.procs[name] = self.run.launch(host, launch, *(args + self.key_args()),
+                                           stage=0 if name.startswith('robot') else 1)
+        return self.procs[name]
+
+    def start_camera(self):
+        host = 'robot%d' % plan.CAMERA_ROBOT
+        self.procs['camera'] = self.run.popen(host, [
+            sys.executable, '-m', 'server_select.soak.camera', CAMERA_TOPIC,
+            str(CAMERA_RATE)], 'camera', stage=1)
+
+    def start_intruder(self, seconds):
+        """The keyless node for ``seconds``, on the first robot's host."""
+        self.intruder_log = os.path.join(self.out, 'intruder.log')
+        self.procs['intruder'] = proc = self.run.tb.popen(
+            'robot1', [sys.executable, '-m', 'server_select.soak.intruder', str(seconds)],
+            env=self.run.env('robot1'), log=self.intruder_log)
+        return proc
+
+    def intruder_said(self):
+        with open(self.intruder_log) as stream:
+            lines = [line for line in stream if line.startswith('{')]
+        return lines[-1].strip() if lines else 'nothing (no summary line)'
+
+    def start_recorder(self):
+        """A ``rosbag record`` of this roscore, as ``/soak_recorder_<n>`` into soak_<n>.bag."""
+        n = len(self.recorders) + 1
+        name, bag = '/soak_recorder_%d' % n, os.path.join(self.out, 'soak_%d.bag' % n)
+        proc = self.run.popen(self.run.scenario.manager.name, [
+            'rosbag', 'record', '--tcpnodelay', '-O', bag, '-e', RECORDED,
+            '__name:=%s' % name[1:]], 'recorder_%d' % n, stage=2)
+        self.recorders.append((name, bag, proc))
+        if not wait_until(lambda: self.pid(name) is not None, 30.0, period=0.3):
+            raise RuntimeError('the recorder %s did not register within 30 s' % name)
+
+    def stop(self, name, sig=signal.SIGINT):
+        """Stop ``name``'s launch (SIGINT: a clean shutdown); its exit status."""
+        proc = self.procs.pop(name, None)
+        return stop_group(proc, sig, 15.0) if proc is not None else None
+
+    def pid(self, name):
+        return self.master.pid(name if name.startswith('/') else '/' + name)
+
+    def signal(self, name, sig):
+        """Send ``sig`` to node ``name`` (its pid from the node itself); the pid or None."""
+        pid = self.pid(name)
+        if pid is not None:
+            os.kill(pid, sig)
+        return pid
+
+    def close(self):
+        self.master.close()

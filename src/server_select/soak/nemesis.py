@@ -1,0 +1,131 @@
+"""The soak's nemesis: each fault of the schedule done to the fleet at its planned time,
+with what happened logged (wall-clock times; the analysis reads faults from this log, and
+everything else from the bags and the nodes' logs).
+
+An event is ``{kind, target, planned, start, end, bound, detail}``: the fault's window is
+``[start, end]`` (for a kill, until the restarted node was started again; a roscore, until
+the new master answers) and the fleet must be back ``bound`` s after ``end``. A robot's
+lives end at ``stops`` (node name, time it was gone, time it was SIGKILLed or None): a
+restarted robot counts its tasks from 1.
+"""
+
+import os
+import signal
+import time
+
+import rosgraph
+
+from server_select.core.util.procs import stop_groups, wait_until
+from server_select.soak import plan
+from server_select.soak.fleet import BURST_RATE
+
+MAIN_NODES = ['manager'] + ['server%d' % s for s in plan.SERVERS] + \
+    ['robot%d' % r for r in plan.ROBOTS]
+# a key rotation restarts the fleet in two halves, each half at once
+HALVES = (['manager', 'server1', 'server2', 'robot1', 'robot2', 'robot3'],
+          ['server3', 'server4', 'robot4', 'robot5', 'robot6'])
+
+
+class Nemesis(object):
+    """Does ``faults`` (plan.Fault, scenario times) to ``fleet`` (a SoakFleet) on testbed
+    ``tb``; ``roscore`` starts a master and returns its process."""
+
+    def __init__(self, fleet, tb, roscore, say=print):
+        self.fleet, self.tb, self.roscore, self.say = fleet, tb, roscore, say
+        self.core = None
+        self.events, self.stops = [], []
+
+    def run(self, faults):
+        for fault in faults:
+            self.tb.sleep_until(fault.at)
+            start = time.time()
+            detail = getattr(self, fault.kind)(fault)
+            event = dict(kind=fault.kind, target=fault.target, planned=self.tb.t0 + fault.at,
+                         start=start, end=time.time(), bound=fault.bound, detail=detail or '')
+            self.events.append(event)
+            self.say('%7.1f s  %-12s %-4s %5.1f s  %s' % (
+                start - self.tb.t0, fault.kind, fault.target or '', event['end'] - start,
+                event['detail']))
+
+    def _killed(self, name, down):
+        """SIGKILL node ``name``, its launch stopped, started again after ``down`` s."""
+        pid = self.fleet.signal(name, signal.SIGKILL)
+        killed = time.time()
+        time.sleep(down)
+        self.fleet.stop(name)
+        self.stops.append((name, time.time(), killed))
+        self.fleet.start(name)
+        return 'pid %s killed' % pid
+
+    def server_kill(self, fault):
+        return self._killed('server%d' % fault.target, fault.length)
+
+    def manager_kill(self, fault):
+        return self._killed('manager', fault.length)
+
+    def robot_kill(self, fault):
+        return self._killed('robot%d' % fault.target, fault.length)
+
+    def server_stop(self, fault):
+        name = 'server%d' % fault.target
+        pid = self.fleet.signal(name, signal.SIGSTOP)
+        try:
+            time.sleep(fault.length)
+        finally:
+            _kill(pid, signal.SIGCONT)
+        return 'pid %s stopped' % pid
+
+    def link_down(self, fault):
+        self.tb.sleep_until(fault.at + fault.length)     # the link emulator does it
+        return 'every link of server%d' % fault.target
+
+    def roscore_kill(self, fault):
+        master, rosout = self.fleet.master.call(self._master_pid), self.fleet.pid('/rosout')
+        stop_groups([self.core], signal.SIGKILL, 5.0)
+        for pid in (master, rosout):
+            _kill(pid, signal.SIGKILL)
+        time.sleep(fault.length)
+        self.core = self.roscore()
+        self.fleet.start_recorder()
+        return 'master pid %s, rosout pid %s' % (master, rosout)
+
+    def _master_pid(self):
+        return rosgraph.Master('/soak', master_uri=self.fleet.master.uri).getPid()
+
+    def overload(self, fault):
+        bursts = ['robot%d' % r for r in plan.BURST_ROBOTS[:3]]
+        for name in bursts:
+            self.fleet.start(name)
+        time.sleep(fault.length)
+        stop_groups([self.fleet.procs.pop(name) for name in bursts])
+        self.stops += [(name, time.time(), None) for name in bursts]
+        return '%s at %g frames/s each' % (', '.join(bursts), BURST_RATE)
+
+    def intruder(self, fault):
+        proc = self.fleet.start_intruder(fault.length)
+        proc.wait(fault.length + 60.0)
+        return 'sent %s' % self.fleet.intruder_said()
+
+    def key_rotation(self, _fault):
+        """Every node restarted on the next key, in passes (plan.KeyRing), each pass in
+        two halves (each half at once) while the other half serves."""
+        passes = self.fleet.keys.passes()
+        for move in passes:
+            move()
+            for half in HALVES:
+                stop_groups([self.fleet.procs.pop(name) for name in half])
+                now = time.time()
+                self.stops += [(name, now, None) for name in half if name.startswith('robot')]
+                for name in half:
+                    self.fleet.start(name)
+                wait_until(lambda: all(self.fleet.pid(n) for n in half), 60.0, period=0.5)
+        steps = ' + '.join(move.__name__.replace('_', ' ') for move in passes)
+        return '%s; signing with key %d' % (steps, self.fleet.keys.index + 1)
+
+
+def _kill(pid, sig):
+    if pid is not None:
+        try:
+            os.kill(pid, sig)
+        except ProcessLookupError:
+            pass

@@ -1,0 +1,142 @@
+"""The soak's plan (no rospy): its fleet as a testbed scenario, and the nemesis schedule.
+
+A :class:`Fault` is one fault of one kind at a planned scenario time: what it hits
+(``target``), how long it lasts (``length``, s) and the recovery it is allowed once it ends
+(``bound``, s). The schedule is drawn from a seeded random source: every kind ``repeats``
+times, shuffled, one at a time, each after a calm stretch long enough for a pre-fault
+reference. Link outages are part of the scenario the link emulator follows, so the nemesis
+only waits for them.
+"""
+
+import collections
+
+Fault = collections.namedtuple('Fault', 'kind target at length bound')
+
+SERVERS = (1, 2, 3, 4)
+SERVER_SHARES = (0.55, 0.4, 0.3, 0.2)     # each server's share of one core: unequal
+ROBOTS = (1, 2, 3, 4, 5, 6)
+CAMERA_ROBOT = 6                          # the robot fed by a camera topic
+BURST_ROBOTS = (101, 102, 103, 104, 105, 106)   # the overload's extra robots, on robot hosts
+RECOVERY = 5.0            # s: the fleet is back this long after a fault ends
+ROSCORE_RECOVERY = 15.0   # s: after a roscore restart
+WARMUP = (45.0, 30.0)     # s before the first fault (nodes up, windows full): full, short
+TAIL = (20.0, 10.0)       # s after the last fault's allowed recovery: full, short
+
+# Fault kinds and their length (s) in a full soak and in the short one (make test).
+KINDS = collections.OrderedDict([
+    ('server_kill', (3.0, 2.0)),      # SIGKILL, restarted under the same name after this
+    ('server_stop', (5.0, 5.0)),      # SIGSTOP, SIGCONT after this
+    ('link_down', (10.0, 6.0)),       # every link of a server down
+    ('manager_kill', (3.0, 2.0)),     # SIGKILL, restarted after this
+    ('roscore_kill', (5.0, 3.0)),     # roscore's processes SIGKILLed, restarted after this
+    ('robot_kill', (3.0, 2.0)),       # SIGKILL, restarted after this
+    ('overload', (30.0, 12.0)),       # the burst robots double the offered load
+    ('intruder', (20.0, 10.0)),       # a keyless node publishes tasks and forged flags
+    ('key_rotation', (0.0, 0.0)),     # every node restarted on the next key (as long as that takes)
+])
+
+
+def target_of(kind, rng):
+    """What a fault of ``kind`` hits: a server or robot id, or None (the fleet)."""
+    if kind in ('server_kill', 'server_stop', 'link_down'):
+        return rng.choice(SERVERS)
+    if kind == 'robot_kill':
+        return rng.choice(ROBOTS)
+    return None
+
+
+def _timing(short):
+    """(length of each kind, calm s before each fault, s planned for a key rotation)."""
+    lengths = dict((kind, pair[1 if short else 0]) for kind, pair in KINDS.items())
+    return lengths, (6.0 if short else 45.0), (25.0 if short else 60.0)
+
+
+def _slot(kind, short):
+    """Planned s of one fault of ``kind``: calm before, its length, its recovery bound."""
+    lengths, calm, rotation = _timing(short)
+    return calm + (lengths[kind] or rotation) + bound_of(kind)
+
+
+def bound_of(kind):
+    return ROSCORE_RECOVERY if kind == 'roscore_kill' else RECOVERY
+
+
+def needed(repeats, short=False):
+    """Scenario s a soak with ``repeats`` faults of each kind needs at least."""
+    return WARMUP[short] + TAIL[short] + repeats * sum(_slot(kind, short) for kind in KINDS)
+
+
+def schedule(duration, rng, repeats=None, short=False):
+    """The faults of a soak of ``duration`` s, in time order. ``repeats``: faults of each
+    kind (None: as many as fit, at least 2); ``short``: the short lengths and calm
+    stretches. Raises ValueError when they do not fit."""
+    lengths, calm, rotation = _timing(short)
+    one_round = sum(_slot(kind, short) for kind in KINDS)
+    room = duration - WARMUP[short] - TAIL[short]
+    if repeats is None:
+        repeats = max(2, int(room // one_round))
+    if repeats * one_round > room:
+        raise ValueError('%d faults of each kind need a soak of %.0f s at least, not %.0f s'
+                         % (repeats, needed(repeats, short), duration))
+    kinds = [kind for kind in KINDS for _ in range(repeats)]
+    rng.shuffle(kinds)
+    spare = (room - repeats * one_round) / len(kinds)
+    faults, at = [], WARMUP[short]
+    for kind in kinds:
+        at += calm + spare
+        faults.append(Fault(kind, target_of(kind, rng), round(at, 1), lengths[kind],
+                            bound_of(kind)))
+        at += (lengths[kind] or rotation) + bound_of(kind)
+    return faults
+
+
+def scenario(faults, duration, name='soak'):
+    """The testbed scenario of a soak: the manager, 4 servers of unequal CPU shares, 6
+    robots; links of 1-4 ms one way, and each ``link_down`` fault cutting every link of
+    its server for its length."""
+    hosts = {'manager': {'role': 'manager'}}
+    for server, share in zip(SERVERS, SERVER_SHARES):
+        hosts['server%d' % server] = {'role': 'server', 'id': server, 'cpu': share}
+    for robot in ROBOTS:
+        hosts['robot%d' % robot] = {'role': 'robot', 'id': robot}
+    links = {}
+    for robot in ROBOTS:
+        for server in SERVERS:
+            delay = 1.0 + (robot + server) % 4
+            links['robot%d server%d' % (robot, server)] = [
+                {'at': 0, 'delay': delay, 'jitter': delay / 10.0}]
+    for fault in (f for f in faults if f.kind == 'link_down'):
+        server = 'server%d' % fault.target
+        for other in (h for h in hosts if h != server):
+            pair = ' '.join(sorted((other, server)))
+            events = links.setdefault(pair, [{'at': 0, 'delay': 0.5, 'jitter': 0.05}])
+            events.append({'at': fault.at, 'down': True})
+            events.append({'at': fault.at + fault.length, 'down': False})
+    return {'name': name, 'duration': duration, 'hosts': hosts,
+            'default': {'delay': 0.5, 'jitter': 0.05}, 'links': links}
+
+
+class KeyRing(object):
+    """The fleet's keys through a soak: every node signs with one and also accepts one
+    (``fleet_key``, ``fleet_key_next``). A rotation restarts every node, in passes: each
+    pass's new state must accept what nodes not yet restarted sign, and the reverse."""
+
+    def __init__(self, paths):
+        self.paths = list(paths)
+        self.index, self.accepts_previous = 0, False     # signs paths[0], accepts paths[1]
+
+    def state(self):
+        """(key signed with, key also accepted)."""
+        other = self.index - 1 if self.accepts_previous else self.index + 1
+        return self.paths[self.index], self.paths[other]
+
+    def passes(self):
+        """The passes of the next rotation, each a function moving to its state: hand every
+        node the next key as the one also accepted (unless it has it), then sign with it."""
+        def hand_out():
+            self.accepts_previous = False
+
+        def switch():
+            self.index += 1
+            self.accepts_previous = True
+        return [switch] if not self.accepts_previous else [hand_out, switch]
