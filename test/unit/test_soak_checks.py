@@ -80,3 +80,14 @@ def test_recovery_is_when_no_task_fails_and_round_trips_are_back_within_ten_perc
 def test_a_message_two_recorders_heard_is_one_and_two_in_one_bag_are_two():
     merged = merge([{'reports': {('a',): 1, ('b',): 2}}, {'reports': {('a',): 1}}])
     assert merged['reports'] == {('a',): 1, ('b',): 2}
+
+
+def test_warnings_count_outside_faults_and_an_intruder_must_be_named():
+    from server_select.soak.history import Line
+    events = [{'kind': 'intruder', 'start': 100.0, 'end': 110.0, 'bound': 5.0}]
+    lines = [Line(50.0, '/robot1', 4, 'server 2 is slow'),
+             Line(105.0, '/server1', 4, 'dropped a task of robot 2 from /intruder_1_2'),
+             Line(120.0, '/robot1', 2, 'all well')]
+    assert checks.warnings_outside(lines, events, (0.0, 200.0)) == {'/robot1': 1}
+    assert checks.intruders_named(lines, events) == [(100.0, 1)]
+    assert checks.intruders_named(lines[:1], events) == [(100.0, 0)]

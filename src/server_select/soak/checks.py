@@ -152,3 +152,29 @@ def percentile(values, q):
     if not values:
         return None
     return values[min(len(values) - 1, int(round(q * (len(values) - 1))))]
+
+
+WARN = 4        # rosgraph_msgs/Log.WARN
+
+
+def warnings_outside(lines, events, measured):
+    """{node: count} of log lines at WARN or above outside every fault's allowed span
+    (a healthy fleet is quiet)."""
+    spans = allowed(events, 0.0)
+    found = collections.Counter()
+    for line in lines:
+        if line.level >= WARN and measured[0] <= line.t <= measured[1] and \
+                not any(a <= line.t <= b for a, b in spans):
+            found[line.node] += 1
+    return dict(found)
+
+
+def intruders_named(lines, events, name='/intruder'):
+    """[(event start, warnings naming the intruder during its window and bound)] of each
+    ``intruder`` fault: a refused keyless node is named in the fleet's logs."""
+    out = []
+    for event in (e for e in events if e['kind'] == 'intruder'):
+        end = ready(event) + event['bound']
+        out.append((event['start'], sum(1 for line in lines if line.level >= WARN and
+                                        event['start'] <= line.t <= end and name in line.text)))
+    return out

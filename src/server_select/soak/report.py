@@ -61,6 +61,7 @@ def analyse(folder, hist):
     rows = timeline(events, hist, t0)
     stray = checks.stray_failures(hist.reports, rows, TASK_TIMEOUT, log['measured'])
     late = [r for r in rows if r['recovery'] is None or r['recovery'] > r['bound']]
+    unnamed = [t for t, count in checks.intruders_named(hist.logs, rows) if not count]
     not_serving = [(r['kind'], n) for r in rows for n, s in r['serving'].items() if s is None]
     half = (t0 + log['duration'] / 2.0, t0 + log['duration'])
     slopes = resources.slopes(samples, *half)
@@ -73,10 +74,13 @@ def analyse(folder, hist):
                'duplicated': len(ledger['duplicated']),
                'lost with a killed robot': ledger['lost with a killed robot'],
                'failed outside faults': len(stray), 'late recoveries': len(late),
-               'restarted nodes not serving': len(not_serving), 'leaks': len(leaks)}
+               'restarted nodes not serving': len(not_serving), 'leaks': len(leaks),
+               'intruders not named': len(unnamed)}
     verdict['passed'] = not any(verdict[k] for k in (
         'unreported', 'duplicated', 'failed outside faults', 'late recoveries',
-        'restarted nodes not serving', 'leaks'))
+        'restarted nodes not serving', 'leaks', 'intruders not named'))
+    quiet = checks.warnings_outside(hist.logs, rows, log['measured'])
+    verdict['warnings outside faults'] = quiet
     text = _markdown(log, verdict, ledger, stray, rows, slopes, judged, hist)
     with open(os.path.join(folder, 'report.md'), 'w') as stream:
         stream.write(text)
@@ -107,12 +111,16 @@ def _markdown(log, verdict, ledger, stray, rows, slopes, judged, hist):
                ('failures only in a fault window + its recovery', 'failed outside faults', 0),
                ('the fleet back within the bound after each fault', 'late recoveries', 0),
                ('every restarted node serves again', 'restarted nodes not serving', 0),
+               ('each keyless intruder named in a warning', 'intruders not named', 0),
                ('no resource slope over its target' + slope_note, 'leaks', 0)]
     lines.append(markdown_table(['invariant', 'count', 'verdict'], [
         [what, verdict[key], 'pass' if verdict[key] == want else 'FAIL']
         for what, key, want in checked]))
     lines += ['', 'Tasks lost with a robot killed while they were out (sent in its last '
-              'task timeout): %d.' % ledger['lost with a killed robot']]
+              'task timeout): %d. Log lines at WARN or above outside faults: %s.' % (
+                  ledger['lost with a killed robot'], ', '.join(
+                      '%s %d' % item for item in sorted(
+                          verdict['warnings outside faults'].items())) or 'none')]
     for label, items in (('unreported', ledger['unreported']),
                          ('duplicated', ledger['duplicated'])):
         if items:
