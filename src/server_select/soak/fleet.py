@@ -18,7 +18,7 @@ import xmlrpc.client
 
 import rosgraph
 
-from server_select.core.util.procs import stop_group, wait_until
+from server_select.core.util.procs import stop_group, stop_groups, wait_until
 from server_select.soak import plan
 
 CLONE_NEWNET = 0x40000000
@@ -61,6 +61,18 @@ class MasterLink(object):
                 return pid if code == 1 else None
             except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
                 return None
+        return self.call(ask)
+
+    def bus_info(self, node):
+        """``node``'s connections (getBusInfo: id, peer, direction, transport, topic, ...);
+        [] when it does not answer."""
+        def ask():
+            try:
+                uri = rosgraph.Master('/soak', master_uri=self.uri).lookupNode(node)
+                code, _, info = xmlrpc.client.ServerProxy(uri).getBusInfo('/soak')
+                return info if code == 1 else []
+            except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
+                return []
         return self.call(ask)
 
     def up(self):
@@ -135,8 +147,19 @@ class SoakFleet(object):
             lines = [line for line in stream if line.startswith('{')]
         return lines[-1].strip() if lines else 'nothing (no summary line)'
 
-    def start_recorder(self):
-        """A ``rosbag record`` of this roscore, as ``/soak_recorder_<n>`` into soak_<n>.bag."""
+    def hears(self, recorder, node):
+        """Whether ``recorder`` has a connection from ``node`` (a robot: its task reports;
+        any other node: its log)."""
+        topic = '/task_report' if node.startswith('robot') else '/rosout'
+        return any(c[1] == recorder and c[2] == 'o' and c[4] == topic
+                   for c in self.master.bus_info('/' + node))
+
+    def start_recorder(self, nodes=()):
+        """A ``rosbag record`` of this roscore, as ``/soak_recorder_<n>`` into soak_<n>.bag.
+        Once it hears every node of ``nodes`` (which registered again with the new master),
+        the recorders of earlier roscores are stopped: each node's messages then go to one
+        recorder, and its connections are the fleet's own (nothing of the soak's counts
+        in its threads and descriptors)."""
         n = len(self.recorders) + 1
         name, bag = '/soak_recorder_%d' % n, os.path.join(self.out, 'soak_%d.bag' % n)
         proc = self.run.popen(self.run.scenario.manager.name, [
@@ -145,6 +168,8 @@ class SoakFleet(object):
         self.recorders.append((name, bag, proc))
         if not wait_until(lambda: self.pid(name) is not None, 30.0, period=0.3):
             raise RuntimeError('the recorder %s did not register within 30 s' % name)
+        if nodes and wait_until(lambda: all(self.hears(name, n) for n in nodes), 60.0, 0.5):
+            stop_groups([proc for _, _, proc in self.recorders[:-1] if proc.poll() is None])
 
     def stop(self, name, sig=signal.SIGINT):
         """Stop ``name``'s launch (SIGINT: a clean shutdown); its exit status."""

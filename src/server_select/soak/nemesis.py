@@ -40,8 +40,11 @@ class Nemesis(object):
             self.tb.sleep_until(fault.at)
             start = time.time()
             detail = getattr(self, fault.kind)(fault)
+            end = time.time()
+            if isinstance(detail, tuple):      # the fault's window ended before its return
+                detail, end = detail
             event = dict(kind=fault.kind, target=fault.target, planned=self.tb.t0 + fault.at,
-                         start=start, end=time.time(), bound=fault.bound, detail=detail or '')
+                         start=start, end=end, bound=fault.bound, detail=detail)
             self.events.append(event)
             self.say('%7.1f s  %-12s %-4s %5.1f s  %s' % (
                 start - self.tb.t0, fault.kind, fault.target or '', event['end'] - start,
@@ -86,8 +89,9 @@ class Nemesis(object):
             _kill(pid, signal.SIGKILL)
         time.sleep(fault.length)
         self.core = self.roscore()
-        self.fleet.start_recorder()
-        return 'master pid %s, rosout pid %s' % (master, rosout)
+        up = time.time()
+        self.fleet.start_recorder(MAIN_NODES)
+        return 'master pid %s, rosout pid %s' % (master, rosout), up
 
     def _master_pid(self):
         return rosgraph.Master('/soak', master_uri=self.fleet.master.uri).getPid()

@@ -88,8 +88,7 @@ def soak(args, say=print):
         fleet.start_recorder()
         _start_fleet(fleet, say)
         measured_from = time.time() + SETTLE
-        sampler = Sampler(nemesis.MAIN_NODES + ['camera'] + [
-            r[0] for r in fleet.recorders[:1]], fleet.pid).start()
+        sampler = Sampler(nemesis.MAIN_NODES + ['camera'], fleet.pid).start()
         try:
             chaos.run(faults)
             tb.sleep_until(duration)
