@@ -8,6 +8,7 @@ import csv
 import json
 import os
 
+from server_select.core.settings import default
 from server_select.core.util.tables import markdown_table
 from server_select.soak import checks, nemesis, resources
 from server_select.soak.plan import ROBOTS
@@ -15,7 +16,7 @@ from server_select.soak.plan import ROBOTS
 RSS_SLOPE_MAX = 1.0     # MiB per 10 minutes per node
 COUNT_GROWTH_MAX = 1.0  # descriptors or threads per 10 minutes: no net growth
 SLOPES_FROM = 20 * 60.0  # s: a shorter soak reports its slopes but is not judged on them
-TASK_TIMEOUT = 2.0
+TASK_TIMEOUT = default('task_timeout')     # s: the soak's robots have the default
 
 
 def _restarted(event):

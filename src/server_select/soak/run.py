@@ -10,6 +10,7 @@ Writes the bags, ``events.json`` (the nemesis's log), ``resources.csv``, ``repor
 
 import argparse
 import csv
+import glob
 import json
 import os
 import random
@@ -21,6 +22,7 @@ from server_select.core.trust.keys import make_key
 from server_select.core.util.procs import wait_until
 from server_select.soak import history, nemesis, plan, report
 from server_select.soak.fleet import SoakFleet
+from server_select.soak.report import TASK_TIMEOUT
 from server_select.soak.resources import Sampler
 from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.netns import Testbed
@@ -28,7 +30,6 @@ from server_select.testbed.runner import MASTER_PORT, HostRun, guarded
 from server_select.testbed.scenario import Scenario
 from server_select.testbed.traces import own_prefix
 
-TASK_TIMEOUT = 2.0      # the robots' task timeout (the default)
 SETTLE = 10.0           # s after every node registered that failures count (first tasks)
 
 
@@ -63,6 +64,8 @@ def soak(args, say=print):
                            args.short)
     rotations = sum(1 for f in faults if f.kind == 'key_rotation')
     os.makedirs(args.out, exist_ok=True)
+    for old in glob.glob(os.path.join(args.out, 'soak_*.bag*')):    # an earlier soak's
+        os.remove(old)
     keys, frames = _keys(args.out, rotations + 2), os.path.join(args.out, 'frames')
     write_frame(frames)
     path = os.path.join(args.out, 'scenario.yaml')
