@@ -24,7 +24,7 @@ import sys
 import tempfile
 import time
 
-from server_select.bench import cli, robot_profile
+from server_select.bench import camera, cli, robot_profile
 from server_select.bench.harness import Roscore, pid_or_none
 from server_select.core.util.procs import measure, stop_group, wait_until
 from server_select.core.util.tables import markdown_table, median_range
@@ -213,7 +213,7 @@ def main(argv=None):
     parser.add_argument('--rate', type=float, default=5.0, help=argparse.SUPPRESS)
     options, _ros = parser.parse_known_args(argv)
     if options.camera:
-        return robot_profile.camera(options.camera, options.rate)
+        return camera.publish(options.camera, options.rate)
     runs, parts = [], {}
     work = tempfile.mkdtemp(prefix='robot_cost_')
     for repeat in range(1, options.repeats + 1):

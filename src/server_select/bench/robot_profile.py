@@ -1,4 +1,4 @@
-"""Where a robot node's time goes (bench-robot's ``--profile``), and the bench's camera.
+"""Where a robot node's time goes (bench-robot's ``--profile``).
 
 :func:`sample` runs py-spy (a sampling profiler, from PyPI) on a running node and sorts
 its samples into parts of the robot by the innermost frame of this package on each
@@ -14,7 +14,6 @@ import os
 import shutil
 import subprocess
 import sys
-import time
 
 from server_select.core.util.tables import markdown_table
 
@@ -104,24 +103,3 @@ def table(by_profile):
                       for p in profiles] for name in names]
     rows.append(['samples on a CPU'] + ['%d' % totals[p] for p in profiles])
     return markdown_table(['part'] + ['%s %%' % p for p in profiles], rows)
-
-
-def camera(topic, rate):
-    """Publish a 640 x 480 JPEG photograph on ``topic`` (sensor_msgs/CompressedImage) at
-    ``rate`` Hz, stamped, frame_id ``camera``, until shut down: the bench's camera driver."""
-    import cv2
-    import rospy
-    from sensor_msgs.msg import CompressedImage
-    from skimage import data as samples
-    rospy.init_node('camera')
-    frame = cv2.resize(cv2.cvtColor(samples.astronaut(), cv2.COLOR_RGB2BGR), (640, 480))
-    jpeg = cv2.imencode('.jpg', frame, [cv2.IMWRITE_JPEG_QUALITY, 80])[1].tobytes()
-    pub = rospy.Publisher(topic, CompressedImage, queue_size=1)
-    period, due = 1.0 / rate, time.monotonic()
-    while not rospy.is_shutdown():
-        msg = CompressedImage(format='bgr8; jpeg compressed bgr8', data=jpeg)
-        msg.header.stamp, msg.header.frame_id = rospy.Time.now(), 'camera'
-        pub.publish(msg)
-        due += period
-        time.sleep(max(0.0, due - time.monotonic()))
-    return 0

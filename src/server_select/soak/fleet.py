@@ -131,7 +131,7 @@ class SoakFleet(object):
     def start_camera(self):
         host = 'robot%d' % plan.CAMERA_ROBOT
         self.procs['camera'] = self.run.popen(host, [
-            sys.executable, '-m', 'server_select.soak.camera', CAMERA_TOPIC,
+            sys.executable, '-m', 'server_select.bench.camera', CAMERA_TOPIC,
             str(CAMERA_RATE)], 'camera', stage=1)
 
     def start_intruder(self, seconds):

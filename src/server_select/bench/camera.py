@@ -1,7 +1,8 @@
-"""The soak's camera driver: a 640 x 480 JPEG photograph on a CompressedImage topic at a
-fixed rate, registering again with a restarted roscore as the package's nodes do.
+"""The benchmarks' and the soak's camera driver: a 640 x 480 JPEG photograph on a
+CompressedImage topic at a fixed rate, stamped, frame_id ``camera``, registering again with
+a restarted roscore as the package's nodes do.
 
-    python -m server_select.soak.camera TOPIC RATE
+    python -m server_select.bench.camera TOPIC RATE
 """
 
 import sys
@@ -16,8 +17,8 @@ from server_select.ros.master_watch import MasterWatch
 from server_select.vision.search import sample_image
 
 
-def main(argv=None):
-    topic, rate = (argv or sys.argv[1:])[:2]
+def publish(topic, rate):
+    """Publish on ``topic`` at ``rate`` Hz until shut down."""
     rospy.init_node('camera')
     frame = cv2.resize(sample_image('astronaut.png'), (640, 480))
     jpeg = cv2.imencode('.jpg', frame, [cv2.IMWRITE_JPEG_QUALITY, 80])[1].tobytes()
@@ -31,6 +32,11 @@ def main(argv=None):
         due += period
         time.sleep(max(0.0, due - time.monotonic()))
     return 0
+
+
+def main(argv=None):
+    topic, rate = (argv or sys.argv[1:])[:2]
+    return publish(topic, rate)
 
 
 if __name__ == '__main__':
