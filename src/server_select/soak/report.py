@@ -133,12 +133,8 @@ def _markdown(log, verdict, ledger, stray, rows, slopes, judged, hist):
         ['at s', 'kind', 'target', 'lasted s', 'back after s', 'bound s', 'served again s',
          'what'],
         [['%.1f' % r['at'], r['kind'], r['target'] or '', '%.1f' % r['lasted'],
-          _fmt(r['recovery']), '%g' % r['bound'],
-          ', '.join('%s %s' % (n, _fmt(s)) for n, s in sorted(r['serving'].items()))
-          if len(r['serving']) < 4 else 'all %s' % _fmt(max(
-              (s for s in r['serving'].values() if s is not None), default=None))
-          if all(s is not None for s in r['serving'].values()) else 'some never',
-          r['detail']] for r in rows])]
+          _fmt(r['recovery']), '%g' % r['bound'], _serving(r['serving']), r['detail']]
+         for r in rows])]
     lines += ['', '## Recovery by kind', '', markdown_table(
         ['kind', 'faults', 'median s', 'max s', 'bound s'], _by_kind(rows))]
     lines += ['', '## Resources over the second half (slope per 10 minutes)', '',
@@ -151,6 +147,15 @@ def _markdown(log, verdict, ledger, stray, rows, slopes, judged, hist):
               '10 minutes per node.' % (RSS_SLOPE_MAX, COUNT_GROWTH_MAX),
               '', '![timeline](timeline.png)', '']
     return '\n'.join(lines)
+
+
+def _serving(serving):
+    """When the restarted nodes served again: each (a few), or the last of many."""
+    if len(serving) < 4:
+        return ', '.join('%s %s' % (node, _fmt(s)) for node, s in sorted(serving.items()))
+    if any(s is None for s in serving.values()):
+        return 'some never'
+    return 'all %s' % _fmt(max(serving.values()))
 
 
 def _by_kind(rows):
