@@ -91,3 +91,13 @@ def test_warnings_count_outside_faults_and_an_intruder_must_be_named():
     assert checks.warnings_outside(lines, events, (0.0, 200.0)) == {'/robot1': 1}
     assert checks.intruders_named(lines, events) == [(100.0, 1)]
     assert checks.intruders_named(lines[:1], events) == [(100.0, 0)]
+
+
+def test_a_task_under_a_robots_id_from_another_node_is_not_the_robots():
+    from server_select.soak.history import own_sends
+    sent = [Sent(1.0, 1, 5, 2, '/robot1'), Sent(0.5, 1, 900, 2, '/intruder_1_2'),
+            Sent(0.7, 1, 3, 1, '/robot1')]
+    assert [s.task for s in own_sends(sent)] == [3, 5]
+    reports = [report(1.0, 1, task) for task in range(1, 6)]
+    assert checks.ledger(reports, own_sends(sent), [], TIMEOUT)['unreported'] == []
+    assert len(checks.ledger(reports, sent, [], TIMEOUT)['unreported']) == 895

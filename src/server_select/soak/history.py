@@ -59,6 +59,12 @@ def merge(per_bag):
     return merged
 
 
+def own_sends(sent):
+    """The tasks robots sent themselves, in time order: a task under a robot's id from
+    another node (a keyless intruder's) is no task of that robot."""
+    return sorted(s for s in sent if s.sender == '/robot%d' % s.robot)
+
+
 def load(folder):
     """The History of the soak whose bags (``soak_<n>.bag``) are in ``folder``."""
     bags = sorted(glob.glob(os.path.join(folder, 'soak_*.bag')))
@@ -68,6 +74,5 @@ def load(folder):
     reports = [r._replace(rtt=float(r.rtt)) for r in reports]
     return History(sorted(reports), sorted(Ranking(*r) for r in merged['rankings']),
                    sorted(Flag(*r) for r in merged['flags']),
-                   sorted(s for s in (Sent(*r) for r in merged['sent'])
-                          if s.sender == '/robot%d' % s.robot),   # not an intruder's
+                   own_sends(Sent(*r) for r in merged['sent']),
                    sorted(Line(*r) for r in merged['logs']), bags)
