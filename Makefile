@@ -197,12 +197,14 @@ bench-emulator: build
 
 # The chaos soak (root, TUN): the keyed fleet on the testbed through a seeded schedule of
 # every fault kind (at least twice each), SOAK_MINUTES long; invariants, recovery and
-# resource slopes from the bags: results/soak/report.md and timeline.png.
+# resource slopes from the bags: results/soak/report.md and timeline.png. SOAK_KINDS: only
+# these kinds (e.g. overload,server_kill), as many of each as fit.
 SOAK_MINUTES ?= 30
 SOAK_SEED ?= 1
+SOAK_KINDS ?=
 soak: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.soak.run --minutes $(SOAK_MINUTES) \
-	  --seed $(SOAK_SEED) --out results/soak
+	  --seed $(SOAK_SEED) $(if $(SOAK_KINDS),--kinds $(SOAK_KINDS)) --out results/soak
 
 unit-test: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m pytest -q test/unit test/ros

@@ -54,3 +54,10 @@ def test_every_pass_of_every_rotation_lets_restarted_and_waiting_nodes_trust_eac
             assert before[0] in after and after[0] in before, (before, after)
         signed.append(ring.state()[0])
     assert signed == ['k2', 'k3', 'k4']
+
+
+def test_a_soak_of_some_kinds_repeats_them_as_often_as_they_fit():
+    faults = plan.schedule(720, random.Random(1), kinds=('overload',))
+    assert {f.kind for f in faults} == {'overload'} and len(faults) == 8
+    with pytest.raises(ValueError, match='no fault kind overlaod'):
+        plan.schedule(720, random.Random(1), kinds=('overlaod',))

@@ -61,28 +61,32 @@ def bound_of(kind):
     return ROSCORE_RECOVERY if kind == 'roscore_kill' else RECOVERY
 
 
-def needed(repeats, short=False):
-    """Scenario s a soak with ``repeats`` faults of each kind needs at least."""
-    return WARMUP[short] + TAIL[short] + repeats * sum(_slot(kind, short) for kind in KINDS)
+def needed(repeats, short=False, kinds=tuple(KINDS)):
+    """Scenario s a soak with ``repeats`` faults of each of ``kinds`` needs at least."""
+    return WARMUP[short] + TAIL[short] + repeats * sum(_slot(kind, short) for kind in kinds)
 
 
-def schedule(duration, rng, repeats=None, short=False):
+def schedule(duration, rng, repeats=None, short=False, kinds=tuple(KINDS)):
     """The faults of a soak of ``duration`` s, in time order. ``repeats``: faults of each
-    kind (None: as many as fit, at least 2); ``short``: the short lengths and calm
-    stretches. Raises ValueError when they do not fit."""
+    of ``kinds`` (None: as many as fit, at least 2); ``short``: the short lengths and calm
+    stretches. Raises ValueError when they do not fit, or for a kind not in KINDS."""
+    unknown = sorted(set(kinds) - set(KINDS))
+    if unknown:
+        raise ValueError('no fault kind %s (the kinds: %s)'
+                         % (', '.join(unknown), ', '.join(KINDS)))
     lengths, calm, rotation = _timing(short)
-    one_round = sum(_slot(kind, short) for kind in KINDS)
+    one_round = sum(_slot(kind, short) for kind in kinds)
     room = duration - WARMUP[short] - TAIL[short]
     if repeats is None:
         repeats = max(2, int(room // one_round))
     if repeats * one_round > room:
         raise ValueError('%d faults of each kind need a soak of %.0f s at least, not %.0f s'
-                         % (repeats, needed(repeats, short), duration))
-    kinds = [kind for kind in KINDS for _ in range(repeats)]
-    rng.shuffle(kinds)
-    spare = (room - repeats * one_round) / len(kinds)
+                         % (repeats, needed(repeats, short, kinds), duration))
+    order = [kind for kind in kinds for _ in range(repeats)]
+    rng.shuffle(order)
+    spare = (room - repeats * one_round) / len(order)
     faults, at = [], WARMUP[short]
-    for kind in kinds:
+    for kind in order:
         at += calm + spare
         faults.append(Fault(kind, target_of(kind, rng), round(at, 1), lengths[kind],
                             bound_of(kind)))

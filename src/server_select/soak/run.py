@@ -57,11 +57,18 @@ def _start_fleet(fleet, say):
     say('fleet up: %s' % ', '.join(nemesis.MAIN_NODES))
 
 
+def plan_of(args):
+    """(s the soak lasts, its faults) from the command line's options (ValueError: the
+    faults do not fit, or a kind is unknown)."""
+    kinds = getattr(args, 'kinds', None) or tuple(plan.KINDS)
+    duration = plan.needed(1, True, kinds) if args.short else args.minutes * 60.0
+    return duration, plan.schedule(duration, random.Random(args.seed),
+                                   1 if args.short else None, args.short, kinds)
+
+
 def soak(args, say=print):
     """One soak; the folder's analysis (report.analyse's result)."""
-    duration = plan.needed(1, True) if args.short else args.minutes * 60.0
-    faults = plan.schedule(duration, random.Random(args.seed), 1 if args.short else None,
-                           args.short)
+    duration, faults = plan_of(args)
     rotations = sum(1 for f in faults if f.kind == 'key_rotation')
     os.makedirs(args.out, exist_ok=True)
     for old in glob.glob(os.path.join(args.out, 'soak_*.bag*')):    # an earlier soak's
@@ -118,8 +125,15 @@ def main(argv=None):
     parser.add_argument('--minutes', type=float, default=30.0, help='length (%(default)s)')
     parser.add_argument('--seed', type=int, default=1, help='the nemesis seed (%(default)s)')
     parser.add_argument('--short', action='store_true', help='every fault kind once, short')
+    parser.add_argument('--kinds', type=lambda text: tuple(text.replace(',', ' ').split()),
+                        help='only these fault kinds, e.g. overload,server_kill (as many '
+                        'of each as fit)')
     parser.add_argument('--out', default='results/soak', help='folder (%(default)s)')
     args = parser.parse_args(argv)
+    try:
+        plan_of(args)
+    except ValueError as error:
+        parser.error(str(error))
     verdict = {}
     status = guarded('soak', lambda: verdict.update(soak(args)))
     if status:
