@@ -68,8 +68,8 @@ def analyse(folder, hist):
     slopes = resources.slopes(samples, *half)
     judged = log['duration'] >= SLOPES_FROM
     leaks = [(node, m) for node, per in slopes.items() for m, (slope, _) in per.items()
-             if judged and slope > (RSS_SLOPE_MAX if m == 'rss_mib' else COUNT_GROWTH_MAX)
-             and m != 'cpu_s']
+             if judged and node in nemesis.MAIN_NODES and m != 'cpu_s'   # the fleet's
+             and slope > (RSS_SLOPE_MAX if m == 'rss_mib' else COUNT_GROWTH_MAX)]
     verdict = {'tasks': ledger['tasks'], 'reports': ledger['reports'],
                'unreported': len(ledger['unreported']),
                'duplicated': len(ledger['duplicated']),

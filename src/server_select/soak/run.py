@@ -30,6 +30,7 @@ from server_select.testbed.runner import MASTER_PORT, HostRun, guarded
 from server_select.testbed.scenario import Scenario
 from server_select.testbed.traces import own_prefix
 
+EMULATOR = 'link emulator'   # sampled beside the nodes: it carries every packet
 SETTLE = 10.0           # s after every node registered that failures count (first tasks)
 
 
@@ -98,7 +99,11 @@ def soak(args, say=print):
         fleet.start_recorder()
         _start_fleet(fleet, say)
         measured_from = time.time() + SETTLE
-        sampler = Sampler(nemesis.MAIN_NODES + ['camera'], fleet.pid).start()
+        emulator = tb.emulator.pid      # the testbed's own share of this host's CPU
+
+        def pid_of(node):
+            return emulator if node == EMULATOR else fleet.pid(node)
+        sampler = Sampler(nemesis.MAIN_NODES + ['camera', EMULATOR], pid_of).start()
         try:
             chaos.run(faults)
             tb.sleep_until(duration)
