@@ -11,6 +11,7 @@ restarted robot counts its tasks from 1.
 
 import os
 import signal
+import subprocess
 import time
 
 import rosgraph
@@ -97,7 +98,7 @@ class Nemesis(object):
         return rosgraph.Master('/soak', master_uri=self.fleet.master.uri).getPid()
 
     def overload(self, fault):
-        bursts = ['robot%d' % r for r in plan.BURST_ROBOTS[:3]]
+        bursts = ['robot%d' % r for r in plan.BURST_ROBOTS]
         for name in bursts:
             self.fleet.start(name)
         time.sleep(fault.length)
@@ -107,7 +108,11 @@ class Nemesis(object):
 
     def intruder(self, fault):
         proc = self.fleet.start_intruder(fault.length)
-        proc.wait(fault.length + 60.0)
+        try:
+            proc.wait(fault.length + 60.0)
+        except subprocess.TimeoutExpired:       # it hangs: stopped, and said
+            stop_groups([proc], signal.SIGKILL, 5.0)
+            return 'did not end within 60 s of its time: killed'
         return 'sent %s' % self.fleet.intruder_said()
 
     def key_rotation(self, _fault):
