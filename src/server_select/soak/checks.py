@@ -15,7 +15,6 @@ bags, faults from the nemesis's log).
 
 import bisect
 import collections
-import math
 
 WINDOW = 3.0        # s a recovered fleet must hold
 STEP = 0.25         # s between the windows tried
@@ -145,13 +144,6 @@ def served_again(event, history, nodes):
                      and f.t >= event['end']]
         found[node] = min(times) - event['end'] if times else None
     return found
-
-
-def percentile(values, q):
-    values = sorted(v for v in values if v is not None and not math.isnan(v))
-    if not values:
-        return None
-    return values[min(len(values) - 1, int(round(q * (len(values) - 1))))]
 
 
 WARN = 4        # rosgraph_msgs/Log.WARN

@@ -19,6 +19,7 @@ import xmlrpc.client
 import rosgraph
 
 from server_select.core.util.procs import stop_group, stop_groups, wait_until
+from server_select.ros.graph import node_pid
 from server_select.soak import plan
 
 CLONE_NEWNET = 0x40000000
@@ -53,12 +54,12 @@ class MasterLink(object):
         return self.pool.submit(function, *args).result(timeout)
 
     def pid(self, node):
-        """The pid ``node`` says it has, None when the master or the node does not answer."""
+        """The pid ``node`` says it has, None when the master or the node does not answer
+        (a stopped node within 2 s)."""
         def ask():
             try:
-                uri = rosgraph.Master('/soak', master_uri=self.uri).lookupNode(node)
-                code, _, pid = xmlrpc.client.ServerProxy(uri).getPid('/soak')
-                return pid if code == 1 else None
+                return node_pid(node, '/soak', rosgraph.Master('/soak', master_uri=self.uri),
+                                timeout=2.0)
             except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
                 return None
         return self.call(ask)

@@ -9,6 +9,7 @@ import json
 import os
 
 from server_select.core.settings import default
+from server_select.core.util.stats import percentile
 from server_select.core.util.tables import markdown_table
 from server_select.soak import checks, nemesis, resources
 from server_select.soak.plan import ROBOTS
@@ -166,7 +167,7 @@ def _by_kind(rows):
     for kind, mine in kinds.items():
         backs = [r['recovery'] for r in mine]
         known = [b for b in backs if b is not None]
-        out.append([kind, len(mine), _fmt(checks.percentile(known, 0.5)),
+        out.append([kind, len(mine), _fmt(percentile(sorted(known), 50) if known else None),
                     _fmt(max(known) if len(known) == len(backs) else None),
                     '%g' % mine[0]['bound']])
     return out
