@@ -76,13 +76,17 @@ class MasterLink(object):
                 return []
         return self.call(ask)
 
-    def up(self):
+    def master_pid(self):
+        """The master's pid, None when it does not answer."""
         def ask():
             try:
-                return bool(rosgraph.Master('/soak', master_uri=self.uri).getPid())
+                return rosgraph.Master('/soak', master_uri=self.uri).getPid()
             except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
-                return False
+                return None
         return self.call(ask)
+
+    def up(self):
+        return self.master_pid() is not None
 
     def close(self):
         self.pool.shutdown(wait=False)

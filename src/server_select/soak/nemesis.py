@@ -14,8 +14,6 @@ import signal
 import subprocess
 import time
 
-import rosgraph
-
 from server_select.core.util.procs import stop_groups, wait_until
 from server_select.soak import plan
 from server_select.soak.fleet import BURST_RATE
@@ -84,7 +82,7 @@ class Nemesis(object):
         return 'every link of server%d' % fault.target
 
     def roscore_kill(self, fault):
-        master, rosout = self.fleet.master.call(self._master_pid), self.fleet.pid('/rosout')
+        master, rosout = self.fleet.master.master_pid(), self.fleet.pid('/rosout')
         stop_groups([self.core], signal.SIGKILL, 5.0)
         for pid in (master, rosout):
             _kill(pid, signal.SIGKILL)
@@ -93,9 +91,6 @@ class Nemesis(object):
         up = time.time()
         self.fleet.start_recorder(MAIN_NODES)
         return 'master pid %s, rosout pid %s' % (master, rosout), up
-
-    def _master_pid(self):
-        return rosgraph.Master('/soak', master_uri=self.fleet.master.uri).getPid()
 
     def overload(self, fault):
         bursts = ['robot%d' % r for r in plan.BURST_ROBOTS]
