@@ -52,10 +52,42 @@ def test_service_times_follow_a_step_in_the_work_within_the_last_second():
     # last 20 tasks, the eleventh would: 2.75 s)
     assert tasks == 3
     for _ in range(3):                       # rare tasks: the newest three still count
-        clock.now += 10.0
+        clock.now += 9.0
         times.add('image', 0.5)
     times.add('image', 0.8)
     assert times.get('image') == pytest.approx(0.5) and times.errors()['image'] > 0
+
+
+def test_a_kind_left_idle_reports_the_least_work_it_had_until_a_task_measures_it():
+    clock = Clock()
+    times = ServiceTimes(idle=10.0, clock=clock)
+    for seconds in [0.25, 0.26, 0.24] * 4 + [0.8] * 6:   # calm, then a burst's frames
+        times.add('image', seconds)
+        clock.now += 0.5
+    calm_error = 1.2533 * statistics.stdev([0.25, 0.26, 0.24]) / 3 ** 0.5
+    assert times.get('image') == pytest.approx(0.8)
+    clock.now += 9.0                          # the robots left: what it did, for a while
+    assert times.snapshot() == {'image': pytest.approx(0.8)}
+    clock.now += 1.0                          # then what it was at best, not the burst
+    assert times.get('image') == pytest.approx(0.25)
+    assert times.snapshot() == {'image': pytest.approx(0.25)}
+    assert times.errors() == {'image': pytest.approx(calm_error)}
+    times.add('image', 0.3)                   # the next task is measured alone
+    assert times.get('image') == pytest.approx(0.3) and times.errors() == {'image': 0.0}
+    assert times.get('sort', None) is None    # a kind never done: the caller's default
+
+
+def test_a_queue_admits_by_what_an_idle_kind_took_at_best():
+    clock = Clock()
+    q = WorkQueue(1, 10, clock=clock)
+    for seconds in (0.2, 0.2, 0.2, 1.0, 1.0, 1.0):     # a burst ends its last three
+        assert q.offer('image', 'x') is None
+        q.done(q.take(), seconds)
+        clock.now += 0.3
+    assert q.offer('image', 'a', deadline=clock.now + 0.5).startswith('busy')
+    clock.now += 11.0
+    assert q.offer('image', 'b', deadline=clock.now + 0.5) is None
+    assert q.load().service == {'image': pytest.approx(0.2)}
 
 
 def test_an_idle_server_takes_what_it_can_finish_in_time_and_refuses_the_rest():

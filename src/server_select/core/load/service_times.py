@@ -19,17 +19,29 @@ class ServiceTimes(object):
     error (thread-safe). A step in the work shows once half of those are new: at 4 tasks
     a second with the third slow one (0.75 s), where the last 20 had needed eleven (2.75
     s: loaded_server's reaction); fewer tasks make a wider error, which the robots count
-    as noise."""
+    as noise.
 
-    def __init__(self, keep=20, horizon=1.0, least=3, clock=time.monotonic):
+    A kind none of whose tasks was done in the last ``idle`` s says what the server was,
+    not what it is: it reports the least work the server has had for it (its least median
+    of at least ``least`` tasks, and that median's error), and its next task is measured
+    alone. A server that did a kind slowly in a burst, and was left by the robots that sent
+    it, would otherwise report the burst's work until it restarted: nothing sent it a task
+    to learn otherwise. The price is a task now and then on a server still slow; 10 s is
+    the decay time of tower's and Finagle's peak-EWMA, which forget a left server alike.
+    """
+
+    def __init__(self, keep=20, horizon=1.0, least=3, idle=10.0, clock=time.monotonic):
         if keep < 1 or not 1 <= least <= keep:
             raise ValueError('need 1 <= least <= keep, got %r, %r' % (least, keep))
-        self.keep, self.horizon, self.least = keep, float(horizon), least
+        if idle < horizon:
+            raise ValueError('need idle >= horizon, got %r < %r' % (idle, horizon))
+        self.keep, self.horizon, self.least, self.idle = keep, float(horizon), least, idle
         self._clock = clock
         self._lock = threading.Lock()
         self._times = {}
         self._medians = {}
         self._errors = {}
+        self._best = {}       # {kind: (rank, (its least median, that median's error))}
 
     def add(self, kind, seconds):
         now = self._clock()
@@ -37,23 +49,38 @@ class ServiceTimes(object):
             times = self._times.get(kind)
             if times is None:
                 times = self._times[kind] = collections.deque(maxlen=self.keep)
+            elif now - times[-1][0] > self.idle:
+                times.clear()
             times.append((now, float(seconds)))
             while len(times) > self.least and now - times[0][0] > self.horizon:
                 times.popleft()
             values = [value for _, value in times]
-            self._medians[kind] = statistics.median(values)
-            self._errors[kind] = MEDIAN_ERROR * mean_error(values)[1]
+            median = self._medians[kind] = statistics.median(values)
+            error = self._errors[kind] = MEDIAN_ERROR * mean_error(values)[1]
+            # the least median of `least` tasks or more (of fewer: while none is known)
+            rank = (len(values) < self.least, median)
+            if kind not in self._best or rank < self._best[kind][0]:
+                self._best[kind] = (rank, (median, error))
+
+    def _work(self, kind, now):
+        """``(seconds, error)`` of ``kind``'s work now (lock held; it was done before)."""
+        if now - self._times[kind][-1][0] > self.idle:
+            return self._best[kind][1]
+        return self._medians[kind], self._errors[kind]
 
     def get(self, kind, default=0.0):
         """Seconds of work per task of ``kind`` (``default`` while none was done)."""
-        return self._medians.get(kind, default)
+        with self._lock:
+            return self._work(kind, self._clock())[0] if kind in self._times else default
 
     def snapshot(self):
         """``{kind: seconds}`` of every kind done so far."""
         with self._lock:
-            return dict(self._medians)
+            now = self._clock()
+            return {kind: self._work(kind, now)[0] for kind in self._times}
 
     def errors(self):
-        """``{kind: the standard error of its median}`` (0.0 from one task)."""
+        """``{kind: the standard error of its work}`` (0.0 from one task)."""
         with self._lock:
-            return dict(self._errors)
+            now = self._clock()
+            return {kind: self._work(kind, now)[1] for kind in self._times}
