@@ -22,6 +22,7 @@ from server_select.core.util.procs import stop_group, stop_groups, wait_until
 from server_select.ros.graph import node_pid
 from server_select.soak import plan
 
+CALLER = '/soak'            # the caller id of the harness's calls
 CLONE_NEWNET = 0x40000000
 RECORDED = ('/(task_report|robot_rankings|fleet_servers|rosout|robot_[0-9]+/server_select_flag'
             '|server_[0-9]+/data)')
@@ -53,39 +54,35 @@ class MasterLink(object):
     def call(self, function, *args, timeout=10.0):
         return self.pool.submit(function, *args).result(timeout)
 
+    def _ask(self, question, failed):
+        """``question(master)`` from the namespace's thread; ``failed`` when the master or
+        the node asked does not answer."""
+        def ask():
+            try:
+                return question(rosgraph.Master(CALLER, master_uri=self.uri))
+            except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
+                return failed
+        return self.call(ask)
+
     def pid(self, node):
         """The pid ``node`` says it has, None when the master or the node does not answer
         (a stopped node within 2 s)."""
-        def ask():
-            try:
-                return node_pid(node, '/soak', rosgraph.Master('/soak', master_uri=self.uri),
-                                timeout=2.0)
-            except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
-                return None
-        return self.call(ask)
+        return self._ask(lambda master: node_pid(node, CALLER, master, timeout=2.0), None)
 
     def bus_info(self, node):
         """``node``'s connections (getBusInfo: id, peer, direction, transport, topic, ...);
         [] when it does not answer."""
-        def ask():
-            try:
-                uri = rosgraph.Master('/soak', master_uri=self.uri).lookupNode(node)
-                code, _, info = xmlrpc.client.ServerProxy(uri).getBusInfo('/soak')
-                return info if code == 1 else []
-            except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
-                return []
-        return self.call(ask)
+        def connections(master):
+            code, _, info = xmlrpc.client.ServerProxy(master.lookupNode(node)).getBusInfo(CALLER)
+            return info if code == 1 else []
+        return self._ask(connections, [])
 
     def master_pid(self):
         """The master's pid, None when it does not answer."""
-        def ask():
-            try:
-                return rosgraph.Master('/soak', master_uri=self.uri).getPid()
-            except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
-                return None
-        return self.call(ask)
+        return self._ask(lambda master: master.getPid(), None)
 
     def up(self):
+        """Whether the master answers."""
         return self.master_pid() is not None
 
     def close(self):
