@@ -95,8 +95,8 @@ def test_nothing_finds_files_above_the_package():
 
 
 # core's topics, each importing only those before it (core/__init__.py says what each owns)
-CORE_ORDER = ('util', 'config', 'trust', 'load', 'selection', 'flow', 'fleet', 'settings',
-              'observe')
+CORE_ORDER = ('util', 'config', 'trust', 'load', 'selection', 'flow', 'fleet', 'robot',
+              'settings', 'observe')
 
 
 def core_imports():

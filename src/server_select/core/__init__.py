@@ -13,6 +13,8 @@ checks the direction and that there is no cycle):
   peers), probing plans, passive samples, a robot's health table.
 - ``flow``: a task's life at the robot: send, re-send, hedge, check, report once.
 - ``fleet``: membership by leases, server groups.
+- ``robot``: the robot whole, one object over selection, load and flow, driven alike by
+  the robot node and the simulator.
 - ``settings``: the table of every node parameter (a module: it names every rule's choices).
 - ``observe``: what a run did (summaries) and what ``top`` shows.
 """

@@ -1,25 +1,21 @@
 """Robot: probes every server, follows the manager's selection and sends tasks."""
 
-import itertools
 import time
 
 import rospy
 
 from server_select.core.config import names
-from server_select.core.flow.budget import RetryBudget
 from server_select.core.config.params import ParamError
 from server_select.core.flow.task_flow import LOCAL, NO_SERVER
-from server_select.core.load.robot_load import RobotLoad
+from server_select.core.robot.robot import Robot
 from server_select.msg import SelectionFlag
 from server_select.ros.camera import TopicSource
 from server_select.ros.flags import flag_topic
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
-from server_select.ros.robot_parts import Joining, robot_prober, robot_selection, task_stream
+from server_select.ros.robot_parts import RobotWire, fixed_server
 from server_select.ros.node import fleet, param
 from server_select.ros.runner import run
-from server_select.ros.passive import TaskSamples
-from server_select.core.selection.answer_time import STILL_OUT
 from server_select.ros.senders import SenderGate
 from server_select.tasks.kinds import stream_kinds
 from server_select.ros.view import RankingSender
@@ -27,7 +23,8 @@ from server_select.tasks.image import Frames
 
 
 class RobotNode(object):
-    """A robot of the fleet: a prober, a selection follower and one or two task streams.
+    """A robot of the fleet: the package's :class:`~server_select.core.robot.robot.Robot`
+    (every decision: probes, selection, health, load, task streams) on rospy's wire.
 
     Tasks go to the selected server (``~mode`` ``select``), to ``~fixed_server``
     (``fixed``, the paper's baseline), or are processed by the robot itself (``local``).
@@ -68,37 +65,34 @@ class RobotNode(object):
                                                     param('top_manager_node'))):
             raise ParamError('~servers: expected a non-empty list of ids (an empty one needs '
                              '~discover, and a mode other than fixed)')
-        self.selection, self.health, self.policy = robot_selection(self.robot_id, servers,
-                                                                   mode)
+        fixed = fixed_server(servers, mode)
         kinds = stream_kinds(self.robot_id, mode, param)
         image = next((k for k, _ in kinds if isinstance(k, Frames)), None)
         self.search = image.search if image else None
         self.camera = image.source if image and isinstance(image.source, TopicSource) else None
-        self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds),
-                              self.selection.heading, self.selection.balancer,
-                              max_age=param('window')) \
-            if param('load_aware') and mode == 'select' else None
-        self.passive = TaskSamples(self.robot_id, self.selection) \
-            if self.selection.passive else None
-        if self.selection.balancer is not None:     # a rule per task: say why it moves
-            self.selection.balancer.on_move = lambda server, why: rospy.loginfo(
-                'robot %d: tasks go to server %d now (%s)', self.robot_id, server, why)
-        self.addresses, self.prober = robot_prober(self, servers)
+        load_aware = param('load_aware') and mode == 'select'
+        self.wire = RobotWire(self.robot_id, self.server_node, load_aware)
+        self.addresses, self.prober = self.wire.addresses, self.wire.prober
+        try:
+            self.robot = Robot(self.robot_id, servers, mode, param, kinds, transport=self.wire,
+                               events=self.wire, stamp=rospy.Time.now, fixed=fixed,
+                               limit=param('tasks'))
+        except ValueError as error:
+            raise ParamError(str(error))
+        self.wire.attach(self.robot)
+        self.selection, self.health = self.robot.selection, self.robot.health
+        self.policy, self.load = self.robot.policy, self.robot.load
+        self.streams = list(self.wire.streams.values())
         self.view = RankingSender(self.robot_id, self.selection, self.policy, param('view_rate')) \
             if param('sample_stream') == 'view' and mode == 'select' else None
         if self.view is not None:       # one check of its ranking per batch of probe answers
             self.view.coalesce, self.prober.after_answers = True, self.view.flush
-        self.start_delay = param('start_delay')
         self.summary_period = param('summary_period')
         manager = param('manager_node')   # None: flags from any node
         self.manager_node = rospy.resolve_name(manager) if manager else None
         self.flag_senders = SenderGate('robot %d' % self.robot_id, 'the manager',
                                        self.manager_node)
         self.providers = ServiceProviders(rospy.get_name())
-        # one retry budget and one series of task ids for all of the robot's streams
-        self.budget, self._task_ids = RetryBudget(param('retry_budget')), itertools.count(1)
-        self.streams = [task_stream(self, kind, rate, mode) for kind, rate in kinds]
-        self.joining = Joining(self.streams, self.selection.add_server)
         top = param('top_manager_node')     # grouped: servers and manager from its table
         self.announcements = GroupFollower(self.robot_id, servers, top, self.on_servers,
                                            self.on_group) if top else ServerAnnouncements(
@@ -108,7 +102,7 @@ class RobotNode(object):
         self.timers = []
 
     def start(self):
-        self._start_after = time.monotonic() + self.start_delay
+        self._start_after = time.monotonic() + self.robot.start_delay
         self.flag_sub = rospy.Subscriber(flag_topic(self.robot_id, param('flag_stream')),
                                          SelectionFlag, self.on_flag, queue_size=100,
                                          tcp_nodelay=True)
@@ -118,11 +112,12 @@ class RobotNode(object):
             self.camera.start()
         for stream in self.streams:
             stream.start()
-            for server in self.prober.servers:    # task topics connected before the first task
-                stream.add_server(server)
         if self.addresses is not None:
             self.addresses.start()
-        self.prober.start()
+        self.robot.start()      # task topics connected before the first task
+        self.prober.start(self.robot)
+        for stream in self.streams:
+            stream.pace()
         for part in (self.announcements, self.view):
             if part is not None:
                 part.start()
@@ -134,13 +129,8 @@ class RobotNode(object):
         rospy.loginfo('robot %d: mode %s%s, probing servers %s %s, tasks: %s',
                       self.robot_id, selection.mode,
                       ' (server %d)' % selection.fixed_server if selection.mode == 'fixed' else '',
-                      self.prober.servers, self.prober.plan.describe(),
+                      self.robot.servers, self.robot.plan.describe(),
                       ', '.join(s.flow.kind for s in self.streams))
-
-    def ready(self):
-        """Tasks start once ``~start_delay`` has passed and the target is known to be up."""
-        return (time.monotonic() >= self._start_after
-                and self.selection.ready(self.prober.answered))
 
     def server_node(self, server, refresh=False):
         """The node that is server ``server``, whose results alone count: with a fleet key
@@ -149,38 +139,12 @@ class RobotNode(object):
         return announced[1] if announced else self.providers.node(
             fleet(names.probe_service(server)), refresh)
 
-    def on_sample(self, server, ok, rtt, error, wait=None):
-        try:   # load-aware: the expected completion, round trip + wait
-            self.selection.on_sample(server, ok, rtt + wait if ok and wait else rtt,
-                                     wait=wait if ok else None)
-        except ValueError as err:
-            rospy.logwarn_throttle(5.0, 'robot %d: own probe of server %d: %s'
-                                   % (self.robot_id, server, err))
-        if ok:
-            self.health.probe_ok(server)
-            for stream in self.streams:     # a connection that lived through an outage
-                stream.heard(server)
-            if self.selection.balancer is not None and self.load is None:
-                self.selection.balancer.probed(server, rtt)   # (with a load: from RobotLoad)
-        else:
-            self.on_failure(server, 'probe failed: %s' % error, probe=True,
-                            late=error == STILL_OUT)
-
     def on_servers(self, added, removed):
         """Servers joined (candidates once their task topics connect) or left the fleet."""
         for server in added:
-            for stream in self.streams:
-                stream.add_server(server)
-            self.prober.add(server)
-            self.joining.add(server)
+            self.robot.add_server(server)
         for server in removed:
-            self.joining.discard(server)
-            self.prober.remove(server)
-            self.selection.remove_server(server)
-            if self.load is not None:
-                self.load.forget(server)
-            for stream in self.streams:
-                stream.remove_server(server)
+            self.robot.remove_server(server)
 
     def on_group(self, group, servers):
         """Grouped: the top manager put this robot in ``group`` of ``servers``; its
@@ -189,33 +153,18 @@ class RobotNode(object):
         self.flag_senders.expect(self.manager_node)
         self.selection.restrict(servers)
 
-    def on_failure(self, server, why, probe=False, late=False):
-        ejection = self.health.failure(server, why, probe, late)
-        if ejection is not None and ejection.seconds:
-            rospy.logwarn('robot %d: server %d ejected for %.3g s: %s', self.robot_id,
-                          server, ejection.seconds, why)
-        elif ejection is not None:
-            rospy.logwarn('robot %d: server %d has not answered yet (%s): a candidate once '
-                          'it answers', self.robot_id, server, why)
-
-    def on_busy(self, kind, server):
-        """``server`` refused a ``kind`` task as busy: last of the candidates for as long as
-        its load says a task there would take (at least 1 s)."""
-        expected = self.load.expected(kind)(server) if self.load is not None else None
-        self.health.busy(server, max(1.0, expected or 0.0))
-
     def on_flag(self, flag):
         if flag.robot_id != self.robot_id:
             return
         if not self.flag_senders.admits(flag, 'a flag'):
             return
-        refused = self.selection.on_flag(flag.robot_id, flag.server_id, flag.ranking)
+        refused = self.robot.on_flag(flag.robot_id, flag.server_id, flag.ranking)
         if refused:
             rospy.logwarn_throttle(5.0, 'robot %d: ignored a flag of %s: it %s'
                                    % (self.robot_id, publisher_of(flag), refused))
 
     def on_decision_timer(self, _event):
-        self.joining.check()
+        self.robot.admit_joined()
         local = self.selection.deciding_locally()
         starting = time.monotonic() < self._start_after + self.selection.manager_timeout
         if local and starting and not self.selection.flagged():

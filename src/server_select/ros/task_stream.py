@@ -1,11 +1,10 @@
-"""ROS wiring of one task stream of a robot (the logic is in core.task_flow).
+"""ROS wiring of one task stream of a robot (its logic: core.robot.stream).
 
 Like tf2_ros's ``TransformListener``, :class:`TaskStream` only owns the publishers,
-subscribers and timers, and forwards into its :class:`TaskFlow`.
+subscribers and its pacing thread, and forwards into the robot's stream.
 """
 
 import math
-import time
 
 import rospy
 
@@ -13,7 +12,7 @@ from server_select.core.config import names
 from server_select.core.util.pacer import Pacer
 from server_select.core.util.stats import format_ms, summarize
 from server_select.core.flow.outcome import STOPPED, cut_off
-from server_select.core.flow.task_flow import ENDED, OUTRUN, RETRIED, TaskFlow
+from server_select.core.flow.task_flow import ENDED, OUTRUN, RETRIED
 from server_select.msg import TaskReport
 from server_select.ros.graph import publisher_of, unheard
 from server_select.ros.senders import SenderGate
@@ -23,80 +22,61 @@ from server_select.ros.seal import SealedPublisher
 
 
 class TaskStream(object):
-    """Sends tasks of one ``kind`` (a :class:`~server_select.ros.plugins.TaskPlugin`) at
-    ``rate``.
+    """The wire of ``core`` (a :class:`~server_select.core.robot.stream.Stream` of robot
+    ``robot_id``): its task and result topics (``route``; none when the robot works
+    ``local``ly), its ``task_report``s, and the thread that paces it.
 
-    The stream waits until ``ready()`` and, unless the robot works ``local``ly, until its
-    task and result topics are connected, and until every node of ``listeners`` (a
-    recorder that must see every task) hears its task reports, and its tasks where it
-    subscribes to them; then it sends a task every ``1/rate`` s (at most ``limit``, 0: no
-    limit) and publishes one ``task_report`` per task. A result counts only if the node
-    ``expected_publisher(server, refresh)`` names published it (a
+    Before the first task the stream waits until every node of ``listeners`` (a recorder
+    that must see every task) hears its task reports, and its tasks where it subscribes to
+    them, and until its task and result topics reach a server. A result counts only if the
+    node ``expected_publisher(server, refresh)`` names published it (a
     :class:`~server_select.ros.senders.SenderGate`).
-    With ``load`` (a :class:`~server_select.core.load.robot_load.RobotLoad`: load-aware),
-    each attempt
-    tells its server the seconds its robot still waits (``budget``), and the load board
-    hears where tasks went. A send that ``max_in_flight`` held back goes as soon as a task
-    ends.
 
     One thread paces the stream (a :class:`~server_select.core.util.pacer.Pacer`): it
-    wakes when a task is due (every ``1/rate`` s of the wall clock, as the tasks'
-    deadlines), when an attempt's deadline, a hedge or a task's timeout comes, and when a
-    result changes what is due; between those it sleeps (a timer polling at 50 Hz cost a
-    robot about 1 % of this host's core by itself).
+    wakes when the stream's ``next_time`` comes and when a result changes what is due;
+    between those it sleeps (a timer polling at 50 Hz cost a robot about 1 % of this
+    host's core by itself).
     """
 
-    def __init__(self, robot_id, kind, rate, limit, ready, flow_args, local=False,
-                 expected_publisher=None, route=BroadcastRoute, load=None, listeners=()):
-        self.robot_id, self.kind, self.rate, self.limit = robot_id, kind, rate, limit
+    def __init__(self, robot_id, core, local=False, expected_publisher=None,
+                 route=BroadcastRoute, listeners=()):
+        self.robot_id, self.core, self.flow = robot_id, core, core.flow
+        self.kind = core.kind
         self.listeners = list(listeners)
-        self.ready, self.local, self.load = ready, local, load
         self.senders = SenderGate('robot %d' % robot_id, 'server {key}',
                                   lookup=expected_publisher)
-        self.started = False
-        self._no_input_since = None
-        self.flow = TaskFlow(kind.kind, make=kind.make, publish=self._publish_task,
-                             check=kind.check, report=self._report, run_local=kind.run_local,
-                             clock=time.monotonic, **flow_args)
-        self.route = None if local else route(robot_id, kind, self.on_result)
+        self.route = None if local else route(robot_id, self.kind, self.on_result)
         self.node_of = expected_publisher
         self.report_pub = None
-        self.period = 1.0 / rate
-        self._next_send = None
-        self.pacer = Pacer(self._act, self._next_time, name='%s tasks' % kind.kind,
+        self.pacer = Pacer(self._act, core.next_time, name='%s tasks' % self.kind.kind,
                            on_error=self._on_error)
 
     def start(self):
+        """Its topics; then (:meth:`pace`) its thread, once the robot has started."""
         self.report_pub = SealedPublisher(fleet(names.TASK_REPORT_TOPIC), TaskReport,
                                           queue_size=100)
         if self.route is not None:
             self.route.start()
-        self._next_send = time.monotonic() + self.period
-        self.pacer.start()
 
-    def _next_time(self):
-        if self.flow.due():
-            return 0.0
-        wake = self.flow.next_wake()
-        return self._next_send if wake is None else min(wake, self._next_send)
+    def pace(self):
+        self.pacer.start()
 
     def _act(self):
         if rospy.is_shutdown():
             self.pacer.stop()
             return
-        now = time.monotonic()
-        if now >= self._next_send:      # steady: one period on; fallen behind: from now
-            self._next_send += self.period
-            if self._next_send <= now:
-                self._next_send = now + self.period
-            self.on_timer()
-        self.flow.tick()
-        if self.flow.due() and not rospy.is_shutdown():
-            self.flow.send_next(rospy.Time.now())
+        self.core.act()
 
     def _on_error(self, error):
         rospy.logerr_throttle(5.0, 'robot %d: %s tasks: %s: %s' % (
             self.robot_id, self.flow.kind, type(error).__name__, error))
+
+    def unready(self):
+        """What the first task still waits for on the wire ('': nothing)."""
+        deaf = self.deaf()
+        if deaf:
+            return '%s to hear them' % ', '.join(deaf)
+        return '' if self.wired() else 'a server'
 
     def wired(self):
         """Whether the first candidate's task topic and our result topic are connected."""
@@ -115,38 +95,11 @@ class TaskStream(object):
         return self.route is None or self.route.wired(
             server, self.node_of(server) if self.node_of else None)
 
-    def on_timer(self):
-        if rospy.is_shutdown() or (self.limit and self.flow.sent >= self.limit):
-            return
-        if not self.kind.ready():
-            # a camera slower than the task rate leaves some ticks without a frame: only
-            # a wait of two periods (at least 1 s) is worth a line
-            now = time.monotonic()
-            self._no_input_since = self._no_input_since or now
-            if now - self._no_input_since > max(1.0, 2.0 / self.rate):
-                rospy.loginfo_throttle(5.0, 'robot %d: no input for %s tasks from %s for '
-                                       '%.1f s' % (self.robot_id, self.flow.kind,
-                                                   self.kind.input,
-                                                   now - self._no_input_since))
-            return
-        self._no_input_since = None
-        if not self.started:
-            deaf = self.deaf()
-            if deaf or not (self.ready() and self.wired()):
-                rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for %s' % (
-                    self.robot_id, self.flow.kind, '%s to hear them' % ', '.join(deaf)
-                    if deaf else 'a server'))
-                return
-            self.started = True
-            rospy.loginfo('robot %d: sending %s tasks', self.robot_id, self.flow.kind)
-        self.flow.send_next(rospy.Time.now())
-
-    def _publish_task(self, request, server, budget):
+    def publish(self, request, server, budget):
+        """A task to ``server``; ``budget``: what it is told it has (None: nothing)."""
         request.server_id = server
-        if self.load is not None:
-            if hasattr(request, 'budget'):
-                request.budget = budget
-            self.load.sent(server, self.flow.kind)
+        if budget is not None and hasattr(request, 'budget'):
+            request.budget = budget
         self.route.publish(request, server)
 
     def on_result(self, result):
@@ -157,7 +110,7 @@ class TaskStream(object):
                                    result.server_id):
             return
         busy = bool(getattr(result, 'busy', False))
-        status = self.flow.resolve(result.task_id, result.server_id, result.ok, result.error,
+        status = self.core.resolve(result.task_id, result.server_id, result.ok, result.error,
                                    result, busy=busy).status
         if status == RETRIED or self.flow.due():     # a new deadline, or a held send may go
             self.pacer.poke()
@@ -179,7 +132,7 @@ class TaskStream(object):
                 % (self.robot_id, status, self.flow.kind, result.task_id, result.server_id,
                    publisher_of(result)))
 
-    def _report(self, outcome):
+    def report(self, outcome):
         msg = TaskReport(robot_id=self.robot_id, task_id=outcome.task_id, kind=outcome.kind,
                          server_id=outcome.server_id, answered_by=outcome.answered_by,
                          ok=outcome.ok, error=outcome.error, attempts=outcome.attempts,

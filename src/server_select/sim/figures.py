@@ -73,7 +73,7 @@ def figures(sim, variant):
                    if o.server_id >= 0]
         switches += sum(1 for a, b in zip(servers, servers[1:]) if a != b)
     minutes = (end - start) / 60.0
-    flows = [s.flow for r in robots for s in r.streams]
+    flows = [s.flow for r in robots for s in r.robot.streams]
     sent = sum(f.sent for f in flows)
     extra = sum(f.resent + f.hedged + f.replicated for f in flows)
     answers = sim.answers[variant]
@@ -83,6 +83,6 @@ def figures(sim, variant):
         percentile(times, 99) if times else None, sum(1 for o in outcomes if not o.ok),
         switches / minutes / max(1, len(robots)), _reaction(sim, robots, by_robot),
         extra / float(sent) if sent else 0.0,
-        sum(r.probes for r in robots) / end / max(1, len(robots)),
+        sum(r.robot.probes for r in robots) / end / max(1, len(robots)),
         sum(1 for o in outcomes if o.ok and o.rtt <= sim.timeout) / (end - start),
         answers[True] / float(done) if done else None)
