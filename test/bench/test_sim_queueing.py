@@ -9,7 +9,7 @@ import pytest
 
 from server_select.sim.events import EventLoop, Streams
 from server_select.sim.server import SimServer
-from server_select.sim.robot import Task
+from server_select.sim.tasks import Task
 from server_select.testbed.scenario import Host
 
 

@@ -12,7 +12,7 @@ from server_select.sim.model import Model
 from server_select.sim.network import Network
 from server_select.sim.run import simulate, variant
 from server_select.sim.server import SimServer
-from server_select.sim.robot import Task
+from server_select.sim.tasks import Task
 from server_select.testbed.scenario import Scenario
 
 

@@ -4,55 +4,20 @@ robot's transport over the modelled network (probes, tasks and results as transf
 TCP's stalled connections renewed as the node renews them) and its wake-ups, as the
 node's threads are (one for probe rounds, one per task stream)."""
 
-import collections
 import functools
 
 from server_select.core.flow.task_flow import ENDED
 from server_select.core.robot.robot import Robot
 from server_select.core.robot.world import Events, Transport
-from server_select.core.selection.rank import NO_SERVER
 from server_select.sim.events import Wakeup
-
-PROBE_BYTES = 120          # a LatencyProbe request or answer
-
-Kind = collections.namedtuple('Kind', 'name rate newest_wins bytes size')
-Kind.__doc__ = """A task stream: kind, tasks per second, whether the newest wins (frames),
-bytes of a task and of its result, values per task (sort)."""
-Task = collections.namedtuple('Task', 'robot task_id kind work bytes')
+from server_select.sim.oracle import OracleFlags
+from server_select.sim.tasks import PROBE_BYTES, TaskKind
 
 
-class _TaskKind(object):
-    """A :class:`Kind` as the robot's stream takes it: tasks whose work the model draws."""
-    run_local, input = None, 'the simulation'
-
-    def __init__(self, kind, robot_id, model, rng):
-        self.kind, self.newest_wins, self._spec = kind.name, kind.newest_wins, kind
-        self._robot_id, self._model, self._rng = robot_id, model, rng
-
-    def make(self, task_id, stamp):
-        work = self._model.work(self.kind, self._rng, self._spec.size)
-        return Task(self._robot_id, task_id, self.kind, work, self._spec.bytes), None
-
-    def check(self, result, context):
-        return None
-
-    def ready(self):
-        return True
-
-
-class _Records(Events):
-    """Where the simulated robot's task reports go: the simulation's records."""
-
-    def __init__(self, sim, robot_id):
-        self.sim, self.robot_id = sim, robot_id
-
-    def report(self, outcome):
-        self.sim.report(self.robot_id, outcome)
-
-
-class SimRobot(Transport):
+class SimRobot(Transport, Events):
     """Robot ``host`` (a scenario Host) of simulation ``sim`` (its loop, network, servers,
-    random streams, model and records), with parameters ``get(name)`` and ``kinds``;
+    random streams, model and records, where its task reports go), with parameters
+    ``get(name)`` and ``kinds``;
     ``scenario_id``: the scenario's robot it is (its links, its oracle, its random streams:
     side by side, every variant's copy meets the same tasks)."""
 
@@ -61,23 +26,21 @@ class SimRobot(Transport):
         self.sim, self.host, self.id, self.loop = sim, host, host.id, sim.loop
         self.scenario_id = host.id if scenario_id is None else scenario_id
         self.oracle = oracle
-        rngs = sim.streams.rng
-        random = functools.partial(self._random, rngs)
-        task_kinds = [(_TaskKind(k, self.id, sim.model, random('tasks/' + k.name)), k.rate)
-                      for k in kinds]
+        task_kinds = [(TaskKind(k, self.id, sim.model, self._random('tasks/' + k.name)),
+                       k.rate) for k in kinds]
         self.robot = Robot(self.id, servers, get('mode'), get, task_kinds, transport=self,
-                           events=_Records(sim, self.id), clock=self.loop.now,
-                           random=random, fixed=fixed, rule_args=rule_args)
+                           events=self, clock=self.loop.now,
+                           random=self._random, fixed=fixed, rule_args=rule_args)
         self.streams = self.robot.streams
         self._round = Wakeup(self.loop, self._probe_round)
         self._wakes = [Wakeup(self.loop, functools.partial(self._act, s)) for s in self.streams]
         self._to, self._from = {}, {}  # server -> connection for tasks, for results
-        self._flagged = None
 
-    def _random(self, rngs, purpose):
-        if purpose == 'rule':
-            return rngs('rule', self.id)
-        return rngs('tasks', self.scenario_id, purpose.partition('/')[2])
+    def _random(self, purpose):
+        """The run's seeded stream for the rule's draws, or a kind's tasks."""
+        rng = self.sim.streams.rng
+        return rng('rule', self.id) if purpose == 'rule' else \
+            rng('tasks', self.scenario_id, purpose.partition('/')[2])
 
     def start(self):
         self.robot.start()
@@ -85,17 +48,16 @@ class SimRobot(Transport):
         for stream, wake in zip(self.streams, self._wakes):
             wake.request(stream.next_time())
         if self.oracle:
-            self._oracle_flag()
+            OracleFlags(self.loop, self.sim.scenario, self.scenario_id, self.robot).start()
 
-    def _oracle_flag(self):
-        """The oracle's flags: 20 Hz, each change (the oracle node's update rate)."""
-        now = self.loop.now()
-        ranked, _ = self.sim.scenario.ranking(self.scenario_id, now)
-        servers = [s for _, s in ranked]
-        if servers != self._flagged or int(now) != int(now - 0.05):
-            self._flagged = servers
-            self.robot.on_flag(self.id, servers[0] if servers else NO_SERVER, servers)
-        self.loop.after(0.05, self._oracle_flag)
+    def join(self, server_id):
+        """Server ``server_id`` joined the fleet (as membership tells the node)."""
+        self.robot.add_server(server_id)
+        self._round.request(self.robot.next_probe_time())
+
+    def leave(self, server_id):
+        """Server ``server_id`` left the fleet."""
+        self.robot.remove_server(server_id)
 
     # -- the robot's wake-ups -------------------------------------------------------------
     def _probe_round(self):
@@ -108,6 +70,9 @@ class SimRobot(Transport):
 
     def _schedule(self, stream):
         self._wakes[self.streams.index(stream)].request(stream.next_time())
+
+    def report(self, outcome):
+        self.sim.report(self.id, outcome)
 
     # -- the transport: probes ------------------------------------------------------------
     def probe(self, server_id, seq, kinds, rates):

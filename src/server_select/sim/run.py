@@ -21,7 +21,7 @@ from server_select.sim.events import EventLoop, Streams
 from server_select.sim.network import Network
 from server_select.sim.robot import SimRobot
 from server_select.sim.server import SimServer
-from server_select.sim.robot import Kind
+from server_select.sim.tasks import Kind
 from server_select.testbed.suite import MEASURE_FROM, VARIANTS, Variant
 from server_select.testbed.suite_scenario import REPLICA
 

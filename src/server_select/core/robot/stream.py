@@ -28,7 +28,7 @@ class Stream(object):
         self.flow = TaskFlow(
             kind.kind, get('task_timeout'),
             candidates=functools.partial(selection.candidates, kind.kind), make=kind.make,
-            publish=self._publish, check=kind.check, report=robot.events.report,
+            publish=self._publish, check=kind.check, report=self._report,
             run_local=kind.run_local, on_failure=robot.on_failure,
             on_success=robot.health.task_ok,
             deadlines=attempts.from_params(get, kind.kind, rate, kind.newest_wins, robot.load),
@@ -93,6 +93,9 @@ class Stream(object):
             load.sent(server, self.kind.kind)
         self.robot.transport.send_task(self.kind.kind, request, server,
                                        budget if load is not None else None)
+
+    def _report(self, outcome):
+        self.robot.events.report(outcome)
 
     def resolve(self, task_id, server, ok, error='', result=None, busy=False):
         """An answer for ``task_id`` from ``server``: the flow's
