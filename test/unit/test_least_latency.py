@@ -33,8 +33,9 @@ def feed(rule, clock, answers, rounds=5):
 def send(rule, servers, kind='image', answered=True):
     """Ask where a task goes and send it there (the move is made at the send); ``answered``:
     its answer is in at once (it is no longer in flight there)."""
-    server = rule.order(servers, kind)[0]
-    rule.started(server, kind)
+    order = rule.order(servers, kind)
+    server = order[0]
+    rule.started(server, kind, order=order)
     if answered:
         rule.ended(server)
     return server

@@ -150,6 +150,7 @@ def test_heading_names_where_the_next_task_goes_without_deciding_anew():
     s.health.probe_ok(2)
     s.health.failure(2, 'task timeout')               # ejected: the next candidate
     assert s.heading() == 3
+    s.health.started(3)                               # a task went there
     clock.now += 3.5                                  # the flag is stale: the robot's own
     for server, rtt in ((1, 0.004), (3, 0.009)):      # choice, once it has made one;
         s.on_sample(server, True, rtt)                # until then the last one's
@@ -171,6 +172,7 @@ def test_an_empty_window_keeps_the_server_tasks_went_to_while_nothing_speaks_aga
     s.health.probe_ok(2)
     s.on_flag(1, 2, [2])
     assert s.candidates() == [2]
+    s.health.started(2)                               # a task went there
     clock.now += 6.0            # the robot stalled: its window and the flag are empty, old
     s.on_flag(1, NO_SERVER, [])
     assert s.candidates() == [2] and s.heading() == 2

@@ -75,13 +75,14 @@ class Pending(object):
         self.hedged = False
         self.open = set()       # servers of attempts not ended yet (no answer, no deadline)
 
-    def attempt(self, server, now, observer=None, kind=None):
-        """An attempt at ``server`` starts ``now`` (``observer.started(server, kind,
-        first)``: ``first`` for the task's first attempt)."""
+    def attempt(self, server, now, observer=None, kind=None, order=None):
+        """An attempt at ``server``, chosen from ``order``, starts ``now``
+        (``observer.started(server, kind, first, order)``: ``first`` for the task's first
+        attempt)."""
         self.attempts.append((server, now))
         self.open.add(server)
         if observer is not None:
-            observer.started(server, kind, len(self.attempts) == 1)
+            observer.started(server, kind, len(self.attempts) == 1, order)
 
     def end(self, server, rtt=None, observer=None):
         """The attempt at ``server`` ended, once: ``observer.ended(server, rtt)``; None

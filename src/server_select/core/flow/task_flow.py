@@ -65,7 +65,8 @@ class TaskFlow(Timing):
         finds them all out is held back (no task is made) until one ends (:meth:`due`).
     :param newest_wins: a task whose attempt deadline passes, or that is refused as busy,
         while a newer one is held back ends there instead of going elsewhere.
-    :param attempts: told of every attempt: ``started(server)`` when it is sent,
+    :param attempts: told of every attempt: ``started(server, kind, first, order)`` when
+        it is sent (``order``: the candidates it was chosen from),
         ``ended(server, rtt)`` once, when its answer came (``rtt``: since it was sent), it
         failed (an error, or its deadline passed: ``rtt`` is how long that took), or it
         stopped counting (``rtt`` None: a busy answer, another attempt won, the task
@@ -151,17 +152,17 @@ class TaskFlow(Timing):
             if candidates[0] != self._last_first and self._last_first is not None:
                 self.switches += 1
             self._last_first = candidates[0]
-            self._attempt(pending, candidates[0])
+            self._attempt(pending, candidates[0], candidates)
             for server in [s for s in candidates[1:] if s != LOCAL][:self.copies - 1]:
                 self.replicated += 1
-                self._attempt(pending, server)
+                self._attempt(pending, server, candidates)
         if self.budget is not None:
             self.budget.sent()
         return task_id
 
-    def _attempt(self, pending, server):
+    def _attempt(self, pending, server, order):
         now = self._clock()
-        pending.attempt(server, now, self._attempts, self.kind)
+        pending.attempt(server, now, self._attempts, self.kind, order)
         pending.deadline = min(pending.started + self.timeout,
                                now + self.deadlines.seconds(server))
         self._publish(pending.request, server, self.deadlines.budget(

@@ -54,7 +54,8 @@ class Timing(object):
         where the load says it can still be done in time."""
         tried = set(s for s, _ in pending.attempts)
         elapsed = self._clock() - pending.started
-        untried = [s for s in self._candidates() if s not in tried and s != LOCAL
+        order = self._candidates()
+        untried = [s for s in order if s not in tried and s != LOCAL
                    and not self.deadlines.too_busy(s, elapsed)]
         if not untried:
             return False
@@ -65,7 +66,7 @@ class Timing(object):
             self.hedged += 1
         else:
             self.resent += 1
-        self._attempt(pending, untried[0])
+        self._attempt(pending, untried[0], order)
         return True
 
     def _gives_way(self):

@@ -16,6 +16,22 @@ from server_select.core.flow import attempts
 from server_select.core.flow.task_flow import HEDGE_QUANTILE, TaskFlow
 
 
+class _Attempts(object):
+    """Every attempt told to the robot's rule (its moves, its own state) and to its health
+    table (where tasks went)."""
+
+    def __init__(self, *observers):
+        self.observers = [o for o in observers if o is not None]
+
+    def started(self, server, kind=None, first=True, order=None):
+        for observer in self.observers:
+            observer.started(server, kind, first, order)
+
+    def ended(self, server, rtt=None):
+        for observer in self.observers:
+            observer.ended(server, rtt)
+
+
 class Stream(object):
     """The stream of ``kind`` tasks (see :class:`~server_select.core.robot.robot.Robot`)
     at ``rate`` a second, task ids from ``ids``, at most ``limit`` tasks (0: no limit)."""
@@ -35,7 +51,8 @@ class Stream(object):
             ids=ids, clock=robot.clock, hedge=HEDGE_QUANTILE if get('hedge') else None,
             budget=robot.budget, max_in_flight=get('max_in_flight'),
             newest_wins=kind.newest_wins, on_busy=functools.partial(robot.on_busy, kind.kind),
-            attempts=balancer, copies=balancer.copies if balancer is not None else 1,
+            attempts=_Attempts(balancer, robot.health),
+            copies=balancer.copies if balancer is not None else 1,
             on_answer=functools.partial(robot.on_task_answer, kind.kind)
             if robot.baseline is not None else None)
         self.started = False

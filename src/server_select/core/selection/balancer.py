@@ -18,6 +18,18 @@ in flight (queued + in service), ``{kind: work s}``, workers, when it arrived, t
 share of the workers' time the other robots' tasks take, and ``{kind: the standard error
 of the work}``."""
 
+
+class Order(list):
+    """The servers in a rule's order for the next task (the first gets it), with
+    ``reasons``: ``{server: why the rule named it}`` (empty: a peer's go unexplained). A
+    rule's answer to an ask: what it will do when the task is sent (:meth:`Balancer.started`
+    with this order) is decided here, and asking changes nothing."""
+
+    def __init__(self, servers, reasons=None):
+        list.__init__(self, servers)
+        self.reasons = reasons or {}
+
+
 Decision = collections.namedtuple('Decision', 'server reason estimates')
 Decision.__doc__ = """Where a task would go and why, with what the rule compared: ``{server:
 its estimate}`` (None: no answer in the window). The fleet's rule's ``choose`` returns one."""
@@ -25,7 +37,8 @@ its estimate}`` (None: no answer in the window). The fleet's rule's ``choose`` r
 
 class Balancer(object):
     """The state every peer keeps: this robot's attempts out per server, the newest probe
-    answer of each, and a random source (``rng``). Thread-safe."""
+    answer of each, and a random source (``rng``), drawn from once per attempt (``draw``:
+    the next decision's numbers, so that asking draws nothing). Thread-safe."""
 
     name = None
     copies = 1
@@ -39,8 +52,12 @@ class Balancer(object):
         self.probes = {}                     # server -> its newest ProbeAnswer
         self.last = None                     # where the last task went
         self.why = ''                        # why tasks go there (the move's reason)
-        self.reasons = {}                    # server -> why the last ask named it
         self.on_move = None                  # on_move(server, why): the rule moved, why
+        self.draw = self._draws()
+
+    def _draws(self):
+        """The random numbers a decision may use (two: a pair of servers)."""
+        return self.rng.random(), self.rng.random()
 
     def probed(self, server, rtt, load=None):
         """A good probe answer: round trip ``rtt`` and ``load`` (a Load, or None)."""
@@ -56,22 +73,31 @@ class Balancer(object):
     def _probed(self, answer):
         """Subclasses: a probe answer arrived (lock held)."""
 
-    def started(self, server, kind=None, first=True):
-        """An attempt of a ``kind`` task is sent to ``server``; the ``first`` of a task
-        makes it where tasks go (asking :meth:`order` is not sending: a robot may ask
+    def started(self, server, kind=None, first=True, order=None):
+        """An attempt of a ``kind`` task is sent to ``server``; the ``first`` of a task,
+        chosen from ``order`` (what :meth:`order` answered), makes it where tasks go, for
+        the reason the order gave (asking :meth:`order` is not sending: a robot may ask
         where a task would go)."""
         moved = None
         with self._lock:
+            now = self._clock()
             self.out[server] += 1
-            self._started(server, kind, self._clock())
+            self._started(server, kind, now)
+            if first and order is not None:
+                self._chosen(server, kind, now, order)
+            self.draw = self._draws()
             if first and server != self.last:
-                moved = self.reasons.get(server)     # (a peer's moves go unexplained)
+                moved = getattr(order, 'reasons', {}).get(server)   # (a peer's: unexplained)
                 self.last, self.why = server, moved or ''
         if moved is not None and self.on_move is not None:
             self.on_move(server, moved)
 
     def _started(self, server, kind, now):
         """Subclasses: an attempt was sent (lock held)."""
+
+    def _chosen(self, server, kind, now, order):
+        """Subclasses: a task's first attempt went to ``server``, chosen from ``order``
+        (lock held): what the choice changes in the rule's own state."""
 
     def ended(self, server, rtt=None):
         """An attempt at ``server`` ended: ``rtt`` its round trip (answered, or failed
@@ -90,10 +116,10 @@ class Balancer(object):
         (the first gets it; re-sends and hedges take the next)."""
         servers = list(servers)
         if not servers:
-            return []
+            return Order([])
         with self._lock:
             ordered = self._order(servers, kind, self._clock())
-        return ordered
+        return ordered if isinstance(ordered, Order) else Order(ordered)
 
     def _order(self, servers, kind, now):
         raise NotImplementedError
@@ -112,5 +138,9 @@ class Balancer(object):
         raise NotImplementedError
 
     def _two(self, servers):
-        """Two distinct servers drawn at random (one when there is one)."""
-        return self.rng.sample(servers, min(2, len(servers)))
+        """Two distinct servers drawn at random (one when there is one), by ``draw``."""
+        first = int(self.draw[0] * len(servers))
+        if len(servers) == 1:
+            return [servers[first]]
+        second = int(self.draw[1] * (len(servers) - 1))
+        return [servers[first], servers[second + (second >= first)]]

@@ -51,8 +51,9 @@ PEERS = ('p2c_peak_ewma', 'least_request', 'prequal', 'round_robin', 'replicate'
 class PeakEwma(object):
     """A peak-sensitive moving average of round trips (Finagle's ``PeakEwma`` cost, tower's
     ``RttEstimate``): a sample above the estimate replaces it; one below moves it by
-    ``1 - exp(-dt / tau)`` (``dt`` since the last update); a read decays it towards 0 the
-    same way (both implementations update with a 0 round trip on every read)."""
+    ``1 - exp(-dt / tau)`` (``dt`` since the last sample); a read sees it decayed towards
+    0 the same way. Both implementations store that decay on every read (an update with a
+    0 round trip); here a read stores nothing, so that asking is not deciding."""
 
     def __init__(self, now, tau=10.0, initial=1.0):
         if not tau > 0:
@@ -68,8 +69,7 @@ class PeakEwma(object):
         self.stamp = now
 
     def get(self, now):
-        self.observe(0.0, now)
-        return self.estimate
+        return self.estimate * math.exp(-max(0.0, now - self.stamp) / self.tau)
 
 
 def _pair_first(drawn, servers, key):
@@ -88,16 +88,27 @@ class P2CPeakEwma(Balancer):
         self.tau, self.initial = tau, initial
         self.ewma = {}
 
-    def _estimate(self, server, now):
-        if server not in self.ewma:     # from when the robot first meets it, as in tower
+    def _met(self, server, now):
+        """``server``'s estimate, kept from when the robot first meets it (its first probe
+        answer or attempt), as in tower."""
+        if server not in self.ewma:
             self.ewma[server] = PeakEwma(now, self.tau, self.initial)
         return self.ewma[server]
 
+    def _probed(self, answer):
+        self._met(answer.server, answer.at)
+
+    def _started(self, server, kind, now):
+        self._met(server, now)
+
     def _ended(self, server, rtt, now):
-        self._estimate(server, now).observe(rtt, now)
+        self._met(server, now).observe(rtt, now)
 
     def cost(self, server, now):
-        return self._estimate(server, now).get(now) * (self.out[server] + 1)
+        """Its estimate x (attempts out + 1); one not met yet at the initial estimate."""
+        ewma = self.ewma.get(server)
+        estimate = ewma.get(now) if ewma is not None else self.initial
+        return estimate * (self.out[server] + 1)
 
     def _order(self, servers, kind, now):
         costs = dict((s, self.cost(s, now)) for s in servers)
@@ -120,14 +131,21 @@ class RoundRobin(Balancer):
         Balancer.__init__(self, **kwargs)
         self.current = collections.defaultdict(float)
 
+    def _weights(self, servers):
+        return dict((s, self.probes[s].workers if s in self.probes else 1) for s in servers)
+
     def _order(self, servers, kind, now):
-        weights = dict((s, self.probes[s].workers if s in self.probes else 1)
-                       for s in servers)
-        for s in servers:
-            self.current[s] += weights[s]
-        turn = max(servers, key=lambda s: (self.current[s], -servers.index(s)))
-        self.current[turn] -= sum(weights.values())
+        weights = self._weights(servers)
+        turn = max(servers, key=lambda s: (self.current[s] + weights[s], -servers.index(s)))
         return [turn] + [s for s in servers if s != turn]
+
+    def _chosen(self, server, kind, now, order):
+        """The turn taken: every server asked about gains its weight, the one sent to
+        loses the total."""
+        weights = self._weights(list(order))
+        for s, weight in weights.items():
+            self.current[s] += weight
+        self.current[server] -= sum(weights.values())
 
 
 class Replicate(Balancer):
@@ -173,21 +191,40 @@ class Prequal(Balancer):
         limit = percentile(sorted(e[0].rif for e in entries), 100 * self.q)
         return [e for e in entries if e[0].rif > limit]
 
-    def _order(self, servers, kind, now):
+    def _ranked(self, servers, kind, now):
+        """``(the pool's fresh answers, those of ``servers`` in the rule's order, their
+        rank)``; None for the rank with fewer than 2 such answers."""
         usable = set(servers)
-        self.pool = [e for e in self.pool if now - e[0].at <= self.max_age]
-        entries = [e for e in self.pool if e[0].server in usable]
+        pool = [e for e in self.pool if now - e[0].at <= self.max_age]
+        entries = [e for e in pool if e[0].server in usable]
         if len(entries) < 2:
-            first = self.rng.choice(servers)
-            return [first] + [s for s in servers if s != first]
+            return pool, entries, None
         hot = self.hot(entries)
         cold = [e for e in entries if not any(e is h for h in hot)]
 
         def rank(e):   # the rule's order: cold by latency, then hot by RIF
             return (0, self.latency(e[0], kind), e[0].rif) if any(e is c for c in cold) \
                 else (1, e[0].rif, self.latency(e[0], kind))
-        ranked = sorted(entries, key=rank)
-        chosen = ranked[0]
+        return pool, sorted(entries, key=rank), rank
+
+    def _order(self, servers, kind, now):
+        _, ranked, rank = self._ranked(servers, kind, now)
+        if rank is None:
+            first = servers[int(self.draw[0] * len(servers))]
+            return [first] + [s for s in servers if s != first]
+        order = []
+        for e in ranked:
+            if e[0].server not in order:
+                order.append(e[0].server)
+        return order + [s for s in servers if s not in order]
+
+    def _chosen(self, server, kind, now, order):
+        """The pool's bookkeeping for a query: the answer used counts a use (gone after
+        ``reuse``), else one answer goes, oldest and worst in turn."""
+        self.pool, ranked, rank = self._ranked(list(order), kind, now)
+        chosen = next((e for e in ranked if e[0].server == server), None)
+        if rank is None or chosen is None:
+            return
         chosen[1] += 1
         if chosen[1] >= self.reuse:
             self.pool.remove(chosen)
@@ -195,11 +232,6 @@ class Prequal(Balancer):
             self.pool.remove(self.pool[0] if self._remove_oldest else
                              max(self.pool, key=rank))
             self._remove_oldest = not self._remove_oldest
-        order = []
-        for e in ranked:
-            if e[0].server not in order:
-                order.append(e[0].server)
-        return order + [s for s in servers if s not in order]
 
 
 _CLASSES = dict((c.name, c) for c in (P2CPeakEwma, LeastRequest, Prequal, RoundRobin,

@@ -69,7 +69,7 @@ class ServerHealth(object):
         self._clock = clock
         self._lock = threading.Lock()
         self._servers = dict((s, _Server()) for s in servers)
-        self._first = None     # the server order() put first last time it named one
+        self._first = None     # where the last task went first
 
     def add(self, server):
         """A new server: healthy."""
@@ -161,19 +161,26 @@ class ServerHealth(object):
         busy lately last (order kept otherwise); when none of them may, those ejected
         whose last probe was answered (panic), in the ranking's order. An empty
         ``ranking`` (no sample in the window: the robot, or its manager, stalled for
-        longer) stands for the server that came first last time: no news of a server is
-        not news against it."""
+        longer) stands for the server the last task went to: no news of a server is not
+        news against it. Asking changes nothing."""
         with self._lock:
             ranking = ranking or [s for s in [self._first] if s is not None]
         usable = [s for s in ranking if self.usable(s)]
         now = self._clock()
         with self._lock:      # (a server may have left since usable() looked)
             busy = set(s for s in usable if getattr(self._servers.get(s), 'busy_until', 0) > now)
-        ordered = [s for s in usable if s not in busy] + [s for s in usable if s in busy] \
+        return [s for s in usable if s not in busy] + [s for s in usable if s in busy] \
             if usable else self.panic(ranking)
-        with self._lock:
-            self._first = ordered[0] if ordered else self._first
-        return ordered
+
+    def started(self, server, kind=None, first=True, order=None):
+        """An attempt went to ``server`` (a task's ``first``: where tasks go now)."""
+        if first:
+            with self._lock:
+                self._first = server
+
+    def ended(self, server, rtt=None):
+        """An attempt ended (nothing to learn here: answers and failures come as
+        :meth:`task_ok` and :meth:`failure`)."""
 
     def panic(self, ranking):
         """The servers of ``ranking`` that are out (ejected, or on probation without its

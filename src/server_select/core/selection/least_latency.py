@@ -17,7 +17,7 @@ import collections
 import math
 import statistics
 
-from server_select.core.selection.balancer import Balancer, Decision
+from server_select.core.selection.balancer import Balancer, Decision, Order
 from server_select.core.selection.rank import by_estimate
 from server_select.core.util.stats import mean_error, median_error
 
@@ -49,7 +49,6 @@ class LeastLatency(Balancer):
         self.window, self.on = float(window), set(MECHANISMS) - set(off)
         self.answers = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
         self.sends = collections.defaultdict(collections.deque)   # kind -> when sent
-        self.draw = self.rng.random()          # the next decision's random number
         self.least_work = {}                   # kind -> the least work any server reported
 
     def _probed(self, answer):
@@ -63,7 +62,9 @@ class LeastLatency(Balancer):
         times.append(now)
         while now - times[0] > RATE_HORIZON:
             times.popleft()
-        self.draw = self.rng.random()
+
+    def _draws(self):
+        return self.rng.random()     # the next decision's random number
 
     def _sent(self, kind, now):
         """How many ``kind`` tasks the robot sent in the last :data:`RATE_HORIZON` s."""
@@ -111,11 +112,11 @@ class LeastLatency(Balancer):
 
     def _order(self, servers, kind, now):
         decision = self._decide(servers, kind, now)
-        self.reasons = {decision.server: decision.reason}
         known = decision.estimates
-        return [decision.server] + sorted(
+        return Order([decision.server] + sorted(
             (s for s in servers if s != decision.server),
-            key=lambda s: (known.get(s) is None, known[s].latency if known.get(s) else 0.0))
+            key=lambda s: (known.get(s) is None, known[s].latency if known.get(s) else 0.0)),
+            {decision.server: decision.reason})
 
     def _decide(self, servers, kind, now):
         here = self.last if self.last in servers else None
