@@ -17,9 +17,8 @@ def least_latency(clock, seed=1, **kwargs):
     return balancers.make('least_latency', rng=random.Random(seed), clock=clock, **kwargs)
 
 
-def load(rif=0, work=0.1, utilization=0.0, error=None):
-    return Load(rif, 0, 1, 0.0, {'image': work}, utilization,
-                {'image': error} if error is not None else None)
+def load(rif=0, work=0.1, utilization=0.0):
+    return Load(rif, 0, 1, 0.0, {'image': work}, utilization)
 
 
 def feed(rule, clock, answers, rounds=5):
