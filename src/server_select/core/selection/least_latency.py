@@ -53,7 +53,10 @@ class LeastLatency(Balancer):
 
     def _probed(self, answer):
         others = max(0, answer.rif - self.out[answer.server])
-        self.answers[answer.server].append((answer, others))
+        answers = self.answers[answer.server]
+        answers.append((answer, others))
+        while answer.at - answers[0][0].at > self.window:   # out of every later window
+            answers.popleft()
         for kind, work in answer.service.items():
             self.least_work[kind] = min(work, self.least_work.get(kind, work))
 
@@ -80,21 +83,22 @@ class LeastLatency(Balancer):
             now = self._clock()
             return sum(self._sent(kind, now) for kind in self.sends) / RATE_HORIZON
 
-    def estimate(self, server, kind, now):
+    def estimate(self, server, kind, now, rate=None):
         """The :class:`Estimate` of a ``kind`` task at ``server`` from its answers of the
-        window (None: none)."""
+        window (None: none); ``rate``: the robot's ``kind`` tasks a second (:meth:`rate`)."""
         answers = [(a, o) for a, o in self.answers.get(server, ()) if now - a.at <= self.window]
         if not answers:
             return None
+        rate = self.rate(kind, now) if rate is None else rate
         newest = answers[-1][0]
         # a server that has not done this kind yet: the least work seen for it (what the
         # task takes where nothing slows it; one task there tells)
         work = newest.service.get(kind, self.least_work.get(kind, 0.0))
         workers = float(newest.workers)
-        mine = self.rate(kind, now) * work / workers
+        mine = rate * work / workers
         rtts = [a.rtt for a, _ in answers]
         queued = [others * work / workers for _, others in answers]
-        tries = statistics.fmean(max(1.0, a.utilization + mine) for a, _ in answers) \
+        tries = math.fsum([max(1.0, a.utilization + mine) for a, _ in answers]) / len(answers) \
             if 'tries' in self.on else 1.0
         if 'robust' in self.on:     # a late answer or two (a retransmission, a hang ending)
             rtt, rtt_error = median_error(rtts)   # must not hold the mean up for a window
@@ -121,7 +125,8 @@ class LeastLatency(Balancer):
     def _decide(self, servers, kind, now):
         here = self.last if self.last in servers else None
         gone = self.last is not None and here is None
-        estimates = self._pooled(dict((s, self.estimate(s, kind, now)) for s in servers))
+        rate = self.rate(kind, now)
+        estimates = self._pooled(dict((s, self.estimate(s, kind, now, rate)) for s in servers))
         known = dict((s, e) for s, e in estimates.items() if e is not None)
         if not known:
             pick = here if here is not None else servers[int(self.draw * len(servers))]
@@ -157,7 +162,8 @@ class LeastLatency(Balancer):
         """``{server: Estimate or None}`` for the kind the robot sent most of lately."""
         counts = dict((k, self._sent(k, now)) for k in self.sends)
         kind = max(sorted(counts, key=str), key=counts.get) if any(counts.values()) else None
-        return self._pooled(dict((s, self.estimate(s, kind, now)) for s in servers))
+        rate = self.rate(kind, now)
+        return self._pooled(dict((s, self.estimate(s, kind, now, rate)) for s in servers))
 
     def contenders(self, servers):
         """The servers worth probing often, by the estimates the choice uses: where tasks
