@@ -12,7 +12,6 @@ other model constants (``config/sim/model.yaml`` keeps the chosen ones).
 import argparse
 import functools
 import itertools
-import multiprocessing
 import os
 import statistics
 import sys
@@ -21,7 +20,7 @@ import yaml
 
 from server_select.core.util.tables import markdown_table
 from server_select.ros.paths import package_file
-from server_select.sim import league
+from server_select.sim import cells, league
 from server_select.sim.figures import figures
 from server_select.sim.model import Model
 from server_select.sim.run import simulate
@@ -63,21 +62,22 @@ def _run(job):
     return _network(job) if job[0] in league.NETWORK else _capacity(job)
 
 
-def measure(reference, seeds, constants, processes):
-    """``{(part, scenario, variant): {figure: [per seed]}}`` of the simulator."""
+def measure(reference, seeds, constants, scheduler=None, processes=None):
+    """``{(part, scenario, variant): {figure: [per seed]}}`` of the simulator (its cells on
+    :mod:`~server_select.sim.cells`)."""
     jobs = [(name, seed, constants) for name in reference['network'] for seed in seeds]
     jobs += [(case, variant, seed, constants) for case, variants in
              reference['capacity'].items() for variant in variants for seed in seeds]
     sims = {}
-    with multiprocessing.Pool(processes) as pool:
-        for part, name, seed, values in pool.imap_unordered(_run, jobs):
-            for variant, value in values.items():
-                figures_of = sims.setdefault((part, name, variant), {})
-                if part == 'network':
-                    figures_of.setdefault('mean', []).append(1e3 * value)
-                else:
-                    figures_of.setdefault('mean', []).append(1e3 * value[0])
-                    figures_of.setdefault('share', []).append(100 * value[1])
+    log = functools.partial(print, file=sys.stderr, flush=True)
+    for part, name, seed, values in cells.run(_run, jobs, scheduler, processes, log):
+        for variant, value in values.items():
+            figures_of = sims.setdefault((part, name, variant), {})
+            if part == 'network':
+                figures_of.setdefault('mean', []).append(1e3 * value)
+            else:
+                figures_of.setdefault('mean', []).append(1e3 * value[0])
+                figures_of.setdefault('share', []).append(100 * value[1])
     return sims
 
 
@@ -115,7 +115,7 @@ def main(argv=None):
     parser.add_argument('--probe-ms', type=float)
     parser.add_argument('--cpu-factor', type=float)
     parser.add_argument('--part', choices=('all', 'network', 'capacity'), default='all')
-    parser.add_argument('--processes', type=int, default=os.cpu_count() or 1)
+    cells.add_arguments(parser)
     parser.add_argument('--out', help='also write calibration.md here')
     args = parser.parse_args(argv)
     with open(package_file('config', 'sim', 'testbed.yaml')) as stream:
@@ -124,7 +124,8 @@ def main(argv=None):
         if args.part not in ('all', part):
             reference[part] = {}
     sims = measure(reference, range(1, args.seeds + 1),
-                   (args.hop_ms, args.probe_ms, args.cpu_factor), args.processes)
+                   (args.hop_ms, args.probe_ms, args.cpu_factor), args.scheduler,
+                   args.processes)
     rows, misses, checked, kept, orderings = compare(reference, sims)
     text = markdown_table(['cell', 'variant', 'testbed median (min-max)',
                            'simulator median [95 % interval]', 'sim / testbed',

@@ -13,7 +13,7 @@ import sys
 
 import yaml
 
-from server_select.sim import league, report
+from server_select.sim import cells, league, report
 from server_select.sim.model import Model
 from server_select.sim.report import ORACLE
 from server_select.testbed.scenario import Scenario, ScenarioError
@@ -31,7 +31,7 @@ def parse(argv):
     parser.add_argument('--first-seed', type=int, default=1)
     parser.add_argument('--together', action='store_true', help='the variants side by side '
                         'on shared servers, as the testbed runs them (one run per seed)')
-    parser.add_argument('--processes', type=int, default=os.cpu_count() or 1)
+    cells.add_arguments(parser)
     parser.add_argument('--out', default='simulation')
     args = parser.parse_args(argv)
     if bool(args.scenario) == bool(args.from_bag):
@@ -60,7 +60,8 @@ def main(argv=None):
     options = league.parse(['--seeds', str(args.seeds), '--first-seed', str(args.first_seed),
                             '--scenarios', name, '--variants', ','.join(variants),
                             '--cases', '', '--processes', str(args.processes),
-                            '--out', args.out] + (['--together'] if args.together else []))
+                            '--out', args.out] + (['--together'] if args.together else []) +
+                           (['--scheduler', args.scheduler] if args.scheduler else []))
     results, _ = league.run(options, lambda text: print(text, file=sys.stderr))
     results.update(seeds=options.seeds, variants={'network': variants},
                    scenarios={'network': [short_name(name)]})

@@ -13,11 +13,11 @@ run's figures), ``league.md`` and ``league.png``; ``--scenarios``, ``--variants`
 generated: ``gen:1-200``; a variant may change its robots' parameters,
 ``fleet:hedge=false``: an ablation). With ``--together`` a network scenario's variants run
 side by side on shared servers, as the testbed's suite runs them (one run per seed).
+The cells run on dask.distributed (:mod:`~server_select.sim.cells`: ``--scheduler``).
 """
 
 import argparse
 import functools
-import multiprocessing
 import os
 import sys
 import time
@@ -26,7 +26,7 @@ from server_select.bench.capacity_cases import SCENARIOS as CAPACITY_SCENARIOS
 from server_select.bench.capacity_cases import TIMEOUT, WARMUP, scenario as capacity_scenario
 from server_select.bench.capacity_report import static_assignment
 from server_select.core.selection.balancers import PEERS
-from server_select.sim import generate, report
+from server_select.sim import cells, generate, report
 from server_select.sim.figures import figures
 from server_select.sim.model import Model
 from server_select.sim.run import simulate, variant
@@ -109,18 +109,14 @@ def jobs(args):
 
 
 def run(args, log=print):
-    """Every job of ``args``, on ``args.processes`` processes: ``{part: {scenario:
-    {variant: {seed: figures}}}}`` and the CPU seconds spent."""
+    """Every job of ``args``, on the engine ``args`` names (:mod:`~server_select.sim.cells`):
+    ``{part: {scenario: {variant: {seed: figures}}}}`` and the CPU seconds spent."""
     results, cpu = {'network': {}, 'capacity': {}}, 0.0
-    work = list(jobs(args))
-    with multiprocessing.Pool(args.processes) as pool:
-        for done, rows in enumerate(pool.imap_unordered(run_cell, work, chunksize=4), start=1):
-            for part, name, variant_name, seed, row, seconds in rows:
-                results[part].setdefault(short_name(name), {}).setdefault(
-                    variant_name, {})[seed] = row
-                cpu += seconds
-            if done % 200 == 0:
-                log('%d of %d runs' % (done, len(work)))
+    for rows in cells.run(run_cell, jobs(args), args.scheduler, args.processes, log):
+        for part, name, variant_name, seed, row, seconds in rows:
+            results[part].setdefault(short_name(name), {}).setdefault(
+                variant_name, {})[seed] = row
+            cpu += seconds
     return results, cpu
 
 
@@ -138,7 +134,7 @@ def parse(argv):
     parser.add_argument('--capacity-variants', type=_names, default=list(CAPACITY_VARIANTS))
     parser.add_argument('--together', action='store_true', help='network variants side by '
                         'side on shared servers (as the testbed runs them)')
-    parser.add_argument('--processes', type=int, default=os.cpu_count() or 1)
+    cells.add_arguments(parser)
     parser.add_argument('--out', default='results/league')
     args = parser.parse_args(argv)
     args.seeds = list(range(args.first_seed, args.first_seed + args.seeds))
@@ -164,9 +160,9 @@ def main(argv=None):
                               'capacity': args.cases})
     text = report.write(results, args.out)
     print(text)
-    print('%d seeds, %.0f s (%.0f CPU s on %d processes); %s' % (
-        len(args.seeds), time.monotonic() - start, cpu, args.processes,
-        os.path.join(args.out, 'league.md')))
+    print('%d seeds, %.0f s (%.0f CPU s on %s); %s' % (
+        len(args.seeds), time.monotonic() - start, cpu, args.scheduler or '%d processes'
+        % args.processes, os.path.join(args.out, 'league.md')))
     return 0
 
 
