@@ -13,6 +13,7 @@ import socket
 import statistics
 import struct
 import subprocess
+import threading
 import time
 import urllib.parse
 
@@ -188,3 +189,41 @@ def test_probes_naming_made_up_kinds_cost_nothing(server):
         return '100 probes of 5,000 kinds each, each refused with the reason'
     attack(server, 'probes with 500,000 made-up kinds', send)
     assert server.lines('on %s from %s' % (server.service, rospy.get_name()))
+
+
+def test_idle_sockets_hold_no_new_connection(server):
+    """Peers that connect to the server's TCPROS port and send nothing: a new connection
+    (a probe over a fresh one) is answered within 1 s meanwhile, and each idle socket is
+    closed once its handshake's deadline passes. (Before: rospy read every handshake on its
+    one accept thread, and the probe waited as long as the idle socket stayed open.)"""
+    idle = [socket.create_connection(server.tcpros_address(), 5.0) for _ in range(5)]
+    answered, took = [], []
+
+    def probe():
+        start = time.perf_counter()
+        rospy.ServiceProxy(server.service, LatencyProbe)(LatencyProbeRequest(robot_id=1))
+        took.append(time.perf_counter() - start)
+        answered.append(True)
+    try:
+        caller = threading.Thread(target=probe, daemon=True)
+        caller.start()
+        caller.join(5.0)
+        closed = 0
+        for sock in idle:
+            sock.settimeout(5.0)
+            try:
+                closed += sock.recv(1) == b''
+            except socket.timeout:  # still open
+                pass
+            except OSError:         # reset: closed too
+                closed += 1
+        show('idle sockets on server %d:' % SERVER, [{
+            'idle sockets': len(idle), 'probe over a new connection answered': bool(answered),
+            'its round trip ms': round(1e3 * took[0], 1) if took else None,
+            'idle sockets closed by the server': closed}])
+        assert answered and took[0] < 1.0, took
+        assert closed == len(idle)
+        assert wait_until(lambda: server.lines('no handshake within 2 s'), 5.0)
+    finally:
+        for sock in idle:
+            sock.close()

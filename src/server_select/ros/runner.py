@@ -11,7 +11,8 @@ from server_select.core.config import names
 from server_select.core.util import interrupts
 from server_select.core.config.params import ParamError
 from server_select.core.settings import PARAMS
-from server_select.ros import bounded_read, diagnostics, launch_args, params_in_force, seal
+from server_select.ros import (bounded_read, diagnostics, handshake, launch_args, params_in_force,
+                               seal)
 from server_select.ros.master_watch import MasterWatch
 from server_select.ros.node import _LIVE, end_parent_launch, fleet, param, quiet_logging
 
@@ -42,7 +43,8 @@ def run(node_name, node_class, argv=None):
         from server_select import paramdoc      # (finds the package's launch files: slow)
         print(paramdoc.usage(node_name, node_class.__doc__ or ''))
         sys.exit(0)
-    bounded_read.install()      # every connection header this node reads is bounded
+    bounded_read.install()      # every connection header this node reads is bounded,
+    handshake.install()         # and an inbound one read off the accept thread, in time
     # rospy's signal handler would deadlock on a master call of the starting node
     with interrupts.deferred():
         rospy.init_node(node_name, argv=argv, disable_signals=True)

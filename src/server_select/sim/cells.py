@@ -30,7 +30,10 @@ def add_arguments(parser):
 def client(scheduler=None, processes=None):
     """A dask ``Client`` of ``scheduler``, or of a local cluster of ``processes`` worker
     processes of one thread each (closed with the block)."""
+    import dask
     from distributed import Client, LocalCluster
+    # a worker samples its tasks' stacks every 10 ms by default: a third of a cell's time
+    dask.config.set({'distributed.worker.profile.enabled': False})
     if scheduler:
         with Client(scheduler, timeout='20s') as connected:
             yield connected

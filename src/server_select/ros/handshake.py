@@ -1,0 +1,97 @@
+"""Inbound TCPROS handshakes off the accept thread, each with a deadline.
+
+rospy accepts every topic and service connection of a node on one thread and reads the
+new connection's handshake header there, with no deadline: one peer that connects and
+sends nothing holds every later connection to the node (probes, a robot joining, a robot
+reconnecting after an outage) until its TCP gives up. Here the accept thread hands each
+new connection to a thread of its own, which has :data:`DEADLINE` s to read the header
+(bounded by :mod:`~server_select.ros.bounded_read`); one that does not finish in time is
+closed, with a throttled line naming the peer. At most :data:`MOST_AT_ONCE` handshakes
+are under way at once; a connection beyond them is closed at once (it may try again).
+After the header the connection is rospy's, as before.
+"""
+
+import io
+import socket
+import threading
+
+import rospy
+from rosgraph.network import ROSHandshakeException
+from rospy.impl import tcpros_base
+
+from server_select.core.trust.senders import Throttle
+from server_select.ros import bounded_read
+
+DEADLINE = 2.0           # s a new connection has to send its header
+MOST_AT_ONCE = 64        # handshakes under way at once
+PEER_CHARS = 64          # what a log line quotes of a peer's words at most
+
+_SLOTS = threading.BoundedSemaphore(MOST_AT_ONCE)
+_THROTTLE = Throttle(5.0)
+_READ = threading.local()       # the header this thread read, for rospy's callback
+_ORIGINAL = {}
+
+
+def install():
+    """Handshakes off the accept thread from now on (before the node starts; idempotent)."""
+    if _ORIGINAL:
+        return
+    bounded_read.install()       # the header read below is the bounded one
+    _ORIGINAL['callback'] = tcpros_base.TCPROSServer._tcp_server_callback
+    _ORIGINAL['read_header'] = tcpros_base.read_ros_handshake_header
+    tcpros_base.TCPROSServer._tcp_server_callback = _accepted
+    tcpros_base.read_ros_handshake_header = _header_read
+
+
+def _accepted(server, sock, client_addr):
+    """The accept thread's part: a thread for the handshake, or the connection closed."""
+    if not _SLOTS.acquire(blocking=False):
+        _close(sock, client_addr, 'more than %d handshakes under way' % MOST_AT_ONCE)
+        return
+    try:
+        threading.Thread(target=_handshake, args=(server, sock, client_addr),
+                         name='handshake', daemon=True).start()
+    except RuntimeError:         # no thread to be had: the node is stopping, or starved
+        _SLOTS.release()
+        _close(sock, client_addr, 'no thread for its handshake')
+
+
+def _handshake(server, sock, client_addr):
+    try:
+        sock.settimeout(DEADLINE)
+        try:
+            header = _ORIGINAL['read_header'](sock, io.BytesIO(), 4096)
+        except socket.timeout:
+            _close(sock, client_addr, 'no handshake within %g s' % DEADLINE)
+            return
+        except (ROSHandshakeException, OSError) as error:
+            _close(sock, client_addr, str(error))
+            return
+        sock.settimeout(None)
+        _READ.header = header     # what rospy's callback reads first, here already read
+        _ORIGINAL['callback'](server, sock, client_addr)
+    finally:
+        _READ.header = None
+        _SLOTS.release()
+
+
+def _header_read(sock, buffer, buff_size):
+    """rospy's header read: the header this thread's handshake read, else a read."""
+    header = getattr(_READ, 'header', None)
+    if header is not None:
+        _READ.header = None
+        return header
+    return _ORIGINAL['read_header'](sock, buffer, buff_size)
+
+
+def _close(sock, client_addr, why):
+    try:
+        sock.close()
+    except OSError:
+        pass
+    due, held = _THROTTLE.due()
+    if due:
+        peer = '%s:%s' % tuple(client_addr[:2]) if client_addr else 'an unknown peer'
+        rospy.logwarn('%s: closed a connection from %s: %s%s' % (
+            rospy.get_name(), peer[:PEER_CHARS], why[:2 * PEER_CHARS],
+            '; %d more before' % held if held else ''))
