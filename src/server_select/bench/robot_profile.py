@@ -18,17 +18,20 @@ import sys
 from server_select.core.util.tables import markdown_table
 
 PARTS = (   # (part, what the file of the innermost frame of ours contains)
-    ('probes', ('ros/prober.py', 'ros/probe_client.py', 'selection/probing.py')),
+    ('probes', ('ros/prober.py', 'ros/probe_client.py', 'selection/probing.py',
+                'core/robot/probes.py')),
     ('windows and ranking', ('core/selection/', 'core/load/', 'ros/load.py', 'ros/passive.py',
                              'core/fleet/health')),
     ('ranking messages', ('ros/view.py',)),
     ('flags', ('ros/flags.py',)),
-    ('task path', ('core/flow/', 'ros/task_stream.py', 'ros/routing.py', 'server_select/tasks/',
+    ('task path', ('core/flow/', 'core/robot/stream.py', 'ros/task_stream.py',
+                   'ros/routing.py', 'server_select/tasks/',
                    'ros/camera.py', 'vision/', 'tasks/kinds.py')),
     ('membership', ('ros/membership.py', 'ros/graph.py', 'ros/senders.py',
                     'ros/master_watch.py')),
     ('seal', ('core/trust/',)),
-    ('robot node', ('nodes/robot.py', 'ros/robot_parts.py', 'ros/runner.py', 'ros/node.py')),
+    ('robot node', ('nodes/robot.py', 'core/robot/', 'ros/robot_parts.py', 'ros/runner.py',
+                    'ros/node.py')),
 )
 # frames that only pass a call on (a SealedPublisher without a key): the caller decides
 WRAPPERS = ('ros/seal.py',)
