@@ -192,12 +192,13 @@ def test_asking_whether_a_per_task_rule_is_ready_or_where_it_heads_decides_nothi
     health = ServerHealth([1, 2], clock=clock, probation_probes=1)
     s = Selection(1, [1, 2], 'select', health=health, clock=clock, policy=Policy('least_latency'))
     rule = s.balancer
-    assert s.ready(set()) and s.heading() == NO_SERVER
+    assert not s.ready(set())                         # no server has answered a probe
+    assert s.ready({2}) and s.heading() == NO_SERVER
     assert rule.last is None and not rule.sends
     first = s.candidates('sort')[0]                   # a send asks with its kind
     assert rule.last is None and s.heading() == NO_SERVER    # asking is not sending
     rule.started(first, 'sort')
     assert rule.last == first and s.heading() == first
     for _ in range(3):
-        assert s.ready(set()) and s.heading() == first and s.candidates('sort')[0] == first
+        assert s.ready({2}) and s.heading() == first and s.candidates('sort')[0] == first
     assert len(rule.sends['sort']) == 1

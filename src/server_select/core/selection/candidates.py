@@ -241,9 +241,10 @@ class Selection(object):
 
     def ready(self, answered):
         """Whether tasks may start: ``answered`` is the set of servers that have answered a
-        probe (what fixed mode waits for). A per-task rule is not asked (it decides)."""
+        probe (fixed mode waits for its server's answer, a per-task rule for one usable
+        server's: no first task is sent blind). A per-task rule is not asked."""
         if self.mode == 'fixed':
             return self.fixed_server in answered
         if self.mode == 'select' and self.balancer is not None:
-            return bool(self._usable())
+            return bool(set(self._usable()) & set(answered))
         return self.mode == 'local' or bool(self.candidates())
