@@ -15,6 +15,7 @@ import os
 import time
 
 PROGRESS_EVERY = 10.0      # s between two progress lines at most
+CHUNK = 8                  # cells a dask task runs (fewer tasks: less of dask's own work)
 
 
 def add_arguments(parser):
@@ -33,7 +34,8 @@ def client(scheduler=None, processes=None):
     import dask
     from distributed import Client, LocalCluster
     # a worker samples its tasks' stacks every 10 ms by default: a third of a cell's time
-    dask.config.set({'distributed.worker.profile.enabled': False})
+    dask.config.set({'distributed.worker.profile.enabled': False,
+                     'distributed.admin.tick.interval': '1s'})
     if scheduler:
         with Client(scheduler, timeout='20s') as connected:
             yield connected
@@ -49,11 +51,18 @@ def run(function, jobs, scheduler=None, processes=None, log=print):
     progress."""
     from distributed import as_completed
     jobs = list(jobs)
+    chunks = [jobs[i:i + CHUNK] for i in range(0, len(jobs), CHUNK)]
     progress = Progress(len(jobs), log)
     with client(scheduler, processes) as connected:
-        for future in as_completed(connected.map(function, jobs, pure=False)):
-            yield future.result()
-            progress.step()
+        tasks = connected.map(_each, [function] * len(chunks), chunks, pure=False)
+        for future in as_completed(tasks):
+            for result in future.result():
+                yield result
+                progress.step()
+
+
+def _each(function, chunk):
+    return [function(job) for job in chunk]
 
 
 class Progress(object):
