@@ -65,7 +65,11 @@ def _handshake(server, sock, client_addr):
             _close(sock, client_addr, 'no handshake within %g s' % DEADLINE)
             return
         except (ROSHandshakeException, OSError) as error:
-            _close(sock, client_addr, str(error))
+            # rospy's own words for a connection that failed before its header (a client
+            # that gave up, or looked only: ros/node.py's filter keeps that one quiet)
+            _close(sock)
+            if not rospy.core.is_shutdown_requested():
+                rospy.logwarn('Inbound TCP/IP connection failed: %s', error)
             return
         sock.settimeout(None)
         _READ.header = header     # what rospy's callback reads first, here already read
@@ -84,11 +88,14 @@ def _header_read(sock, buffer, buff_size):
     return _ORIGINAL['read_header'](sock, buffer, buff_size)
 
 
-def _close(sock, client_addr, why):
+def _close(sock, client_addr=None, why=None):
+    """Close ``sock``; with ``why``, say so in a throttled line naming the peer."""
     try:
         sock.close()
     except OSError:
         pass
+    if why is None:
+        return
     due, held = _THROTTLE.due()
     if due:
         peer = '%s:%s' % tuple(client_addr[:2]) if client_addr else 'an unknown peer'
