@@ -208,10 +208,7 @@ class Robot(object):
     def admit_joined(self):
         """Admit the joined servers the transport reaches now (asked again by the driver)."""
         with self._lock:
-            waiting = sorted(self.joining)
-        wired = [s for s in waiting if self.transport.wired(s)]   # (may ask the master)
-        with self._lock:
-            ready = [s for s in wired if s in self.joining]       # (not left meanwhile)
+            ready = [s for s in sorted(self.joining) if self.transport.wired(s)]
             self.joining.difference_update(ready)
         for server in ready:
             self.selection.add_server(server)
