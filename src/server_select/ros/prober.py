@@ -165,12 +165,11 @@ class Prober(object):
     def sample(self, server, seq, rtt, error, wait, round_number):
         """A sample of the robot's: published, and added to its round's batch."""
         with self._lock:
-            sent = self._stamps.get(server)
-            if sent is not None and sent[0] == seq:
-                del self._stamps[server]
+            sent = self._stamps.pop(server) if self._stamps.get(server, (None,))[0] == seq \
+                else None
             entry = self._rounds.get(round_number)
         batch = entry if isinstance(entry, ProbeRound) else None
-        stamp = sent[1] if sent is not None and sent[0] == seq else \
+        stamp = sent[1] if sent is not None else \
             batch.stamp if batch is not None else entry or rospy.Time.now()
         self.samples.sample(server, seq, stamp, rtt, error)
         if batch is not None and batch.record(server, not error, rtt, wait):

@@ -10,7 +10,7 @@ its answers take. Probes are numbered one series for the robot, rounds another.
 
 import itertools
 
-from server_select.core.selection.answer_time import STILL_OUT, AnswerTimes  # noqa: F401
+from server_select.core.selection.answer_time import AnswerTimes
 
 ROUND_FLOOR = 0.001     # two probe rounds at least this far apart (s)
 
