@@ -12,6 +12,8 @@ import json
 
 import pytest
 
+from server_select.soak.fleet import TASK_RATE
+from server_select.soak.report import TASK_TIMEOUT
 from server_select.soak.run import soak
 from server_select.testbed.netns import available
 
@@ -25,7 +27,10 @@ def test_a_short_soak_loses_nothing_and_every_node_comes_back(tmp_path):
                    say=lambda line: print('soak:', line))
     print((out / 'report.md').read_text())
     print(json.dumps(verdict))
-    assert verdict['tasks'] > 3000 and verdict['reports'] >= verdict['tasks']
+    lost = verdict['lost with a killed robot']
+    assert verdict['tasks'] > 3000 and verdict['reports'] + lost == verdict['tasks'], verdict
+    # one robot_kill: at most the tasks of one task timeout are out when it dies
+    assert lost <= TASK_RATE * TASK_TIMEOUT, verdict
     assert (verdict['unreported'], verdict['duplicated']) == (0, 0), verdict
     assert verdict['restarted nodes not serving'] == 0, verdict
     assert verdict['intruders not named'] == 0, verdict
