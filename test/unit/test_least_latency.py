@@ -249,3 +249,38 @@ def test_least_latency_counts_the_tries_at_a_server_asked_for_more_than_it_can_d
     blind = least_latency(clock, off=('tries',))
     feed(blind, clock, {1: (0.010, 0, 2.0), 2: (0.020, 0, 0.0)})
     assert blind.choose([1, 2], 'image').server == 1
+
+
+def test_least_latency_never_moves_to_a_server_its_estimate_says_is_slower():
+    """The robot's server (1, 12 ms) is beyond the noise of the best (2, 10 ms); server 3
+    is within the noise of the best only by its own wide spread, and its median (12.5 ms)
+    is above the robot's server: a move goes to 2 with whatever draw, never to 3."""
+    picks = set()
+    for seed in range(1, 21):
+        clock = Clock()
+        rule = least_latency(clock, seed=seed)
+        rule.started(1, 'image')
+        for spread in [0.005, -0.005, 0.0, -0.01, 0.01]:
+            rule.probed(1, 0.012, load())
+            rule.probed(2, 0.010, load())
+            rule.probed(3, 0.0125 + spread, load())
+            clock.now += 0.1
+        decision = rule.choose([1, 2, 3], 'image')
+        picks.add(decision.server)
+        assert 'faster than 1 by 2 ms' in decision.reason, decision.reason
+    assert picks == {2}
+
+
+def test_least_latency_work_reports_that_vary_are_noise_not_a_reason_to_move():
+    """Two servers alike but for the work they report, which varies from answer to answer
+    as a shared CPU's does (+-10 %): the newest reports 5 % apart move no robot."""
+    clock = Clock()
+    rule = least_latency(clock)
+    rule.started(1, 'image')
+    for work in [0.100, 0.110, 0.090, 0.105, 0.095]:
+        rule.probed(1, 0.010, load(work=work))
+        rule.probed(2, 0.010, load(work=work - 0.005))
+        clock.now += 0.1
+    decision = rule.choose([1, 2], 'image')
+    assert decision.server == 1, decision.reason
+    assert decision.reason == 'kept: within the noise of server 2'
