@@ -5,12 +5,12 @@ import random
 
 import pytest
 
-from server_select.sim import generate, stats
+from server_select.sim import generate, report, stats
 from server_select.sim.events import EventLoop, Streams, Wakeup
 from server_select.sim.figures import figures
 from server_select.sim.model import Model
 from server_select.sim.network import Network
-from server_select.sim.run import simulate, variant
+from server_select.sim.run import measured_window, simulate, variant
 from server_select.sim.server import SimServer
 from server_select.sim.tasks import Task
 from server_select.testbed.scenario import Scenario
@@ -200,3 +200,37 @@ def test_a_variant_may_switch_a_mechanism_of_the_rule_off_and_a_wrong_one_is_nam
     assert kept.switches < loose.switches       # near-equal servers: keep holds it still
     with pytest.raises(ValueError, match='no mechanism spread'):
         variant('fleet~spread')
+
+
+def test_a_measured_part_that_is_empty_is_an_error_naming_both_numbers():
+    short = scenario({}, duration=32.0)
+    short.suite['measure_from'] = 35
+    with pytest.raises(ValueError, match=r'measure_from \(35 s\).*duration \(32 s\)'):
+        measured_window(short)
+    with pytest.raises(ValueError, match='nothing is measured'):
+        simulate(short, Model.load(), 1, ['fleet'])
+
+
+def test_changes_before_the_measured_part_are_warned_about_and_later_ones_not():
+    data = scenario({'robot1 server1': [{'at': 0, 'delay': 5}, {'at': 20, 'delay': 9},
+                                        {'at': 50, 'delay': 5}]},
+                    servers={1: {}, 2: {'stop': 10}}, duration=90.0)
+    start, warnings = measured_window(data)
+    assert start == 35.0
+    assert len(warnings) == 2, warnings
+    assert 'server2 stops at 10 s' in warnings[0] and 'link robot1-server1 at 20 s' in \
+        warnings[1], warnings
+
+
+def test_the_table_names_the_variant_to_pick_or_says_there_is_no_difference():
+    def runs(means):
+        return dict((seed, {'mean': m}) for seed, m in enumerate(means, start=1))
+    seeds = [1, 2, 3, 4, 5]
+    oracle = runs([0.010] * 5)
+    clear = {'oracle_fleet': oracle, 'fleet': runs([0.0101, 0.0102, 0.0100, 0.0101, 0.0102]),
+             'prequal': runs([0.0110, 0.0111, 0.0112, 0.0110, 0.0111])}
+    assert report.pick(clear, seeds).startswith('Pick: fleet, its mean 9.'), \
+        report.pick(clear, seeds)
+    noisy = {'oracle_fleet': oracle, 'fleet': runs([0.0100, 0.0110, 0.0100, 0.0110, 0.0105]),
+             'prequal': runs([0.0110, 0.0100, 0.0110, 0.0100, 0.0106])}
+    assert report.pick(noisy, seeds).startswith('Pick: no difference beyond the noise')

@@ -16,7 +16,8 @@ import yaml
 from server_select.sim import cells, league, report
 from server_select.sim.model import Model
 from server_select.sim.report import ORACLE
-from server_select.testbed.scenario import Scenario, ScenarioError
+from server_select.sim.run import measured_window
+from server_select.testbed.scenario import ScenarioError
 from server_select.testbed.suite_scenario import short_name
 
 
@@ -51,8 +52,9 @@ def main(argv=None):
             with open(name, 'w') as stream:
                 stream.write('# the links of %s\n' % args.from_bag)
                 yaml.safe_dump(data, stream, sort_keys=False)
-        elif name.endswith('.yaml'):
-            Scenario.load(name)          # a bad file: its one line, before any run
+        # a bad file or an empty measured part: its one line, before any run
+        for warning in measured_window(league.network_scenario(name))[1]:
+            print('simulate: warning: %s' % warning, file=sys.stderr)
     except (ScenarioError, ValueError, OSError) as error:
         print('simulate: %s' % error, file=sys.stderr)
         return 2

@@ -62,7 +62,26 @@ def network_tables(name, variants, seeds):
         ['variant'] + [title for _, title, _, _ in NETWORK_COLUMNS], rows))
     if FLEET in variants and ORACLE in variants:
         text += '\n' + paired_table(variants, seeds) + '\n'
-    return text
+    return text + '\n' + pick(variants, seeds) + '\n'
+
+
+def pick(variants, seeds):
+    """Which variant to pick on this scenario: the one of the least median mean round
+    trip (failed tasks at the timeout), if the paired difference to the next best is below
+    0 beyond the noise; else that there is no difference beyond the noise."""
+    means = dict((v, median_interval(relative(variants, seeds, v, 'mean'))[0])
+                 for v in variants if v != ORACLE and ORACLE in variants)
+    ranked = sorted((m, v) for v, m in means.items() if m is not None)
+    if len(ranked) < 2:
+        return 'Pick: - (fewer than two variants with a mean to compare)'
+    (_, best), (_, second) = ranked[:2]
+    mean, low, high = paired_difference(variants, seeds, best, second, 'mean')
+    if high < 0:
+        return ('Pick: %s, its mean %.2f %% [%.2f, %.2f] of the oracle\'s below %s\'s '
+                '(the next best; paired over %d seeds)'
+                % (best, -mean, -high, -low, second, len(seeds)))
+    return ('Pick: no difference beyond the noise between %s and %s (%+.2f %% [%+.2f, '
+            '%+.2f] of the oracle\'s mean)' % (best, second, mean, low, high))
 
 
 def relative(variants, seeds, variant, key):

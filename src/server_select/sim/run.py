@@ -63,6 +63,27 @@ def rule_args(name):
     return {'off': off} if off else None
 
 
+def measured_window(scenario):
+    """``(measure_from, [warnings])`` of ``scenario``: the measured part starts at its
+    ``suite: measure_from`` (ValueError when that leaves no time before its end); a
+    warning names each change that falls before it (the figures do not see it)."""
+    start = float(scenario.suite.get('measure_from', MEASURE_FROM))
+    if start >= scenario.duration:
+        raise ValueError('%s: nothing is measured: suite: measure_from (%g s) is not before '
+                         'the end of its duration (%g s); lower measure_from or lengthen '
+                         'duration' % (scenario.source, start, scenario.duration))
+    changes = [('link %s-%s' % pair, at) for pair, link in sorted(scenario.links.items())
+               for at in link.times if at > 0]
+    for host in scenario.hosts.values():
+        changes += [('%s starts' % host.name, host.start)] if host.start > 0 else []
+        changes += [('%s stops' % host.name, host.stop)] if host.stop is not None else []
+        changes += [('%s hangs' % host.name, a) for a, _ in host.hang]
+        changes += [('%s work changes' % host.name, at) for at, _ in host.work]
+    return start, ['%s: %s at %g s is before the measured part (from %g s): the figures do '
+                   'not see it' % (scenario.source, what, at, start)
+                   for what, at in sorted(changes, key=lambda c: c[1]) if at < start]
+
+
 def kinds_of(args):
     """The task streams that a scenario's ``robot_args`` ask for (robot.launch's names)."""
     kinds = []
@@ -89,7 +110,7 @@ class Simulation(object):
                             for h in scenario.of_role('server'))
         suite = scenario.suite
         args = dict(suite.get('robot_args') or {})
-        self.measure_from = float(suite.get('measure_from', MEASURE_FROM))
+        self.measure_from = measured_window(scenario)[0]
         self.timeout = float(args.get('task_timeout', default('task_timeout')))
         kinds = kinds_of(args)
         self.records, self.robots = [], []
