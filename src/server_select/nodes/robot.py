@@ -87,6 +87,8 @@ class RobotNode(object):
             if param('sample_stream') == 'view' and mode == 'select' else None
         if self.view is not None:       # one check of its ranking per batch of probe answers
             self.view.coalesce, self.prober.after_answers = True, self.view.flush
+            # and one at each move, so that the manager's flag names where tasks go now
+            self.wire.on_move = lambda: self.view.send(False)
         self.summary_period = param('summary_period')
         manager = param('manager_node')   # None: flags from any node
         self.manager_node = rospy.resolve_name(manager) if manager else None

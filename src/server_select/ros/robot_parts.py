@@ -41,6 +41,7 @@ class RobotWire(Transport, Events):
                              addresses=self.addresses)
         self.streams = {}       # kind -> its TaskStream
         self.passive = None
+        self.on_move = None     # on_move(): the rule moved the robot's tasks (its views)
 
     def attach(self, robot):
         """Wire ``robot``'s streams to their topics."""
@@ -103,6 +104,8 @@ class RobotWire(Transport, Events):
 
     def moved(self, server, why):
         rospy.loginfo('robot %d: tasks go to server %d now (%s)', self.robot_id, server, why)
+        if self.on_move is not None:
+            self.on_move()
 
     def waiting(self, kind, what):
         rospy.loginfo_throttle(5.0, 'robot %d: %s tasks wait for %s'
