@@ -77,7 +77,7 @@ class Script(object):
         return not (server == server_down and start <= t < end)
 
     def load(self):
-        return Load(0, 0, 1, 0.0, {'sort': WORK}, 0.0)
+        return Load(0, 0, 1, 0.0, {'sort': WORK}, 0.0, {'sort': 0.0})
 
     def task_answer(self, server, t):
         """``(seconds until the robot has the answer, ok, busy)`` of a task sent to
@@ -284,7 +284,7 @@ class _ProbeLoop(object):
             loop.at(sent + rtt, end, LatencyProbeResponse(
                 server_id=server, seq=request.seq, stamp=request.stamp, queued=load.queued,
                 in_service=load.in_service, workers=load.workers, backlog=load.backlog,
-                kinds=['sort'], service_time=[WORK],
+                kinds=['sort'], service_time=[WORK], service_error=[0.0],
                 utilization=load.utilization), (sent + rtt) - sent, None)
         loop.at(sent + timeout, end, None, None, ProbeTimeout('no answer within %.3g s'
                                                               % timeout))

@@ -52,7 +52,8 @@ def plain(value, seen=None):
 
 
 def load(queued=0, workers=1, work=0.004):
-    return Load(queued, 0, workers, 0.0, {'sort': work, 'image': 5 * work}, 0.2)
+    return Load(queued, 0, workers, 0.0, {'sort': work, 'image': 5 * work}, 0.2,
+                {'sort': 0.0005, 'image': 0.001})
 
 
 def fed(name, seed):

@@ -7,7 +7,7 @@ from server_select.core.observe.health_status import (ERROR, OK, STALE, WARN, fl
 
 
 def load(queued=0, in_service=1, workers=2, utilization=0.3):
-    return Load(queued, in_service, workers, 0.0, {}, utilization)
+    return Load(queued, in_service, workers, 0.0, {}, utilization, {})
 
 
 def test_a_server_is_ok_serving_and_warns_when_it_answers_busy():

@@ -17,8 +17,9 @@ def least_latency(clock, seed=1, **kwargs):
     return balancers.make('least_latency', rng=random.Random(seed), clock=clock, **kwargs)
 
 
-def load(rif=0, work=0.1, utilization=0.0):
-    return Load(rif, 0, 1, 0.0, {'image': work}, utilization)
+def load(rif=0, work=0.1, utilization=0.0, error=None):
+    return Load(rif, 0, 1, 0.0, {'image': work}, utilization,
+                {'image': error} if error is not None else None)
 
 
 def feed(rule, clock, answers, rounds=5):
@@ -272,15 +273,18 @@ def test_least_latency_never_moves_to_a_server_its_estimate_says_is_slower():
 
 
 def test_least_latency_work_reports_that_vary_are_noise_not_a_reason_to_move():
-    """Two servers alike but for the work they report, which varies from answer to answer
-    as a shared CPU's does (+-10 %): the newest reports 5 % apart move no robot."""
-    clock = Clock()
-    rule = least_latency(clock)
-    rule.started(1, 'image')
-    for work in [0.100, 0.110, 0.090, 0.105, 0.095]:
-        rule.probed(1, 0.010, load(work=work))
-        rule.probed(2, 0.010, load(work=work - 0.005))
-        clock.now += 0.1
-    decision = rule.choose([1, 2], 'image')
-    assert decision.server == 1, decision.reason
-    assert decision.reason == 'kept: within the noise of server 2'
+    """Two servers alike but for the work they report, each a median with the error the
+    server gives it (a shared CPU's: 10 %): the newest reports 5 % apart move no robot;
+    20 % apart, with the same errors, they do."""
+    def newest(gap):
+        clock = Clock()
+        rule = least_latency(clock)
+        rule.started(1, 'image')
+        for _ in range(5):
+            rule.probed(1, 0.010, load(work=0.100, error=0.010))
+            rule.probed(2, 0.010, load(work=0.100 - gap, error=0.010))
+            clock.now += 0.1
+        return rule.choose([1, 2], 'image')
+    kept = newest(0.005)
+    assert kept.server == 1 and kept.reason == 'kept: within the noise of server 2', kept
+    assert newest(0.05).server == 2

@@ -1,6 +1,7 @@
 """A server's work queue (admission by deadline, shedding, backlog), the robot's load board
 and the retry budget, without a master."""
 
+import statistics
 import threading
 
 import pytest
@@ -29,6 +30,11 @@ def test_service_times_are_the_median_of_the_recent_ones():
         times.add('sort', seconds)
     assert times.get('sort') == pytest.approx(0.3)
     assert times.snapshot() == {'sort': pytest.approx(0.3)}
+    # the median's standard error: sqrt(pi / 2) x their standard deviation / sqrt(3)
+    spread = statistics.stdev([0.9, 0.2, 0.3])
+    assert times.errors() == {'sort': pytest.approx(1.2533 * spread / 3 ** 0.5)}
+    times.add('image', 0.5)
+    assert times.errors()['image'] == 0.0     # one task: no spread known
 
 
 def test_service_times_follow_a_step_in_the_work_within_the_last_second():
@@ -49,7 +55,7 @@ def test_service_times_follow_a_step_in_the_work_within_the_last_second():
         clock.now += 9.0
         times.add('image', 0.5)
     times.add('image', 0.8)
-    assert times.get('image') == pytest.approx(0.5)
+    assert times.get('image') == pytest.approx(0.5) and times.errors()['image'] > 0
 
 
 def test_a_kind_left_idle_reports_the_least_work_it_had_until_a_task_measures_it():
@@ -58,14 +64,16 @@ def test_a_kind_left_idle_reports_the_least_work_it_had_until_a_task_measures_it
     for seconds in [0.25, 0.26, 0.24] * 4 + [0.8] * 6:   # calm, then a burst's frames
         times.add('image', seconds)
         clock.now += 0.5
+    calm_error = 1.2533 * statistics.stdev([0.25, 0.26, 0.24]) / 3 ** 0.5
     assert times.get('image') == pytest.approx(0.8)
     clock.now += 9.0                          # the robots left: what it did, for a while
     assert times.snapshot() == {'image': pytest.approx(0.8)}
     clock.now += 1.0                          # then what it was at best, not the burst
     assert times.get('image') == pytest.approx(0.25)
     assert times.snapshot() == {'image': pytest.approx(0.25)}
+    assert times.errors() == {'image': pytest.approx(calm_error)}
     times.add('image', 0.3)                   # the next task is measured alone
-    assert times.get('image') == pytest.approx(0.3)
+    assert times.get('image') == pytest.approx(0.3) and times.errors() == {'image': 0.0}
     assert times.get('sort', None) is None    # a kind never done: the caller's default
 
 
@@ -101,7 +109,7 @@ def test_the_backlog_counts_the_work_left_of_tasks_in_service_over_the_workers()
     clock.now += 0.4                                 # both 0.4 s into their 1 s of work
     # (three arrivals at one instant: three per 10 s horizon, 1 s of work each, 2 workers)
     assert q.load() == Load(1, 2, 2, pytest.approx((1.0 + 0.6 + 0.6) / 2), {'image': 1.0},
-                            pytest.approx(0.3 * 1.0 / 2))
+                            pytest.approx(0.3 * 1.0 / 2), {'image': 0.0})
     q.done(first, 1.0)
     q.done(second, 1.0)
     assert q.load().backlog == 0.0                   # one queued, a worker free: no wait

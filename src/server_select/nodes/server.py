@@ -167,7 +167,8 @@ class ServerNode(object):
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),
             queued=load.queued, in_service=load.in_service, workers=load.workers,
             backlog=load.backlog, utilization=load.utilization, kinds=list(load.service),
-            service_time=list(load.service.values())),
+            service_time=list(load.service.values()),
+            service_error=[load.service_error.get(k, 0.0) for k in load.service]),
             self.probe_srv.resolved_name,
             self.probe_srv.uri, req)
 

@@ -6,17 +6,24 @@ import statistics
 import threading
 import time
 
+from server_select.core.util.stats import mean_error
+
+# the standard error of a median of n draws: its variance is 1 / (4 n f(median)^2) for
+# large n, sqrt(pi / 2) x sigma / sqrt(n) when the draws are normal
+MEDIAN_ERROR = 1.2533
+
 
 class ServiceTimes(object):
     """The recent work per task of each kind: the median of the tasks of the last
-    ``horizon`` s, at least the newest ``least`` and at most ``keep`` (thread-safe). A step
-    in the work shows once half of those are new: at 4 tasks a second with the third slow
-    one (0.75 s), where the last 20 had needed eleven (2.75 s: loaded_server's
-    reaction).
+    ``horizon`` s, at least the newest ``least`` and at most ``keep``, and its standard
+    error (thread-safe). A step in the work shows once half of those are new: at 4 tasks
+    a second with the third slow one (0.75 s), where the last 20 had needed eleven (2.75
+    s: loaded_server's reaction); fewer tasks make a wider error, which the robots count
+    as noise.
 
     A kind none of whose tasks was done in the last ``idle`` s says what the server was,
     not what it is: it reports the least work the server has had for it (its least median
-    of at least ``least`` tasks), and its next task is measured
+    of at least ``least`` tasks, and that median's error), and its next task is measured
     alone. A server that did a kind slowly in a burst, and was left by the robots that sent
     it, would otherwise report the burst's work until it restarted: nothing sent it a task
     to learn otherwise. The price is a task now and then on a server still slow; 10 s is
@@ -33,7 +40,8 @@ class ServiceTimes(object):
         self._lock = threading.Lock()
         self._times = {}
         self._medians = {}
-        self._best = {}       # {kind: (rank, its least median)}
+        self._errors = {}
+        self._best = {}       # {kind: (rank, (its least median, that median's error))}
 
     def add(self, kind, seconds):
         now = self._clock()
@@ -48,24 +56,31 @@ class ServiceTimes(object):
                 times.popleft()
             values = [value for _, value in times]
             median = self._medians[kind] = statistics.median(values)
+            error = self._errors[kind] = MEDIAN_ERROR * mean_error(values)[1]
             # the least median of `least` tasks or more (of fewer: while none is known)
             rank = (len(values) < self.least, median)
             if kind not in self._best or rank < self._best[kind][0]:
-                self._best[kind] = (rank, median)
+                self._best[kind] = (rank, (median, error))
 
     def _work(self, kind, now):
-        """Seconds of ``kind``'s work now (lock held; it was done before)."""
+        """``(seconds, error)`` of ``kind``'s work now (lock held; it was done before)."""
         if now - self._times[kind][-1][0] > self.idle:
             return self._best[kind][1]
-        return self._medians[kind]
+        return self._medians[kind], self._errors[kind]
 
     def get(self, kind, default=0.0):
         """Seconds of work per task of ``kind`` (``default`` while none was done)."""
         with self._lock:
-            return self._work(kind, self._clock()) if kind in self._times else default
+            return self._work(kind, self._clock())[0] if kind in self._times else default
 
     def snapshot(self):
         """``{kind: seconds}`` of every kind done so far."""
         with self._lock:
             now = self._clock()
-            return {kind: self._work(kind, now) for kind in self._times}
+            return {kind: self._work(kind, now)[0] for kind in self._times}
+
+    def errors(self):
+        """``{kind: the standard error of its work}`` (0.0 from one task)."""
+        with self._lock:
+            now = self._clock()
+            return {kind: self._work(kind, now)[1] for kind in self._times}

@@ -33,10 +33,12 @@ import time
 from server_select.core.load.demand import Demand
 from server_select.core.load.service_times import ServiceTimes
 
-Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization')
-Load.__new__.__defaults__ = (0.0,)
+Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization '
+                              'service_error')
+Load.__new__.__defaults__ = (0.0, None)
 Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per task}``,
-``utilization`` the share of the workers' time the others' tasks take (0: none)."""
+``utilization`` the share of the workers' time the others' tasks take (0: none),
+``service_error`` ``{kind: the standard error of that work}`` (None: not reported)."""
 
 
 class Job(object):
@@ -193,7 +195,7 @@ class WorkQueue(object):
                     service[job.kind] = self._work(job.kind, now)
             return Load(len(self._queue), len(self._running), self.workers,
                         self._backlog(now, excluding), service,
-                        self._utilization(now, excluding))
+                        self._utilization(now, excluding), self.times.errors())
 
     def close(self):
         """Wake every worker with None; what is still queued is dropped (returned)."""

@@ -11,10 +11,12 @@ import time
 
 
 ProbeAnswer = collections.namedtuple('ProbeAnswer',
-                                     'server rtt rif service workers at utilization')
+                                     'server rtt rif service workers at utilization '
+                                     'service_error')
 ProbeAnswer.__doc__ = """One probe answer as a balancer keeps it: round trip (s), requests
-in flight (queued + in service), ``{kind: work s}``, workers, when it arrived, and the
-share of the workers' time the other robots' tasks take."""
+in flight (queued + in service), ``{kind: work s}``, workers, when it arrived, the
+share of the workers' time the other robots' tasks take, and ``{kind: the standard error
+of the work}``."""
 
 
 class Order(list):
@@ -62,7 +64,8 @@ class Balancer(object):
         answer = ProbeAnswer(server, rtt, (load.queued + load.in_service) if load else 0,
                              dict(load.service) if load else {},
                              max(1, load.workers) if load else 1, self._clock(),
-                             load.utilization if load else 0.0)
+                             load.utilization if load else 0.0,
+                             dict(load.service_error or {}) if load else {})
         with self._lock:
             self.probes[server] = answer
             self._probed(answer)

@@ -6,11 +6,11 @@ it: the robot's round trip, the other robots' work in flight there per worker, t
 per task, and its utilization. A server's estimate is the median round trip (a late
 answer or two must not hold it up) + the mean work in flight + the work, times the tries
 a server asked for more than it can do needs (its utilization with this robot's share,
-when above 1); its noise the errors of all three (the work a server reports varies with
-what else its CPU runs). ``choose`` keeps the robot's server while it is within 3 errors
-of the best; else moves to the best, or at random to one within 3 errors of it whose
-estimate is lower than its server's (robots that read the same answers do not all move to
-one, and no move is to a worse estimate).
+when above 1); its noise the errors of all three (the server reports its work's: on a
+shared CPU it varies with what else runs). ``choose`` keeps the robot's server while it
+is within 3 errors of the best; else moves to the best, or at random to one within 3
+errors of it whose estimate is lower than its server's (robots that read the same answers
+do not all move to one, and no move is to a worse estimate).
 ``choose`` changes nothing: the move is made when a task's first attempt is sent
 (:meth:`started`). docs/selection.md has each mechanism's worth.
 """
@@ -36,11 +36,6 @@ def within(estimate, best):
     """Whether ``estimate`` is within the noise of ``best``: 3 standard errors of their
     difference."""
     return estimate.latency - best.latency <= Z * math.hypot(estimate.error, best.error)
-
-
-def _spread(values):
-    """The standard deviation of ``values`` (0.0 for fewer than two)."""
-    return mean_error(values)[1] * math.sqrt(len(values))
 
 
 class LeastLatency(Balancer):
@@ -100,11 +95,10 @@ class LeastLatency(Balancer):
         newest = answers[-1][0]
         # a server that has not done this kind yet: the least work seen for it (what the
         # task takes where nothing slows it; one task there tells)
-        least = self.least_work.get(kind, 0.0)
-        work = newest.service.get(kind, least)
-        # the newest report (a step in the work shows at once); its error, how much the
-        # reports of the window vary (each is a median of the server's last second)
-        work_error = _spread([a.service.get(kind, least) for a, _ in answers])
+        work = newest.service.get(kind, self.least_work.get(kind, 0.0))
+        # the newest report (a step in the work shows at once) and its error, the server's
+        # (a median of its last second's tasks, which a shared CPU makes vary)
+        work_error = newest.service_error.get(kind, 0.0)
         workers = float(newest.workers)
         mine = rate * work / workers
         rtts = [a.rtt for a, _ in answers]
