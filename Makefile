@@ -15,7 +15,7 @@ DEMO_MD := $(BUILD)/demo_summary.md
 # scripts' `#!/usr/bin/env python3` must find the interpreter that sees rospy).
 ROSENV := source $(DEVEL)/setup.bash && export PATH=$(VENV)/bin:$$PATH ROS_HOME=$(BUILD)/ros_home &&
 
-.PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory \
+.PHONY: all deps build demo demo-loopback search-demo evaluate evaluate-suite bench bench-emulator bench-memory bench-loopback \
   bench-scale bench-routing bench-hedging bench-capacity league calibrate league-testbed soak bench-master bench-fleet bench-seal bench-probes bench-top bench-robot \
   test check unit-test testbed-test fault-test catkin-test rostest lint docs help clean
 all: build
@@ -184,6 +184,11 @@ bench-seal: build
 # (~6 min).
 bench-top: build
 	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.top_cost --out results/bench
+
+# The fleet demo on one host, 3 runs of 90 s: switches a minute per robot, each move's
+# margin, the spread of the work servers report (what sim.work_noise fits; ~5 min).
+bench-loopback: build
+	@$(ROSENV) cd $(TOP) && $(PY) -m server_select.bench.loopback_demo --out results/bench
 
 # A robot node's CPU and RSS by profile, servers (4, 10, 30) and workload (sort tasks,
 # a compressed camera), here and on an emulated Raspberry Pi 3 (root), 3 runs, and where

@@ -110,3 +110,18 @@ def test_the_probe_cost_benchmark_counts_probes(tmp_path):
     uniform, adaptive = (r['near'] / r['probes'] for r in runs)
     assert adaptive > uniform - 0.05, runs
     assert 'target probes/s' in proc.stdout
+
+
+def test_the_loopback_demo_benchmark_counts_switches_and_work_reports(tmp_path):
+    """`make bench-loopback` in a tiny configuration: one short run of the fleet demo gives
+    each robot's switches and the work each server reported to the observer's probes."""
+    proc = subprocess.run([sys.executable, '-m', 'server_select.bench.loopback_demo',
+                           '--runs', '1', '--seconds', '15', '--out', str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:]
+    (run,) = json.loads((tmp_path / 'loopback_demo.json').read_text())['runs']
+    assert len(run['switches_per_min']) == 2 and run['tasks'] > 0, run
+    # the robots send sort tasks from the start: some server did some and reported them
+    assert any(finite(w) and w > 0 for w in run['work_ms'].values()), run['work_ms']
+    assert 'switches a minute per robot' in proc.stdout

@@ -14,6 +14,10 @@
   report).
 - ``cpu_factor``: how much longer CPU work takes on the testbed than timed alone (its
   nodes, emulator and recorder share two cores): calibrated on the capacity cases.
+- ``shared_ms``: what a task's work gains on a host whose CPU the fleet's nodes share, as
+  against timed alone: a delay of its own per task, exponential with this mean (the
+  scheduler's and the interpreter's waits, whatever the task's size): fitted to the spread
+  of the work servers report on the loopback demo (``sim.work_noise``).
 
 ``python3 -m server_select.sim.model --measure`` times the kinds here and rewrites
 ``kinds`` (the constants it keeps).
@@ -39,6 +43,7 @@ class Model(object):
         self.hop = float(data['hop_ms']) * 1e-3
         self.probe_cpu = float(data['probe_ms']) * 1e-3
         self.cpu_factor = float(data.get('cpu_factor', 1.0))
+        self.shared = float(data.get('shared_ms', 0.0)) * 1e-3
         self.kinds = dict((name, (float(k['median_ms']) * 1e-3, float(k['sigma']),
                                   int(k.get('per', 0))))
                           for name, k in data['kinds'].items())
@@ -56,7 +61,8 @@ class Model(object):
         median *= self.cpu_factor
         if per and size:
             median *= size / float(per)
-        return median * math.exp(rng.gauss(0.0, sigma)) if sigma > 0 else median
+        work = median * math.exp(rng.gauss(0.0, sigma)) if sigma > 0 else median
+        return work + rng.expovariate(1.0 / self.shared) if self.shared > 0 else work
 
 
 def _fit(seconds):

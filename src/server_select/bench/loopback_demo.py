@@ -1,0 +1,149 @@
+"""The fleet demo on one host, measured: 3 identical servers and 2 robots under one
+roscore (``demo.launch profile:=fleet``), ``--runs`` times. Per run: switches a minute
+per robot (the demo's own summary), the margin each move's reason gives, and the work
+per sort task each server reports to an observer's probes (robot 0, 2 a second): its
+spread from answer to answer is the noise of the work term on a shared CPU, which the
+simulator's ``shared_sigma`` is fitted to (``python3 -m server_select.sim.model --fit``).
+
+``python3 -m server_select.bench.loopback_demo --runs 3 --seconds 90`` writes
+``loopback_demo.json`` and prints a line per run and the median (min-max) over runs.
+"""
+
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import threading
+import time
+
+from server_select.bench import cli
+from server_select.bench.harness import Roscore
+from server_select.core.config import names
+from server_select.core.util.procs import stop_group
+from server_select.core.util.tables import median_range
+
+MARGIN = re.compile(r'faster than \d+ by (-?[0-9.e+-]+) ms')
+PROBE_PERIOD = 0.5      # s between an observer's probes of one server
+
+
+def log_spread(values):
+    """The standard deviation of the logarithms of the positive ``values`` (None for fewer
+    than 3): a relative spread, as the model's sigma is."""
+    logs = [math.log(v) for v in values if v > 0]
+    if len(logs) < 3:
+        return None
+    mean = math.fsum(logs) / len(logs)
+    return math.sqrt(math.fsum((x - mean) ** 2 for x in logs) / (len(logs) - 1))
+
+
+class Observer(object):
+    """This process's view of a running demo: the robots' rankings (where each robot's
+    tasks go and why) and its own probes' work reports per server."""
+
+    def __init__(self, servers):
+        import rospy
+        from server_select.msg import RobotRanking
+        self.rospy, self.servers = rospy, servers
+        self.lock = threading.Lock()
+        self.selected = {}      # robot -> server its tasks go to now
+        self.moves = []         # (robot, server, reason)
+        self.work = dict((s, []) for s in servers)   # server -> reported sort work, s
+        self.sub = rospy.Subscriber('/' + names.RANKINGS_TOPIC, RobotRanking, self.on_ranking,
+                                    queue_size=100)
+        self.stopped = threading.Event()
+        self.thread = threading.Thread(target=self.probe_loop, daemon=True)
+        self.thread.start()
+
+    def on_ranking(self, msg):
+        with self.lock:
+            before = self.selected.get(msg.robot_id)
+            if msg.selected and before is not None and msg.selected != before:
+                self.moves.append((msg.robot_id, msg.selected, msg.reason))
+            if msg.selected:
+                self.selected[msg.robot_id] = msg.selected
+
+    def probe_loop(self):
+        from server_select.srv import LatencyProbe, LatencyProbeRequest
+        proxies = dict((s, self.rospy.ServiceProxy('/' + names.probe_service(s), LatencyProbe))
+                       for s in self.servers)
+        while not self.stopped.wait(PROBE_PERIOD):
+            for server, proxy in proxies.items():
+                try:
+                    answer = proxy(LatencyProbeRequest(robot_id=0))
+                except (self.rospy.ServiceException, OSError):
+                    continue        # not up yet, or the demo is ending
+                work = dict(zip(answer.kinds, answer.service_time)).get('sort')
+                if work:
+                    with self.lock:
+                        self.work[server].append(work)
+
+    def close(self):
+        self.stopped.set()
+        self.sub.unregister()
+        self.thread.join(5.0)
+
+
+def run_once(out, index, seconds, servers=3, robots=2):
+    """One demo run of ``seconds``: its figures (a dict)."""
+    summary_path = os.path.join(out, 'summary_%d.json' % index)
+    cmd = ['roslaunch', 'server_select', 'demo.launch', 'profile:=fleet', 'output:=log',
+           'n_servers:=%d' % servers, 'n_robots:=%d' % robots, 'duration:=%g' % seconds,
+           'summary_file:=%s' % summary_path]
+    observer = Observer(range(1, servers + 1))
+    with open(os.path.join(out, 'launch_%d.log' % index), 'w') as log:
+        proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True)
+    try:
+        proc.wait(seconds + 120.0)
+    finally:
+        stop_group(proc, timeout=20.0)
+        observer.close()
+    with open(summary_path) as stream:
+        summary = json.load(stream)
+    per_minute = [60.0 * r['switches'] / seconds for r in summary]
+    margins = [float(m.group(1)) for _, _, why in observer.moves
+               for m in [MARGIN.search(why)] if m]
+    spreads = dict((s, log_spread(w)) for s, w in observer.work.items())
+    return {'switches_per_min': per_minute, 'moves': observer.moves, 'margins_ms': margins,
+            'work_ms': dict((s, 1e3 * sorted(w)[len(w) // 2] if w else None)
+                            for s, w in observer.work.items()),
+            'work_sigma': spreads, 'tasks': sum(r['tasks'] for r in summary),
+            'failed': sum(r['failed'] for r in summary)}
+
+
+def main(argv=None):
+    parser = cli.parser(__doc__)
+    parser.add_argument('--runs', type=int, default=3)
+    parser.add_argument('--seconds', type=float, default=90.0)
+    args = parser.parse_args(argv)
+    out = os.path.abspath(args.out)
+    os.makedirs(out, exist_ok=True)
+    runs = []
+    with Roscore(out):
+        import rospy
+        rospy.init_node('loopback_demo_bench', anonymous=True, disable_signals=True)
+        for index in range(args.runs):
+            run = run_once(out, index, args.seconds)
+            runs.append(run)
+            sigmas = [v for v in run['work_sigma'].values() if v is not None]
+            print('run %d: switches a minute per robot %s; %d moves, least margin %s ms; '
+                  'work sigma per server %s; %d tasks, %d failed' % (
+                      index + 1, ' '.join('%.1f' % v for v in run['switches_per_min']),
+                      len(run['moves']), '%.3g' % min(run['margins_ms'])
+                      if run['margins_ms'] else '-',
+                      ' '.join('%.3f' % v for v in sigmas), run['tasks'], run['failed']))
+            sys.stdout.flush()
+    per_minute = [v for r in runs for v in r['switches_per_min']]
+    sigmas = [v for r in runs for v in r['work_sigma'].values() if v is not None]
+    print('switches a minute per robot: %s; work sigma: %s; moves with a margin <= 0: %d' % (
+        median_range(per_minute, '%.2f'), median_range(sigmas, '%.3f') if sigmas else '-',
+        sum(1 for r in runs for m in r['margins_ms'] if m <= 0)))
+    cli.write(out, 'loopback_demo.json', {'runs': runs, 'seconds': args.seconds,
+                                          'time': time.time()})
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,36 @@
+"""The simulator's work noise of a shared CPU (config/sim/model.yaml ``shared_ms``) against
+the loopback demo it was fitted to (``shared_fit``: the measured spread of the sort work
+servers report, bench.loopback_demo)."""
+
+import statistics
+
+import pytest
+import yaml
+
+from server_select.ros.paths import package_file
+from server_select.sim.model import Model, PATH
+from server_select.sim.work_noise import reported_spread, with_shared
+
+SEEDS = range(1, 11)
+
+
+@pytest.fixture(scope='module')
+def fitted():
+    with open(package_file(*PATH)) as stream:
+        return yaml.safe_load(stream)['shared_fit']
+
+
+def simulated(model):
+    return statistics.median(reported_spread(model, seed) for seed in SEEDS)
+
+
+def test_the_simulated_loopback_demo_reports_work_as_varied_as_the_real_one(fitted):
+    measured = fitted['measured_spread']
+    assert measured == pytest.approx(statistics.median(fitted['spreads']), abs=1e-3)
+    spread = simulated(Model.load())
+    print('reported sort work, log spread: measured %.3f, simulated %.3f' % (measured, spread))
+    assert spread == pytest.approx(measured, rel=0.10)
+
+
+def test_without_the_shared_noise_the_reports_vary_far_less_than_measured(fitted):
+    assert simulated(with_shared(Model.load(), 0.0)) < 0.5 * fitted['measured_spread']
