@@ -40,18 +40,43 @@ def parse(argv):
     return args
 
 
+def _from_bag(path, out):
+    """The scenario of the run recorded in the bag at ``path``, written to ``out`` (its
+    path), and the run's own figures."""
+    from server_select.sim import from_bag
+    from server_select.testbed.bag_analysis import load
+    run = load(path)
+    data = from_bag.scenario(run, Model.load())
+    name = os.path.abspath(os.path.join(out, 'from_bag.yaml'))
+    with open(name, 'w') as stream:
+        stream.write('# the run of %s\n' % path)
+        yaml.safe_dump(data, stream, sort_keys=False)
+    return name, from_bag.recorded(run, data['suite']['measure_from'])
+
+
+def _beside(own, variants, seeds):
+    """The bag's own figures beside each simulated variant's (median [95 % interval])."""
+    def figures(mean, failed, tasks):
+        return '%s ms, %s failed of %s tasks' % (mean, failed, tasks)
+    lines = ['this run (the bag): %s, %.2f switches /min /robot' % (figures(
+        '-' if own['mean'] is None else '%.2f' % (1e3 * own['mean']), own['failed'],
+        own['tasks']), own['switches'])]
+    for variant, runs in variants.items():
+        series = [runs[s] for s in seeds if s in runs]
+        lines.append('simulated %s: %s' % (variant, figures(
+            report.cell([r.get('mean') for r in series], '%.2f', 1e3),
+            report.cell([r.get('failed') for r in series], '%.0f'),
+            report.cell([r.get('tasks') for r in series], '%.0f'))))
+    return '\n'.join(lines)
+
+
 def main(argv=None):
     args = parse(sys.argv[1:] if argv is None else argv)
     os.makedirs(args.out, exist_ok=True)
     name = args.scenario
     try:
         if args.from_bag:
-            data = __import__('server_select.sim.from_bag', fromlist=['scenario']).scenario(
-                args.from_bag, Model.load())
-            name = os.path.abspath(os.path.join(args.out, 'from_bag.yaml'))
-            with open(name, 'w') as stream:
-                stream.write('# the links of %s\n' % args.from_bag)
-                yaml.safe_dump(data, stream, sort_keys=False)
+            name, own = _from_bag(args.from_bag, args.out)
         # a bad file or an empty measured part: its one line, before any run
         for warning in measured_window(league.network_scenario(name))[1]:
             print('simulate: warning: %s' % warning, file=sys.stderr)
@@ -68,6 +93,8 @@ def main(argv=None):
     results.update(seeds=options.seeds, variants={'network': variants},
                    scenarios={'network': [short_name(name)]})
     print(report.write(results, args.out))
+    if args.from_bag:
+        print(_beside(own, results['network'][short_name(name)], options.seeds))
     print('written: %s' % os.path.join(args.out, 'league.md'))
     return 0
 

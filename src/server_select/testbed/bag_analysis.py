@@ -19,8 +19,9 @@ from server_select.testbed.bag_tables import compare, table
 
 Flag = collections.namedtuple('Flag', 't robot server ranking means reason')
 Flag.__new__.__defaults__ = ('',)       # reason: why (bags of older versions: none)
-Report = collections.namedtuple('Report', 't robot task ok rtt server answered_by error attempts')
-Report.__new__.__defaults__ = (1,)      # attempts: servers the task went to
+Report = collections.namedtuple('Report',
+                                't robot task ok rtt server answered_by error attempts kind')
+Report.__new__.__defaults__ = (1, 'sort')   # attempts: servers the task went to; its kind
 Sample = collections.namedtuple('Sample', 't robot server ok rtt')
 Run = collections.namedtuple('Run', 'meta flags reports samples servers')
 Servers = collections.namedtuple('Servers', 't servers')
@@ -51,7 +52,8 @@ def load(bag_path):
                                   list(msg.mean_latency), getattr(msg, 'reason', '')))
             elif name == 'task_report' and not cut_off(msg.error):
                 reports.append(Report(t, msg.robot_id, msg.task_id, msg.ok, msg.rtt,
-                                      msg.server_id, msg.answered_by, msg.error, msg.attempts))
+                                      msg.server_id, msg.answered_by, msg.error, msg.attempts,
+                                      msg.kind))
             elif name.startswith('latency_R'):
                 samples.append(Sample(t, msg.robot_id, msg.server_id, msg.ok, msg.rtt))
             elif name == 'latency_samples':     # the fleet profile's batch per probe round
