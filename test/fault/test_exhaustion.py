@@ -1,6 +1,7 @@
 """A server fed inputs made to exhaust it, each from this process: a sort task of 1e7
-values (40 MB), 4096 x 4096 frames (50 MB each), a connection header claiming 4 GB
-followed by 40 MB of junk, probes naming 500,000 made-up task kinds.
+values (40 MB), 4096 x 4096 frames (50 MB each), PNGs of 0.9 MB that inflate to 30000 x
+30000 pixels, a connection header claiming 4 GB followed by 40 MB of junk, probes naming
+500,000 made-up task kinds.
 
 Each is refused from the length that precedes it, before it is read: the server stays
 under 150 MiB, its probes are answered as fast as before (within 2 ms), a good task sent
@@ -16,13 +17,14 @@ import subprocess
 import threading
 import time
 import urllib.parse
+import zlib
 
 import numpy as np
 import pytest
 import rosgraph
 import rospy
 from rospy.numpy_msg import numpy_msg
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import CompressedImage, Image
 
 from server_select.core.util.procs import stat_fields, stop_group, wait_until
 from server_select.msg import ImageTask, SortResult, SortTask
@@ -152,6 +154,34 @@ def test_oversized_frames_are_refused_unread(server):
         return '3 frames of 4096 x 4096'
     attack(server, 'frames of 16.7 MP', send)
     assert wait_until(lambda: server.lines('on /task_image from %s' % rospy.get_name()), 5.0)
+
+
+def png_bomb(side=30000):
+    """A grayscale PNG of ``side`` x ``side`` zero pixels (900 MB inflated, about 0.9 MB)."""
+    def chunk(kind, payload):
+        return struct.pack('>I', len(payload)) + kind + payload + \
+            struct.pack('>I', zlib.crc32(kind + payload))
+    packer, row, parts = zlib.compressobj(9), b'\x00' * (side + 1), []
+    for _ in range(side):
+        parts.append(packer.compress(row))
+    parts.append(packer.flush())
+    header = struct.pack('>IIBBBBB', side, side, 8, 0, 0, 0, 0)
+    return b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', header) + chunk(b'IDAT', b''.join(parts)) + \
+        chunk(b'IEND', b'')
+
+
+def test_a_png_that_inflates_to_900_mb_is_refused_from_its_header(server):
+    bomb = png_bomb()
+
+    def send():
+        for task_id in (301, 302, 303):
+            server.image.publish(ImageTask(robot_id=67, task_id=task_id, server_id=SERVER,
+                                           compressed=CompressedImage(format='png', data=bomb)))
+        return '3 PNGs of %d KB, 30000 x 30000 pixels' % (len(bomb) >> 10)
+    figures = attack(server, 'PNG bombs', send)
+    assert wait_until(lambda: server.lines('30000x30000 exceeds max_image_pixels'), 10.0), \
+        server.lines('robot 67')
+    assert figures['server CPU s meanwhile'] < 5.0, figures
 
 
 def test_a_header_claiming_4_gb_ends_its_connection(server):

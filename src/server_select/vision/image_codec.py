@@ -8,6 +8,7 @@ add up, raise :class:`ImageError` with the reason.
 
 from server_select.core.settings import MAX_IMAGE_PIXELS
 from server_select.core.util.lazy import deferred
+from server_select.vision.image_header import HeaderError, dimensions
 
 np = deferred('numpy')
 
@@ -93,20 +94,21 @@ def encode(array, quality=80, kind='jpeg'):
 
 def decode(fmt, data, max_pixels=MAX_PIXELS):
     """The BGR array of a compressed frame (JPEG or PNG); a frame that does not decode, or
-    decodes to more than ``max_pixels``, raises ImageError."""
+    whose header says it has more than ``max_pixels``, raises ImageError."""
     import cv2
     if not any(k in fmt.lower() for k in ('jpeg', 'jpg', 'png')):
         raise ImageError('unsupported compressed format %r (jpeg or png)' % fmt)
-    buffer = np.frombuffer(data, dtype=np.uint8)
-    if buffer.size == 0:
+    if not len(data):
         raise ImageError('empty compressed frame')
-    header = cv2.imdecode(buffer, cv2.IMREAD_REDUCED_GRAYSCALE_8)
-    if header is None:
-        raise ImageError('compressed frame (%s, %d bytes) does not decode' % (fmt, buffer.size))
-    if header.shape[0] * header.shape[1] * 64 > max_pixels:
-        raise ImageError('compressed frame of about %dx%d exceeds max_image_pixels %d'
-                         % (header.shape[1] * 8, header.shape[0] * 8, max_pixels))
-    frame = cv2.imdecode(buffer, cv2.IMREAD_COLOR)
+    try:        # its size from its header, before a byte of it is decoded
+        width, height = dimensions(data)
+    except HeaderError as error:
+        raise ImageError('compressed frame (%s, %d bytes) does not decode: %s'
+                         % (fmt, len(data), error))
+    if width * height > max_pixels:
+        raise ImageError('compressed frame of %dx%d exceeds max_image_pixels %d'
+                         % (width, height, max_pixels))
+    frame = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_COLOR)
     if frame is None:
         raise ImageError('compressed frame (%s) does not decode' % fmt)
     return frame
