@@ -66,12 +66,12 @@ def test_exactly_the_messages_within_the_limit_arrive_in_order(tasks, chunk):
             for robot, task, values, _ in tasks]
     for msg, (_, _, _, frame) in zip(msgs, tasks):
         msg.header.frame_id = frame
-    before = bounded_read.refused().get(('/sender', TOPIC), 0)
+    before = bounded_read.refused()[0].get('/sender on %s' % TOPIC, 0)
     got = received(b''.join(wire(m) for m in msgs), chunk)
     within = [m for m in msgs if len(wire(m)) - 4 <= LIMIT]
     assert [(m.robot_id, m.task_id, tuple(m.data), m.header.frame_id) for m in got] == \
         [(m.robot_id, m.task_id, tuple(m.data), m.header.frame_id) for m in within]
-    assert bounded_read.refused().get(('/sender', TOPIC), 0) - before == \
+    assert bounded_read.refused()[0].get('/sender on %s' % TOPIC, 0) - before == \
         len(msgs) - len(within)
 
 

@@ -12,7 +12,6 @@ is stored, deserialized and queued before its kind can refuse it. Both are prece
   sender's next message), counted by sender, and named in a line at most every 5 s.
 """
 
-import collections
 import socket
 import struct
 import threading
@@ -24,12 +23,13 @@ from rospy.impl.tcpros_pubsub import TCPROSSub
 from rospy.impl.tcpros_service import TCPService
 
 from server_select.core.trust.senders import Throttle
+from server_select.core.util.bounded import PeerCounter, peer
 
 MAX_HEADER_BYTES = 1 << 20    # the fleet's largest header is 5 KB (ImageResult's definition)
 _SCRATCH = 1 << 16            # read size while reading past a refused message
 _LIMITS = {}                  # resolved topic or service name -> largest message, bytes
 _LOCK = threading.Lock()
-_REFUSED = collections.Counter()      # (sender, name) -> messages refused
+_REFUSED = PeerCounter()      # 'sender on name' -> messages refused (the latest senders)
 _THROTTLE = Throttle(5.0)
 _ORIGINAL = {}
 
@@ -81,9 +81,10 @@ def limit(name, most):
 
 
 def refused():
-    """Messages refused so far, by (sender, topic or service)."""
+    """Messages refused so far, by ``'sender on topic or service'`` (the latest senders'),
+    and in all."""
     with _LOCK:
-        return dict(_REFUSED)
+        return dict(_REFUSED), _REFUSED.total
 
 
 def _length(buffer):
@@ -113,15 +114,15 @@ def _read_past(transport, size):
 def _refuse(transport, name, size, most):
     """Count and name the message just read past; a service client is answered with the
     reason (its call fails at once, with it)."""
-    sender = (transport.header or {}).get('callerid', 'an unknown node')
+    sender = peer((transport.header or {}).get('callerid', 'an unknown node'))
     why = 'a message of %d bytes on %s from %s: more than its limit of %d' % (
         size, name, sender, most)
     if isinstance(transport.protocol, TCPService):
         error = ('request refused: %s' % why).encode('utf-8')
         transport.write_data(struct.pack('<BI', 0, len(error)) + error)
     with _LOCK:
-        _REFUSED[(sender, name)] += 1
-        total = sum(_REFUSED.values())
+        _REFUSED.add('%s on %s' % (sender, name))
+        total = _REFUSED.total
     due, held = _THROTTLE.due()
     if due:
         rospy.logwarn('%s: refused %s%s' % (

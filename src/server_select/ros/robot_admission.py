@@ -11,13 +11,13 @@ publisher), counted by sender, in a line at most every 5 s that also says how ma
 were taken meanwhile. Without a key everything counts.
 """
 
-import collections
 import threading
 
 import rospy
 
 from server_select.core.fleet.leases import Leases
 from server_select.core.trust.senders import Throttle
+from server_select.core.util.bounded import PEER_CHARS, PeerCounter, peer
 from server_select.ros import seal
 from server_select.ros.graph import publisher_of
 from server_select.ros.senders import warn
@@ -37,7 +37,7 @@ class RobotAdmission(object):
         self._lock = threading.Lock()
         self._expired_at = 0.0
         self.taken = 0
-        self.refused = collections.Counter()      # sender -> tasks dropped
+        self.refused = PeerCounter()      # sender -> tasks dropped (the latest senders)
         self._probe_throttle, self._task_throttle = Throttle(5.0), Throttle(5.0)
 
     def probe(self, request):
@@ -48,7 +48,7 @@ class RobotAdmission(object):
         if request.robot_id == 0:
             return False
         sender = (getattr(request, '_connection_header', None) or {}).get('callerid', '?')
-        if not request.seal.mac and self.leases.holder(request.robot_id) == sender:
+        if not request.seal.mac and self.leases.holder(request.robot_id, self._clock()) == sender:
             return False          # its robot's, between the ones it seals (once a second)
         why = seal.request_refusal(request, self.service)
         if why is None:
@@ -61,7 +61,7 @@ class RobotAdmission(object):
                 request.robot_id, holder, ROBOT_LEASE)
         warn(self._probe_throttle, '%s: a probe of robot %d from %s announces nothing and '
              'prepares nothing (%s, by the fleet key)'
-             % (self.who, request.robot_id, sender, why))
+             % (self.who, request.robot_id, peer(sender), peer(why, 4 * PEER_CHARS)))
         return False
 
     def _expire(self, now):
@@ -77,13 +77,13 @@ class RobotAdmission(object):
         if not self.keyed:
             return True
         sender = publisher_of(task)
-        bound = self.leases.holder(task.robot_id)
+        bound = self.leases.holder(task.robot_id, self._clock())    # a lease ends in time
         with self._lock:
             if bound is not None and sender == bound:
                 self.taken += 1
                 return True
-            self.refused[sender] += 1
-            refused, taken = self.refused[sender], self.taken
+            refused, taken = self.refused.add(sender), self.taken
+        sender = peer(sender)
         warn(self._task_throttle, '%s: dropped a task of robot %d from %s (%s): %d of its '
              'tasks dropped, %d robots\' tasks taken so far'
              % (self.who, task.robot_id, sender, 'no signed probe of robot %d' % task.robot_id

@@ -3,6 +3,7 @@
 import rospy
 
 from server_select.core.trust.senders import ExpectedSender, Throttle
+from server_select.core.util.bounded import PEER_CHARS, peer
 from server_select.ros import seal
 from server_select.ros.graph import Liveness, publisher_of
 
@@ -53,7 +54,8 @@ class SenderGate(object):
         if due:
             what = what() if callable(what) else what
             rospy.logwarn('%s: ignored %s published by %s (%s)%s' % (
-                self.who, what, sender, why, '; %d more ignored before' % held if held else ''))
+                self.who, what, peer(sender), peer(why, 4 * PEER_CHARS),
+                '; %d more ignored before' % held if held else ''))
 
 
 def warn(throttle, text):

@@ -1,0 +1,43 @@
+"""A keyed server's binding of robot ids to nodes (ros/robot_admission.py): a lease ends by
+the clock at every check, and a flood of made-up senders keeps a bounded table."""
+
+import types
+
+import pytest
+
+from server_select.ros import robot_admission
+from server_select.ros.robot_admission import ROBOT_LEASE, RobotAdmission
+
+from support.clock import Clock
+
+
+def task(robot_id, sender):
+    return types.SimpleNamespace(robot_id=robot_id, _connection_header={'callerid': sender})
+
+
+@pytest.fixture(autouse=True)
+def keyed(monkeypatch):
+    """A fleet key is set (the probes that bind are checked with it elsewhere)."""
+    monkeypatch.setattr(robot_admission.seal, 'enabled', lambda: True)
+
+
+def admission(clock):
+    return RobotAdmission('server 1', '/latency_S1', clock=clock)
+
+
+def test_a_robots_tasks_count_until_its_lease_ends_and_not_after():
+    clock = Clock()
+    gate = admission(clock)
+    gate.leases.renew(1, '/robot1', clock(), ROBOT_LEASE)
+    assert gate.admits(task(1, '/robot1'))
+    assert not gate.admits(task(1, '/robot1_impostor'))
+    clock.now += ROBOT_LEASE + 0.1      # no signed probe since: the binding is over
+    assert not gate.admits(task(1, '/robot1'))
+
+
+def test_made_up_senders_keep_a_bounded_table():
+    clock = Clock()
+    gate = admission(clock)
+    for n in range(1000):
+        assert not gate.admits(task(1, '/x%d' % n + 'y' * 100000))
+    assert gate.refused.total == 1000 and len(gate.refused) <= gate.refused.most
