@@ -151,8 +151,10 @@ def test_a_key_others_can_read_or_write_is_refused_with_what_to_do(tmp_path, mod
         key_files.load_key(path)
 
 
-@pytest.mark.parametrize('text, message', [('zz' * 32, 'not hex'), ('ab' * 8 + 'a', 'not hex'),
-                                           ('ab' * 15, 'fewer than 16')])
+@pytest.mark.parametrize('text, message', [
+    ('zz' * 32, 'not hex'), ('ab' * 8 + 'a', 'not hex'),
+    ('ab' * 15, '15 bytes'), ('ab' * 20, r'20 bytes \(40 hex characters\), not 32'),
+    ('ab' * 33, '33 bytes')])
 def test_a_key_that_is_not_one_is_refused(tmp_path, text, message):
     path = tmp_path / 'fleet.key'
     path.write_text(text)

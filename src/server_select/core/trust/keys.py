@@ -15,8 +15,7 @@ import hmac
 import os
 import stat
 
-KEY_BYTES = 32            # what make_key writes
-MIN_KEY_BYTES = 16
+KEY_BYTES = 32            # what make_key writes, and what a fleet key must have
 ROLES = ('manager', 'server', 'robot')
 OBSERVER = 'observer'     # a role key file that checks and signs nothing (top, report)
 
@@ -68,11 +67,13 @@ def _hex(text, path, what='fleet key'):
 def load_key(path):
     """The fleet key in ``path`` (hex text, as :func:`make_key` writes it). Refused
     (:class:`KeyFileError`) when missing, readable or writable by group or others, not hex, or
-    shorter than ``MIN_KEY_BYTES``."""
+    not ``KEY_BYTES`` long (a key cut or copied in part would be another fleet's: every
+    peer would then refuse this node's signatures, and nothing here would say why)."""
     key = _hex(_read_private(path), path)
-    if len(key) < MIN_KEY_BYTES:
-        raise KeyFileError('fleet key %s has %d bytes, fewer than %d'
-                           % (path, len(key), MIN_KEY_BYTES))
+    if len(key) != KEY_BYTES:
+        raise KeyFileError('fleet key %s has %d bytes (%d hex characters), not %d (%d, as '
+                           'make_key writes it): was it cut or copied in part?'
+                           % (path, len(key), 2 * len(key), KEY_BYTES, 2 * KEY_BYTES))
     return key
 
 
