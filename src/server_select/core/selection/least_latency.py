@@ -27,7 +27,7 @@ Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
 RATE_HORIZON = 5.0       # s of the robot's own tasks its rate is counted over
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('keep', 'robust', 'tries')
+MECHANISMS = ('keep', 'robust', 'tries', 'work_error')
 
 Estimate = collections.namedtuple('Estimate', 'latency error wait answers')
 
@@ -98,7 +98,7 @@ class LeastLatency(Balancer):
         work = newest.service.get(kind, self.least_work.get(kind, 0.0))
         # the newest report (a step in the work shows at once) and its error, the server's
         # (a median of its last second's tasks, which a shared CPU makes vary)
-        work_error = newest.service_error.get(kind, 0.0)
+        work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.on else 0.0
         workers = float(newest.workers)
         mine = rate * work / workers
         rtts = [a.rtt for a, _ in answers]
