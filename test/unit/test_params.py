@@ -121,3 +121,11 @@ def test_a_path_with_a_tilde_is_the_users_home(monkeypatch):
     assert parse_path('~image_source', 'search:a.yaml') == 'search:a.yaml'
     with pytest.raises(ParamError, match='expected a string'):
         parse_path('~fleet_key', [1])
+
+
+def test_a_typo_in_any_case_gets_its_did_you_mean():
+    from server_select.core.config.params import nearest
+    assert nearest('robot_Id', ['robot_id', 'robots']) == 'robot_id'
+    assert nearest('duraton', ['duration', 'output']) == 'duration'
+    assert nearest('TASK_RATE', ['task_rate', 'frame_rate']) == 'task_rate'
+    assert nearest('zzz', ['task_rate']) is None

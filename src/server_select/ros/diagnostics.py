@@ -42,10 +42,16 @@ class Diagnostics(object):
         self.timer = rospy.Timer(rospy.Duration(PERIOD / 4), self._update)
 
     def _update(self, _event):
+        if rospy.is_shutdown():
+            return
         if self.before is not None and rospy.Time.now() >= \
                 self.updater.last_time + rospy.Duration(self.updater.period):
             self.before()
-        self.updater.update()
+        try:
+            self.updater.update()
+        except rospy.ROSException:      # "publish() to a closed topic": the node stops
+            if not rospy.is_shutdown():
+                raise
 
     def shutdown(self):
         if self.timer is not None:

@@ -214,5 +214,8 @@ def one_of(*choices):
 
 
 def nearest(name, valid):
-    """The name in ``valid`` closest to ``name`` (what a typo meant), or None."""
-    return next(iter(difflib.get_close_matches(name, sorted(valid), 1)), None)
+    """The name in ``valid`` closest to ``name`` (what a typo meant, in any case:
+    ``robot_Id`` means ``robot_id``), or None."""
+    lowered = dict((v.lower(), v) for v in sorted(valid, reverse=True))
+    near = difflib.get_close_matches(name.lower(), sorted(lowered), 1)
+    return lowered[near[0]] if near else None
