@@ -5,8 +5,7 @@ what each parameter means and what it defaults to; each role's launch file says 
 parameters its node takes, under which launch argument. :func:`problems` lists where the
 two disagree (a launch file setting a parameter the table does not have, an argument
 that reaches nothing, a parameter no launch file or node list names); :func:`render` is
-the document. ``python3 -m server_select.paramdoc --check`` fails when the document in
-the repository is not what :func:`render` makes now (``--write`` makes it).
+the document (``--check``: fail when the repository's is not what it makes; ``--write``).
 """
 
 import argparse
@@ -16,6 +15,7 @@ import sys
 import textwrap
 import xml.etree.ElementTree as ET
 
+from server_select.core.config import limits
 from server_select.core.selection.policy import POLICIES
 from server_select.core.settings import PARAMS, PROFILES, REQUIRED
 from server_select.ros.paths import package_file
@@ -168,8 +168,8 @@ def render(top=TOP):
            '(`src/server_select/core/settings.py`) and the launch files; `make test` checks '
            'that it is current and that the two agree. Every parameter is private (`~name`). '
            'A launch argument left at `-` (the default of all but ids; empty is the same) '
-           'leaves the node\'s '
-           'default, the `paper` column or, with `profile:=fleet`, the `fleet` column; a '
+           'leaves the node\'s default, the `paper` column or, with `profile:=fleet`, the '
+           '`fleet` column; a '
            'parameter set explicitly always wins. Id lists are YAML lists or strings: '
            '`[1, 2, 3]`, `"1,2,3"`, `"1 2 3"`. An invalid value stops the node with one '
            '`invalid parameter` line and exit status 2.', '']
@@ -190,6 +190,7 @@ def render(top=TOP):
             '|---|---|---|---|---|']
     for node, params in OTHER_NODES.items():
         out += [row(p).replace('| ', '| `%s` | ' % node, 1) for p in params]
+    out += ['', '## Message size limits', ''] + limits.table()
     return '\n'.join(out) + '\n'
 
 

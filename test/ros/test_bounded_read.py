@@ -15,7 +15,8 @@ from rospy.exceptions import TransportTerminated
 from rospy.impl.tcpros_base import TCPROSTransport
 from rospy.impl.tcpros_pubsub import TCPROSSub
 
-from server_select.msg import SortTask
+from server_select.core.config.limits import MESSAGE_LIMITS
+from server_select.msg import ServerAnnouncement, SortTask
 from server_select.ros import bounded_read
 
 TOPIC = '/bounded_test'
@@ -29,10 +30,11 @@ def wire(msg):
     return struct.pack('<I', len(data)) + data
 
 
-def received(stream, chunk):
-    """The messages a subscriber's transport reads from ``stream`` (bytes), sent in pieces
-    of ``chunk`` bytes."""
-    bounded_read.limit(TOPIC, LIMIT)
+def received(stream, chunk, topic=TOPIC, cls=SortTask, limit=LIMIT):
+    """The messages a subscriber's transport of ``cls`` on ``topic`` reads from ``stream``
+    (bytes), sent in pieces of ``chunk`` bytes (``limit``: the topic's own; None: none)."""
+    if limit is not None:
+        bounded_read.limit(topic, limit)
     ours, theirs = socket.socketpair()
 
     def send():
@@ -41,7 +43,7 @@ def received(stream, chunk):
         theirs.shutdown(socket.SHUT_WR)
     writer = threading.Thread(target=send)
     writer.start()
-    transport = TCPROSTransport(TCPROSSub(TOPIC, SortTask), TOPIC)
+    transport = TCPROSTransport(TCPROSSub(topic, cls), topic)
     transport.socket, transport.header = ours, {'callerid': '/sender'}
     got = []
     try:
@@ -98,3 +100,17 @@ def test_a_header_is_read_when_within_its_limit_and_refused_unread_when_not(
     finally:
         ours.close()
         theirs.close()
+
+
+def test_a_fleet_message_type_has_its_limit_on_any_topic_without_one():
+    """A subscriber of server announcements with no limit of its own: one of 2 MB (its
+    probe_uri) is refused from its length, the small ones before and after arrive."""
+    topic = '/announcements_test'
+    big = ServerAnnouncement(server_id=2, probe_uri='x' * (2 << 20))
+    small = [ServerAnnouncement(server_id=1), ServerAnnouncement(server_id=3)]
+    before = bounded_read.refused()[1]
+    got = received(wire(small[0]) + wire(big) + wire(small[1]), 1 << 16, topic,
+                   ServerAnnouncement, limit=None)
+    assert [m.server_id for m in got] == [1, 3]
+    assert bounded_read.refused()[1] - before == 1
+    assert MESSAGE_LIMITS[ServerAnnouncement._type] < len(wire(big))

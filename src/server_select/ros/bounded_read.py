@@ -10,6 +10,9 @@ is stored, deserialized and queued before its kind can refuse it. Both are prece
 - :func:`limit` (a topic this node subscribes to, a service it serves): a message longer
   than the limit is read past without being kept (the connection stays usable for the
   sender's next message), counted by sender, and named in a line at most every 5 s.
+- every other subscription to one of the fleet's own message types has its type's limit
+  (:mod:`server_select.core.config.limits`, docs/parameters.md): an announcement of
+  150 MB is refused from its length, not read, decoded and then refused for its seal.
 """
 
 import socket
@@ -22,6 +25,7 @@ from rospy.impl import tcpros_base
 from rospy.impl.tcpros_pubsub import TCPROSSub
 from rospy.impl.tcpros_service import TCPService
 
+from server_select.core.config.limits import MESSAGE_LIMITS
 from server_select.core.trust.senders import Throttle
 from server_select.core.util.bounded import PeerCounter, peer
 
@@ -129,11 +133,20 @@ def _refuse(transport, name, size, most):
             rospy.get_name(), why, ' (%d refused in all)' % total if held else ''))
 
 
+def _limit_of(protocol):
+    """The largest message ``protocol`` takes: its topic's or service's limit, else its
+    message type's (None: none)."""
+    most = _LIMITS.get(getattr(protocol, 'resolved_name', None))
+    if most is None and isinstance(protocol, TCPROSSub):
+        most = MESSAGE_LIMITS.get(getattr(protocol.recv_data_class, '_type', None))
+    return most
+
+
 def _receive_once(transport):
     """rospy's, but a message over its topic's limit is read past and refused first
     (then nothing is returned: rospy's loops ask again)."""
     protocol = transport.protocol
-    most = _LIMITS.get(getattr(protocol, 'resolved_name', None))
+    most = _limit_of(protocol)
     if most is not None and isinstance(protocol, (TCPROSSub, TCPService)) and \
             transport.socket is not None:
         buffer = transport.read_buff
@@ -171,7 +184,7 @@ def _whole_within(buffer, most):
 def _read_messages(protocol, buffer, msg_queue, sock):
     """rospy's, but a message over the limit in the same buffer as good ones is not
     deserialized with them: it stays at the buffer's start for :func:`_receive_once`."""
-    most = _LIMITS.get(protocol.resolved_name)
+    most = _limit_of(protocol)
     whole = _whole_within(buffer, most) if most is not None else None
     if whole == 0:
         return
