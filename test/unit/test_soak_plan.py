@@ -1,5 +1,6 @@
 """The soak's schedule and scenario: seeded, every kind, one at a time, link outages."""
 
+import os
 import random
 
 import pytest
@@ -61,3 +62,12 @@ def test_a_soak_of_some_kinds_repeats_them_as_often_as_they_fit():
     assert {f.kind for f in faults} == {'overload'} and len(faults) == 8
     with pytest.raises(ValueError, match='no fault kind overlaod'):
         plan.schedule(720, random.Random(1), kinds=('overlaod',))
+
+
+def test_the_key_files_handed_to_nodes_are_absolute_paths(tmp_path, monkeypatch):
+    """`make soak` gives a folder relative to the repository; roslaunch starts the nodes
+    in ROS_HOME, where that path names nothing."""
+    from server_select.soak.run import _keys
+    monkeypatch.chdir(tmp_path)
+    paths = _keys('results/soak', 2)
+    assert all(os.path.isabs(p) and os.path.exists(p) for p in paths), paths

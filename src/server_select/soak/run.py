@@ -35,7 +35,9 @@ SETTLE = 10.0           # s after every node registered that failures count (fir
 
 
 def _keys(out, count):
-    folder = os.path.join(out, 'keys')
+    """``count`` new fleet key files in ``out``/keys: their absolute paths (the nodes that
+    are given them start in ROS_HOME)."""
+    folder = os.path.join(os.path.abspath(out), 'keys')
     os.makedirs(folder, exist_ok=True)
     paths = [os.path.join(folder, 'fleet_%d.key' % (n + 1)) for n in range(count)]
     for path in paths:
@@ -71,6 +73,9 @@ def soak(args, say=print):
     """One soak; the folder's analysis (report.analyse's result)."""
     duration, faults = plan_of(args)
     rotations = sum(1 for f in faults if f.kind == 'key_rotation')
+    # absolute: the nodes are handed paths in it (key files), and roslaunch starts them
+    # in ROS_HOME, not here
+    args.out = os.path.abspath(args.out)
     os.makedirs(args.out, exist_ok=True)
     for old in glob.glob(os.path.join(args.out, 'soak_*.bag*')):    # an earlier soak's
         os.remove(old)
