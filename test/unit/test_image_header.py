@@ -64,6 +64,12 @@ def test_the_header_says_what_opencv_decodes(width, height, kind):
     assert decode(fmt, data).shape == (height, width, 3)
 
 
+def test_a_jpeg_with_large_segments_before_its_frame_says_its_size():
+    """A camera's EXIF thumbnail and ICC profile: several 64 KB segments before the frame."""
+    segments = [(0xE1, bytes(65000)), (0xE2, bytes(65000)), (0xE2, bytes(65000))]
+    assert dimensions(jpeg_header(4000, 3000, segments)) == (4000, 3000)
+
+
 @pytest.mark.parametrize('data, why', [
     (b'\x89PNG\r\n\x1a\n' + b'\x00' * 8, 'without its IHDR'),
     (jpeg_header(0, 480), '0 x 480'),

@@ -12,6 +12,7 @@ JPEG_START = b'\xff\xd8'
 SOF_MARKERS = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
 STANDALONE = frozenset(range(0xD0, 0xD8)) | {0x01}    # restart markers, TEM: no length
 START_OF_SCAN = 0xDA
+HEADER_BYTES = 1 << 20      # a JPEG's segments before its frame (EXIF, ICC profiles) fit
 
 
 class HeaderError(ValueError):
@@ -21,7 +22,7 @@ class HeaderError(ValueError):
 def dimensions(data):
     """``(width, height)`` of the PNG or JPEG frame in the bytes ``data``, read from its
     header (HeaderError: neither, or a header cut short or malformed)."""
-    data = bytes(data[:1 << 16])
+    data = bytes(data[:HEADER_BYTES])
     if data.startswith(PNG_SIGNATURE):
         width, height = _png(data)
     elif data.startswith(JPEG_START):
