@@ -103,14 +103,35 @@ class ProbeLoop(object):
             return flight
         flight = Flight(proxy, sock, started, timeout, then, proxy.departed(sent) or sent)
         self._flights[sock] = flight
-        self._selector.register(sock, selectors.EVENT_READ, flight)
+        try:
+            self._selector.register(sock, selectors.EVENT_READ, flight)
+        except KeyError:        # its number is that of a connection closed elsewhere (a
+            self._forget_stale(sock.fileno())     # proxy renewed) while its probe was out
+            self._selector.register(sock, selectors.EVENT_READ, flight)
         return flight
+
+    def _forget_stale(self, fd):
+        """The flight registered under ``fd`` lost its connection: ended, and its
+        registration dropped (the number now belongs to a new connection)."""
+        stale = self._selector.get_map().get(fd)
+        if stale is None:
+            return
+        self._selector.unregister(stale.fileobj)
+        if stale.data is not None and self._flights.pop(stale.fileobj, None) is not None:
+            stale.data.finished = True
+            try:
+                stale.data.then(None, None, ProbeTimeout('its connection was closed'))
+            except Exception as failure:    # the prober's bug must not stop the loop
+                self.on_error(failure)
 
     def _finish(self, flight, response, rtt, error, drop=False):
         """``flight`` is over (``drop``: and its connection with it: an answer may still
         come, and must not be read as the next probe's)."""
         if flight.sock is not None and self._flights.pop(flight.sock, None) is not None:
-            self._selector.unregister(flight.sock)
+            try:
+                self._selector.unregister(flight.sock)
+            except (KeyError, ValueError):   # dropped with a stale number already
+                pass
         if drop:
             flight.proxy.reconnect()
         flight.finished = True
