@@ -135,8 +135,10 @@ def bench_sort_throughput(tiny, log, listener):
 
 def bench_image_throughput(tiny, log, listener, area):
     """Frames per second one server sustains for one robot (640x480 bgr8)."""
-    return offered_load(log, listener, 'image', 'fps', [10] if tiny else [10, 15, 20, 30],
-                        3.0 if tiny else 10.0, sort_tasks='false', image_source='search:' + area)
+    # tiny (make test's smoke run, at nice 19 beside two other streams): a rate such a host
+    # keeps up with; at 10 frames/s one CI run answered none within the task timeout
+    return offered_load(log, listener, 'image', 'fps', [2] if tiny else [10, 15, 20, 30],
+                        5.0 if tiny else 10.0, sort_tasks='false', image_source='search:' + area)
 
 
 def bench_sort_breakdown(tiny, log, listener):
