@@ -20,11 +20,11 @@ from rosgraph.network import ROSHandshakeException
 from rospy.impl import tcpros_base
 
 from server_select.core.trust.senders import Throttle
+from server_select.core.util.bounded import PEER_CHARS, peer
 from server_select.ros import bounded_read
 
 DEADLINE = 2.0           # s a new connection has to send its header
 MOST_AT_ONCE = 64        # handshakes under way at once
-PEER_CHARS = 64          # what a log line quotes of a peer's words at most
 
 _SLOTS = threading.BoundedSemaphore(MOST_AT_ONCE)
 _THROTTLE = Throttle(5.0)
@@ -98,7 +98,7 @@ def _close(sock, client_addr=None, why=None):
         return
     due, held = _THROTTLE.due()
     if due:
-        peer = '%s:%s' % tuple(client_addr[:2]) if client_addr else 'an unknown peer'
+        address = '%s:%s' % tuple(client_addr[:2]) if client_addr else 'an unknown peer'
         rospy.logwarn('%s: closed a connection from %s: %s%s' % (
-            rospy.get_name(), peer[:PEER_CHARS], why[:2 * PEER_CHARS],
+            rospy.get_name(), peer(address), peer(why, 2 * PEER_CHARS),
             '; %d more before' % held if held else ''))

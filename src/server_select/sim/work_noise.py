@@ -9,6 +9,7 @@ grid (simulated spread per value, over ``--seeds``) and the value it fits.
 """
 
 import argparse
+import copy
 import json
 import statistics
 import sys
@@ -53,9 +54,9 @@ def measured_spread(path):
 
 def with_shared(model, shared_ms):
     """A copy of ``model`` with ``shared_ms``."""
-    copy = Model.__new__(Model)
-    copy.__dict__.update(model.__dict__, shared=shared_ms * 1e-3)
-    return copy
+    changed = copy.copy(model)
+    changed.shared = shared_ms * 1e-3
+    return changed
 
 
 def fit(measured, seeds=range(1, 11), grid=GRID, model=None):
