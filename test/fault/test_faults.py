@@ -58,8 +58,12 @@ def answered(rec, robot, since, tasks, by=None):
 
 
 def warm_up(rec, robots=(1, 2), tasks=10):
-    assert wait_until(lambda: all(sum(1 for r in rec.of(rec.reports, robot) if r.msg.ok)
-                                  >= tasks for robot in robots), 40.0), 'no tasks answered'
+    def ok():
+        return dict((robot, sum(1 for r in rec.of(rec.reports, robot) if r.msg.ok))
+                    for robot in robots)
+    assert wait_until(lambda: min(ok().values()) >= tasks, 40.0), \
+        'tasks answered in 40 s, by robot: %s; %s' % (
+            ok(), dict((robot, rec.failures(robot)) for robot in robots))
 
 
 def show(title, rows):

@@ -309,7 +309,7 @@ class _Route(object):
     def remove(self, server):
         pass
 
-    def heard(self, server):
+    def heard(self, server, node=None):
         return []
 
     def publishers(self):

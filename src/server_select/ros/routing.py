@@ -14,8 +14,15 @@ import rospy
 
 from server_select.core.config import names
 from server_select.core.util import tcp
+from server_select.core.util.lasting import Lasting
 from server_select.ros.graph import hearing, stalled
 from server_select.ros.node import fleet
+
+# s a server that answers probes (so it subscribes to our task topic) may go without hearing
+# our task publisher before the publisher is made anew. rospy connects a subscriber once,
+# when the master names the publisher, and does not try again when that connection is lost
+# as it is made (two of the master's updates at once, or a publisher too busy to answer).
+DEAF_GRACE = 5.0
 
 
 class BroadcastRoute(object):
@@ -23,41 +30,62 @@ class BroadcastRoute(object):
 
     def __init__(self, robot_id, kind, on_result):
         self.kind, self.on_result = kind, on_result
-        self.pub = self.sub = None
+        self._lock = threading.Lock()
+        self.pubs = {}            # None -> the one task publisher (a dict for renew())
+        self.sub = None
+        self.deaf = Lasting(DEAF_GRACE)
+
+    def _pub(self, _server=None):
+        pub = self.pubs.get(None)
+        if pub is None:
+            pub = self.pubs[None] = rospy.Publisher(
+                fleet(self.kind.task_topic), self.kind.task_type, queue_size=100)
+        return pub
 
     def start(self):
-        self.pub = rospy.Publisher(fleet(self.kind.task_topic), self.kind.task_type,
-                                   queue_size=100)
+        with self._lock:
+            self._pub()
         self.sub = _results(fleet(self.kind.result_topic), self.kind, self.on_result)
 
     def publish(self, request, _server):
-        self.pub.publish(request)
+        with self._lock:      # (not while heard() makes it anew)
+            self._pub().publish(request)
 
-    def heard(self, _server):
-        """(DirectRoute.heard) One publisher for every server: the paper's, kept as is."""
-        return []
+    def heard(self, server, node=None):
+        """``server`` answered a probe: the publisher is made anew when a connection of it
+        is stalled, or when the server's node ``node`` has not heard it for DEAF_GRACE s
+        (every server then connects again); the nodes it was made anew for."""
+        with self._lock:
+            deaf = node is not None and node not in hearing(self._pub())
+            return renew(self.pubs, None, self._pub,
+                         [node] if self.deaf.held(server, deaf) else [])
 
     def publishers(self):
-        return [self.pub]
+        with self._lock:
+            return [self._pub()]
 
     def wired(self, _server, node=None):
         """Whether our result topic hears a server and our task topic reaches ``node`` (the
         server's node name; None: unknown, any server will do). A robot started again under
         its name is connected to one server after another: a task sent before the selected
         one is connected is lost to it."""
-        if not (self.pub.get_num_connections() > 0 and self.sub.get_num_connections() > 0):
+        with self._lock:
+            pub = self._pub()
+        if not (pub.get_num_connections() > 0 and self.sub.get_num_connections() > 0):
             return False
         # rospy names a publisher's connection by its subscriber's caller id
-        return node is None or node in hearing(self.pub)
+        return node is None or node in hearing(pub)
 
     def add(self, server):
         pass
 
     def remove(self, server):
-        pass
+        self.deaf.forget(server)
 
     def shutdown(self):
-        for endpoint in (self.pub, self.sub):
+        with self._lock:
+            pubs, self.pubs = list(self.pubs.values()), {}
+        for endpoint in pubs + [self.sub]:
             if endpoint is not None:
                 endpoint.unregister()
 
@@ -70,6 +98,7 @@ class DirectRoute(object):
         self._lock = threading.Lock()
         self.pubs = {}
         self.sub = None
+        self.deaf = Lasting(DEAF_GRACE)
 
     def start(self):
         self.sub = _results(fleet(names.robot_topic(self.robot_id, self.kind.result_topic)),
@@ -88,12 +117,16 @@ class DirectRoute(object):
         with self._lock:      # (not while heard() makes it anew)
             self._pub(server).publish(request)
 
-    def heard(self, server):
+    def heard(self, server, node=None):
         """``server`` answered a probe: when its task connection is stalled
-        (:func:`~server_select.ros.graph.stalled`), the publisher is made anew so that
-        the server connects again, and the subscribers it names are returned."""
+        (:func:`~server_select.ros.graph.stalled`), or it has not connected for
+        DEAF_GRACE s, the publisher is made anew so that the server connects again, and
+        the subscribers it names are returned."""
         with self._lock:
-            return renew(self.pubs, server, lambda: self._pub(server))
+            deaf = self._pub(server).get_num_connections() == 0
+            return renew(self.pubs, server, lambda: self._pub(server),
+                         [node or 'server %d' % server] if self.deaf.held(server, deaf)
+                         else [])
 
     def publishers(self):
         with self._lock:
@@ -110,6 +143,7 @@ class DirectRoute(object):
             self._pub(server)
 
     def remove(self, server):
+        self.deaf.forget(server)
         with self._lock:
             pub = self.pubs.pop(server, None)
         if pub is not None:
@@ -126,21 +160,22 @@ class DirectRoute(object):
 ROUTES = {'broadcast': BroadcastRoute, 'direct': DirectRoute}
 
 
-def renew(pubs, key, make):
-    """Unregister ``pubs[key]`` and ``make()`` it again when a connection of it is stalled;
-    the stalled subscribers' nodes, or [] (the caller holds the lock guarding ``pubs``).
-    Its connections close with a reset, so that their subscribers drop them at once (one
-    that still held it would not connect again), and the new registration has the master
-    tell them to connect anew."""
+def renew(pubs, key, make, deaf=()):
+    """Unregister ``pubs[key]`` and ``make()`` it again when a connection of it is stalled
+    or ``deaf`` names subscribers that do not hear it; the stalled subscribers' nodes and
+    ``deaf``, or [] (the caller holds the lock guarding ``pubs``). Its connections close
+    with a reset, so that their subscribers drop them at once (one that still held it
+    would not connect again), and the new registration has the master tell them to
+    connect anew."""
     pub = pubs.get(key)
-    connections = stalled(pub) if pub is not None else []
-    if connections:
+    nodes = [c.endpoint_id for c in stalled(pub)] + list(deaf) if pub is not None else []
+    if nodes:
         for connection in list(pub.impl.connections):
             tcp.reset_on_close(getattr(connection, 'socket', None))
         del pubs[key]
         pub.unregister()
         make()
-    return [c.endpoint_id for c in connections]
+    return nodes
 
 
 def kind_name(kind):

@@ -171,12 +171,16 @@ class TaskStream(object):
 
     def heard(self, server):
         """``server`` answered a probe: a task connection to it stalled in TCP's
-        retransmission back-off is made anew (``DirectRoute.heard``), with a line."""
-        nodes = self.route.heard(server) if self.route is not None else []
+        retransmission back-off, or never made, is made anew (``BroadcastRoute.heard``,
+        ``DirectRoute.heard``), with a line."""
+        if self.route is None:
+            return
+        nodes = self.route.heard(server, self.node_of(server) if self.node_of else None)
         if nodes:
-            rospy.logwarn('robot %d: %s tasks to server %d stalled in TCP retransmission '
-                          'back-off (%s): connecting anew', self.robot_id, self.flow.kind,
-                          server, ', '.join(nodes))
+            rospy.logwarn('robot %d: %s tasks to server %d not heard by %s (a connection '
+                          'stalled in TCP retransmission back-off, or never made): '
+                          'connecting anew', self.robot_id, self.flow.kind, server,
+                          ', '.join(nodes))
 
     def shutdown(self):
         """Stop sending; a task still out is reported failed (each task is reported once,

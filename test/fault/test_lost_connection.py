@@ -1,0 +1,83 @@
+"""A task connection closed under its subscriber: the selected server's TCP connection to
+a robot's task publisher is destroyed (``ss -K``, both ends reset) while the fleet runs.
+rospy's subscriber drops a connection that ends and does not connect again by itself, so
+the server would never hear that robot's tasks again. The robot sees that a server that
+answers its probes does not hear its task topic, and makes the publisher anew; the master
+then has the server connect again. Printed: the seconds until the server hears the robot
+again, and the robot's task counts. Asserted: it does, with one line saying so, and every
+task is reported once."""
+
+import subprocess
+import time
+import xmlrpc.client
+
+import pytest
+import rosgraph
+import rospy
+
+from server_select.core.config import names
+from server_select.core.util.procs import wait_until
+from server_select.ros.routing import DEAF_GRACE
+
+from support.fleet import Fleet
+from test_faults import STABLE, TASK_TIMEOUT, current_server, show, warm_up
+
+ROBOT = 1
+
+
+def _robot_api():
+    master = rosgraph.Master(rospy.get_name())
+    return xmlrpc.client.ServerProxy(master.lookupNode('/robot%d' % ROBOT))
+
+
+def hearers(topic):
+    """The nodes robot ROBOT's publisher of ``topic`` is connected to (its bus info)."""
+    try:
+        _, _, connections = _robot_api().getBusInfo(rospy.get_name())
+    except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
+        return set()
+    return set(c[1] for c in connections if c[4] == topic and c[2] == 'o')
+
+
+def destroy_connections(from_pid):
+    """Reset every TCP connection of process ``from_pid`` to robot ROBOT's TCPROS port;
+    how many there were."""
+    _, _, (_, _, port) = _robot_api().requestTopic(rospy.get_name(), '/' + names.TASK_REPORT_TOPIC,
+                                                   [['TCPROS']])
+    lines = subprocess.run(['ss', '-tnpH', 'dport = :%d' % port], capture_output=True,
+                           text=True, check=True).stdout.splitlines()
+    local = [line.split()[3] for line in lines if 'pid=%d,' % from_pid in line]
+    for address in local:
+        subprocess.run(['ss', '-K', '-tn', 'src', address, 'dport', '=', ':%d' % port],
+                       capture_output=True, check=True)
+    return len(local)
+
+
+@pytest.mark.parametrize('profile', ['paper', 'fleet'])
+def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros, profile):
+    rec = ros['rec']
+    rec.clear()
+    args = STABLE if profile == 'paper' else {'task_rate': STABLE['task_rate']}
+    with Fleet(ros['log'], profile=profile, **args) as fleet:
+        warm_up(rec)
+        server = current_server(rec, ROBOT)
+        node = '/server%d' % server
+        topic = '/' + (names.server_topic(server, 'data') if profile == 'fleet' else 'data')
+        assert wait_until(lambda: node in hearers(topic), 10.0), hearers(topic)
+        destroyed = destroy_connections(fleet.pid(node))
+        t_cut = time.monotonic()
+        dropped = wait_until(lambda: node not in hearers(topic), 10.0, period=0.1)
+        again = wait_until(lambda: node in hearers(topic), 4 * DEAF_GRACE, period=0.2)
+        t_again = time.monotonic() - t_cut
+        said = wait_until(lambda: rec.log_lines('/robot%d' % ROBOT, 'connecting anew'), 5.0)
+        outcomes = rec.outcomes((ROBOT,), TASK_TIMEOUT)[ROBOT]
+    show('%s profile: server %d\'s connections to robot %d destroyed:' % (
+        profile, server, ROBOT), [{
+            'connections reset': destroyed, 'robot saw it drop': dropped,
+            'server hears the robot again after s': '%.1f' % t_again if again else 'never',
+            'line': (rec.log_lines('/robot%d' % ROBOT, 'connecting anew') or ['none'])[0]},
+            outcomes])
+    assert destroyed >= 1 and dropped
+    assert again, 'server %d never heard robot %d\'s tasks again' % (server, ROBOT)
+    assert said
+    assert (outcomes['never answered'], outcomes['duplicates']) == (0, 0), outcomes
