@@ -101,3 +101,17 @@ def test_a_task_under_a_robots_id_from_another_node_is_not_the_robots():
     reports = [report(1.0, 1, task) for task in range(1, 6)]
     assert checks.ledger(reports, own_sends(sent), [], TIMEOUT)['unreported'] == []
     assert len(checks.ledger(reports, sent, [], TIMEOUT)['unreported']) == 895
+
+
+def test_faults_at_once_are_over_together_and_recovery_counts_from_the_last():
+    short = {'start': 100.0, 'end': 102.0, 'bound': 5.0}
+    long_ = {'start': 100.0, 'end': 112.0, 'bound': 5.0}
+    later = {'start': 130.0, 'end': 131.0, 'bound': 5.0}
+    events = [short, long_, later]
+    assert checks.over_with(short, events) == 112.0
+    assert checks.over_with(long_, events) == 112.0 and checks.over_with(later, events) == 131.0
+    before = _steady(40.0, 100.0)
+    during = _steady(102.0, 112.0, rtt=0.05)            # the long fault still on
+    after = _steady(112.0, 125.0)
+    back, _ = checks.recovery(sorted(before + during + after), short, events, {1, 2}, 125.0)
+    assert back is not None and back <= checks.STEP

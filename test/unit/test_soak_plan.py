@@ -1,4 +1,5 @@
-"""The soak's schedule and scenario: seeded, every kind, one at a time, link outages."""
+"""The soak's schedule and scenario: seeded, every kind, one at a time (the short one in
+waves), link outages."""
 
 import os
 import random
@@ -71,3 +72,18 @@ def test_the_key_files_handed_to_nodes_are_absolute_paths(tmp_path, monkeypatch)
     monkeypatch.chdir(tmp_path)
     paths = _keys('results/soak', 2)
     assert all(os.path.isabs(p) and os.path.exists(p) for p in paths), paths
+
+
+def test_the_short_soak_does_every_kind_once_in_waves_each_server_fault_on_its_own_server():
+    faults = plan.schedule(plan.needed(1, short=True), random.Random(4), 1, short=True)
+    assert sorted(f.kind for f in faults) == sorted(plan.KINDS)
+    waves = {}
+    for fault in faults:
+        waves.setdefault(fault.at, []).append(fault)
+    assert len(waves) == len(plan.WAVES)
+    for wave in waves.values():
+        servers = [f.target for f in wave if f.kind in plan.SERVER_FAULTS]
+        assert len(servers) == len(set(servers))
+    times = sorted(waves)
+    for before, after in zip(times, times[1:]):     # a wave over, bound included, first
+        assert after >= max(f.at + f.length + f.bound for f in waves[before])

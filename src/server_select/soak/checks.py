@@ -80,6 +80,19 @@ def ready(event):
     return event['end'] + max(late, default=0.0)
 
 
+def over_with(event, events):
+    """When ``event`` and every fault overlapping it, or one of those, are over (faults
+    done at once, as in a wave of the short soak, are over together)."""
+    over, changed = ready(event), True
+    while changed:
+        changed = False
+        for other in events:
+            if other['start'] <= over and ready(other) > over and \
+                    ready(other) >= event['start']:
+                over, changed = ready(other), True
+    return over
+
+
 def allowed(events, timeout):
     """The spans [start - timeout, ready + bound] in which a task may fail."""
     return [(e['start'] - timeout, ready(e) + e['bound']) for e in events]
@@ -106,12 +119,12 @@ def _reference(reports, event, events, robots):
 
 
 def recovery(reports, event, events, robots, limit):
-    """(s from when ``event`` is over (:func:`ready`) until the fleet is back, or None if
-    not before ``limit``; the reference's size). Back: a window of WINDOW s from which every task of
-    ``robots`` sent succeeded, with the mean of each round trip over its (robot, kind)
-    reference at most 1 + TOLERANCE."""
+    """(s from when ``event`` and the faults overlapping it are over (:func:`over_with`)
+    until the fleet is back, or None if not before ``limit``; the reference's size).
+    Back: a window of WINDOW s from which every task of ``robots`` sent succeeded, with
+    the mean of each round trip over its (robot, kind) reference at most 1 + TOLERANCE."""
     reference = _reference(reports, event, events, robots)
-    over = ready(event)
+    over = over_with(event, events)
     mine = [r for r in reports if r.robot in robots and over <= r.t <= limit + WINDOW]
     stamps = [r.t for r in mine]
     t = over

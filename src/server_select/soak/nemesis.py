@@ -9,9 +9,11 @@ lives end at ``stops`` (node name, time it was gone, time it was SIGKILLed or No
 restarted robot counts its tasks from 1.
 """
 
+import itertools
 import os
 import signal
 import subprocess
+import threading
 import time
 
 from server_select.core.util.procs import stop_groups, wait_until
@@ -35,19 +37,39 @@ class Nemesis(object):
         self.events, self.stops = [], []
 
     def run(self, faults):
-        for fault in faults:
-            self.tb.sleep_until(fault.at)
-            start = time.time()
-            detail = getattr(self, fault.kind)(fault)
-            end = time.time()
-            if isinstance(detail, tuple):      # the fault's window ended before its return
-                detail, end = detail
-            event = dict(kind=fault.kind, target=fault.target, planned=self.tb.t0 + fault.at,
-                         start=start, end=end, bound=fault.bound, detail=detail)
-            self.events.append(event)
-            self.say('%7.1f s  %-12s %-4s %5.1f s  %s' % (
-                start - self.tb.t0, fault.kind, fault.target or '', event['end'] - start,
-                event['detail']))
+        """Each fault at its time; faults planned for one time (a wave of the short soak)
+        at once, each in a thread of its own; the first error of a wave raised."""
+        for at, wave in itertools.groupby(faults, key=lambda f: f.at):
+            self.tb.sleep_until(at)
+            errors = []
+            threads = [threading.Thread(target=self._guarded, args=(f, errors), name=f.kind)
+                       for f in wave]
+            for thread in threads:
+                thread.start()
+            for thread in threads:
+                thread.join()
+            self.events.sort(key=lambda e: e['start'])
+            if errors:
+                raise errors[0]
+
+    def _guarded(self, fault, errors):
+        try:
+            self._do(fault)
+        except Exception as error:   # raised by run() once the wave is over
+            errors.append(error)
+
+    def _do(self, fault):
+        start = time.time()
+        detail = getattr(self, fault.kind)(fault)
+        end = time.time()
+        if isinstance(detail, tuple):      # the fault's window ended before its return
+            detail, end = detail
+        event = dict(kind=fault.kind, target=fault.target, planned=self.tb.t0 + fault.at,
+                     start=start, end=end, bound=fault.bound, detail=detail)
+        self.events.append(event)
+        self.say('%7.1f s  %-12s %-4s %5.1f s  %s' % (
+            start - self.tb.t0, fault.kind, fault.target or '', event['end'] - start,
+            event['detail']))
 
     def _killed(self, name, down):
         """SIGKILL node ``name``, its launch stopped, started again after ``down`` s."""
@@ -98,7 +120,7 @@ class Nemesis(object):
             self.fleet.start(name)
         time.sleep(fault.length)
         stop_groups([self.fleet.procs.pop(name) for name in bursts])
-        self.stops += [(name, time.time(), None) for name in bursts]
+        self.stops.extend((name, time.time(), None) for name in bursts)
         return '%s at %g frames/s each' % (', '.join(bursts), BURST_RATE)
 
     def intruder(self, fault):
@@ -119,7 +141,8 @@ class Nemesis(object):
             for half in HALVES:
                 stop_groups([self.fleet.procs.pop(name) for name in half])
                 now = time.time()
-                self.stops += [(name, now, None) for name in half if name.startswith('robot')]
+                self.stops.extend((name, now, None) for name in half
+                                  if name.startswith('robot'))
                 for name in half:
                     self.fleet.start(name)
                 wait_until(lambda: all(self.fleet.pid(n) for n in half), 60.0, period=0.5)

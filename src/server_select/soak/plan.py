@@ -4,8 +4,9 @@ A :class:`Fault` is one fault of one kind at a planned scenario time: what it hi
 (``target``), how long it lasts (``length``, s) and the recovery it is allowed once it ends
 (``bound``, s). The schedule is drawn from a seeded random source: every kind ``repeats``
 times, shuffled, one at a time, each after a calm stretch long enough for a pre-fault
-reference. Link outages are part of the scenario the link emulator follows, so the nemesis
-only waits for them.
+reference. The short soak (make test) does every kind once in a few ``WAVES`` instead:
+the faults of a wave start together, each on nodes of its own. Link outages are part of
+the scenario the link emulator follows, so the nemesis only waits for them.
 """
 
 import collections
@@ -19,7 +20,7 @@ CAMERA_ROBOT = 6                          # the robot fed by a camera topic
 BURST_ROBOTS = (101, 102, 103)   # the overload's extra robots, on the first robots' hosts
 RECOVERY = 5.0            # s: the fleet is back this long after a fault ends
 ROSCORE_RECOVERY = 15.0   # s: after a roscore restart
-WARMUP = (45.0, 30.0)     # s before the first fault (nodes up, windows full): full, short
+WARMUP = (45.0, 25.0)     # s before the first fault (nodes up, windows full): full, short
 TAIL = (20.0, 10.0)       # s after the last fault's allowed recovery: full, short
 
 # Fault kinds and their length (s) in a full soak and in the short one (make test).
@@ -36,10 +37,19 @@ KINDS = collections.OrderedDict([
 ])
 
 
-def target_of(kind, rng):
-    """What a fault of ``kind`` hits: a server or robot id, or None (the fleet)."""
-    if kind in ('server_kill', 'server_stop', 'link_down'):
-        return rng.choice(SERVERS)
+# The short soak's waves: faults on different nodes at once (each wave's server faults on
+# servers of their own); a master restart and a key rotation, which every node lives
+# through, each alone.
+WAVES = (('server_kill', 'server_stop', 'link_down', 'robot_kill', 'manager_kill', 'overload',
+          'intruder'), ('roscore_kill',), ('key_rotation',))
+SERVER_FAULTS = ('server_kill', 'server_stop', 'link_down')
+
+
+def target_of(kind, rng, servers=SERVERS):
+    """What a fault of ``kind`` hits: a server (of ``servers``) or robot id, or None (the
+    fleet)."""
+    if kind in SERVER_FAULTS:
+        return rng.choice(servers)
     if kind == 'robot_kill':
         return rng.choice(ROBOTS)
     return None
@@ -48,7 +58,7 @@ def target_of(kind, rng):
 def _timing(short):
     """(length of each kind, calm s before each fault, s planned for a key rotation)."""
     lengths = dict((kind, pair[1 if short else 0]) for kind, pair in KINDS.items())
-    return lengths, (6.0 if short else 45.0), (25.0 if short else 60.0)
+    return lengths, (4.0 if short else 45.0), (25.0 if short else 60.0)
 
 
 def _slot(kind, short):
@@ -61,19 +71,37 @@ def bound_of(kind):
     return ROSCORE_RECOVERY if kind == 'roscore_kill' else RECOVERY
 
 
+def _waves(kinds):
+    """The short soak's waves of ``kinds`` (those of no wave: a wave each), none empty."""
+    waves = [tuple(k for k in wave if k in kinds) for wave in WAVES]
+    waves += [(kind,) for kind in kinds if not any(kind in wave for wave in WAVES)]
+    return [wave for wave in waves if wave]
+
+
+def _wave_slot(wave, short):
+    lengths, calm, rotation = _timing(short)
+    return calm + max(lengths[k] or rotation for k in wave) + max(bound_of(k) for k in wave)
+
+
 def needed(repeats, short=False, kinds=tuple(KINDS)):
-    """Scenario s a soak with ``repeats`` faults of each of ``kinds`` needs at least."""
+    """Scenario s a soak with ``repeats`` faults of each of ``kinds`` needs at least (the
+    short one: one of each, in waves)."""
+    if short:
+        return WARMUP[1] + TAIL[1] + sum(_wave_slot(w, True) for w in _waves(kinds))
     return WARMUP[short] + TAIL[short] + repeats * sum(_slot(kind, short) for kind in kinds)
 
 
 def schedule(duration, rng, repeats=None, short=False, kinds=tuple(KINDS)):
     """The faults of a soak of ``duration`` s, in time order. ``repeats``: faults of each
-    of ``kinds`` (None: as many as fit, at least 2); ``short``: the short lengths and calm
-    stretches. Raises ValueError when they do not fit, or for a kind not in KINDS."""
+    of ``kinds`` (None: as many as fit, at least 2); ``short``: one of each, in waves, with
+    the short lengths and calm stretches. Raises ValueError when they do not fit, or for a
+    kind not in KINDS."""
     unknown = sorted(set(kinds) - set(KINDS))
     if unknown:
         raise ValueError('no fault kind %s (the kinds: %s)'
                          % (', '.join(unknown), ', '.join(KINDS)))
+    if short:
+        return _in_waves(duration, rng, kinds)
     lengths, calm, rotation = _timing(short)
     one_round = sum(_slot(kind, short) for kind in kinds)
     room = duration - WARMUP[short] - TAIL[short]
@@ -91,6 +119,22 @@ def schedule(duration, rng, repeats=None, short=False, kinds=tuple(KINDS)):
         faults.append(Fault(kind, target_of(kind, rng), round(at, 1), lengths[kind],
                             bound_of(kind)))
         at += (lengths[kind] or rotation) + bound_of(kind)
+    return faults
+
+
+def _in_waves(duration, rng, kinds):
+    """The short soak: every kind of ``kinds`` once, the faults of a wave at one time."""
+    if needed(1, True, kinds) > duration:
+        raise ValueError('a short soak of %s needs %.0f s at least, not %.0f s'
+                         % (', '.join(kinds), needed(1, True, kinds), duration))
+    lengths, calm, _ = _timing(True)
+    faults, at = [], WARMUP[1]
+    for wave in _waves(kinds):
+        servers = rng.sample(SERVERS, sum(1 for k in wave if k in SERVER_FAULTS))
+        for kind in wave:
+            target = servers.pop() if kind in SERVER_FAULTS else target_of(kind, rng)
+            faults.append(Fault(kind, target, at + calm, lengths[kind], bound_of(kind)))
+        at += _wave_slot(wave, True)
     return faults
 
 

@@ -40,8 +40,9 @@ def timeline(events, hist, t0):
     rows = [dict(event, at=event['start'] - t0, lasted=event['end'] - event['start'],
                  serving=checks.served_again(event, hist, _restarted(event)))
             for event in events]
-    for index, row in enumerate(rows):
-        limit = rows[index + 1]['start'] if index + 1 < len(rows) else row['end'] + 60
+    for row in rows:
+        over = checks.over_with(row, rows)      # the next fault after it ends the search
+        limit = min([r['start'] for r in rows if r['start'] > over], default=over + 60)
         row['recovery'], row['reference'] = checks.recovery(hist.reports, row, rows,
                                                             set(ROBOTS), limit)
     return rows

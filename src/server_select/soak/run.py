@@ -2,7 +2,7 @@
 its invariants, recovery times and resource slopes checked from the bags (root, TUN).
 
     python -m server_select.soak.run --minutes 30 --seed 1 --out results/soak
-    python -m server_select.soak.run --short --out /tmp/soak     # every kind once, ~4 min
+    python -m server_select.soak.run --short --out /tmp/soak     # every kind once, in waves, ~2 min
 
 Writes the bags, ``events.json`` (the nemesis's log), ``resources.csv``, ``report.md`` and
 ``timeline.png`` into ``--out``; exits 1 when an invariant fails.
@@ -134,7 +134,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--minutes', type=float, default=30.0, help='length (%(default)s)')
     parser.add_argument('--seed', type=int, default=1, help='the nemesis seed (%(default)s)')
-    parser.add_argument('--short', action='store_true', help='every fault kind once, short')
+    parser.add_argument('--short', action='store_true', help='every fault kind once, in waves')
     parser.add_argument('--kinds', type=lambda text: tuple(text.replace(',', ' ').split()),
                         help='only these fault kinds, e.g. overload,server_kill (as many '
                         'of each as fit)')
