@@ -17,6 +17,7 @@ import subprocess
 import threading
 import time
 import urllib.parse
+import xmlrpc.client
 import zlib
 
 import numpy as np
@@ -256,4 +257,57 @@ def test_idle_sockets_hold_no_new_connection(server):
         assert wait_until(lambda: server.lines('no handshake within 2 s'), 5.0)
     finally:
         for sock in idle:
+            sock.close()
+
+
+def threads(pid):
+    with open('/proc/%d/status' % pid) as stream:
+        return next(int(line.split()[1]) for line in stream if line.startswith('Threads'))
+
+
+def test_half_written_xmlrpc_requests_hold_a_bounded_number_of_threads(server):
+    """1,000 peers that each send half an HTTP request to the server's XML-RPC port: the
+    server serves at most MOST_AT_ONCE at once and closes the rest, closes the ones it
+    serves at their deadline, answers a new call once they are closed, and goes on
+    answering probes meanwhile. (Before: a thread each, 24 -> 1,024, for as long as the
+    peers held them.)"""
+    from server_select.ros.xmlrpc_bound import DEADLINE, MOST_AT_ONCE
+    pid = server.proc.pid
+    uri = urllib.parse.urlparse(rosgraph.Master(rospy.get_name()).lookupNode('/server7'))
+    before = threads(pid)
+    t_start = time.monotonic()
+    held = []
+    for _ in range(1000):
+        sock = socket.create_connection((uri.hostname, uri.port), 5.0)
+        sock.sendall(b'POST /RPC2 HTTP/1.1\r\nContent-Length: 500\r\n')
+        held.append(sock)
+    try:
+        most = max(threads(pid) for _ in range(20) if time.sleep(0.05) is None)
+        probes = server.probe_times(10)
+
+        def open_ones():
+            alive = 0
+            for sock in held:
+                sock.settimeout(0.0)
+                try:
+                    alive += sock.recv(1) != b''
+                except BlockingIOError:      # nothing to read: still open
+                    alive += 1
+                except OSError:              # reset: closed
+                    pass
+            return alive
+        closed_all = wait_until(lambda: open_ones() == 0, DEADLINE + 5.0)
+        t_closed = time.monotonic() - t_start
+        proxy = xmlrpc.client.ServerProxy(uri.geturl())
+        answered = proxy.getPid('/fault_tests')[2] == pid
+        show('1,000 half-written XML-RPC requests to server %d:' % SERVER, [{
+            'threads before': before, 'most threads meanwhile': most,
+            'probe max ms meanwhile': round(1e3 * max(probes), 2),
+            'every connection closed after s': round(t_closed, 1) if closed_all else 'never',
+            'a new call answered': answered, 'threads after': threads(pid)}])
+        assert most <= before + MOST_AT_ONCE + 4, most
+        assert closed_all and answered
+        assert wait_until(lambda: server.lines('closed an XML-RPC connection'), 5.0)
+    finally:
+        for sock in held:
             sock.close()

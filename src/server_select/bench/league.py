@@ -19,8 +19,9 @@ import os
 import sys
 
 from server_select.bench import capacity_report, cli
-from server_select.bench.league_report import (CAPACITY, CAPACITY_VARIANTS, NETWORK,
+from server_select.bench.league_report import (CAPACITY, CAPACITY_VARIANTS,
                                                NETWORK_VARIANTS, report)
+from server_select.testbed.suite_scenario import NETWORK
 
 
 def network(args, log):

@@ -7,8 +7,6 @@ import os
 from server_select.core.selection.balancers import PEERS
 from server_select.core.util.tables import markdown_table, median_range
 
-NETWORK = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
-           'hung_server')
 NETWORK_VARIANTS = ('oracle_fleet', 'fleet', 'fleet_hysteresis') + PEERS
 # capacity cases: the capacity benchmark's scenario and what the league changes in it
 CAPACITY = collections.OrderedDict([

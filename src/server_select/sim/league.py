@@ -31,10 +31,8 @@ from server_select.sim.figures import figures
 from server_select.sim.model import Model
 from server_select.sim.run import simulate, variant
 from server_select.testbed.scenario import Scenario
-from server_select.testbed.suite_scenario import scenario_path, short_name
+from server_select.testbed.suite_scenario import NETWORK, scenario_path, short_name
 
-NETWORK = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
-           'hung_server')
 NETWORK_VARIANTS = ('oracle_fleet', 'fleet') + PEERS
 # the league's capacity cases: (the capacity benchmark's case, offered load, its options)
 CASES = {

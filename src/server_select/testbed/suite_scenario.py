@@ -9,6 +9,9 @@ from server_select.ros.paths import package_file
 from server_select.testbed.scenario import ScenarioError
 
 REPLICA = 10        # robot r of variant k is robot REPLICA * k + r
+# the suite's network scenarios that the leagues run (simulated and on the testbed)
+NETWORK = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
+           'hung_server')
 
 
 def scenario_path(name):
