@@ -10,12 +10,15 @@ and publishes a junk result for every task of robot 1, once a second. ``announce
 server's key): registers ``/latency_S2`` at the master and announces server 2 there, then
 leaves. ``namespace`` (a
 robot's key; run in ``/robot2``, as ``/robot2/attacker``): rankings of robot 2 naming
-server 3 and failed task reports of robot 2, 20 a second.
+server 3 and failed task reports of robot 2, 20 a second. ``flood`` (a robot's key): robot
+9, admitted by a sealed probe of each server every second, sends 100,000-value sort tasks
+to servers 1-3 in turn, 68 a second, ignoring every answer.
 
 Prints what it sent as one line of JSON.
 """
 
 import json
+import random
 import sys
 import time
 
@@ -32,6 +35,7 @@ from server_select.srv import LatencyProbe, LatencyProbeRequest, LatencyProbeRes
 
 SERVERS = (1, 2, 3)
 MADE_UP = 66
+FLOODER = 9
 
 
 def tasks(seconds, _sealer):
@@ -122,8 +126,40 @@ def namespace(seconds, sealer):
     return {'rankings': sent, 'reports': sent}
 
 
-MODES = dict((f.__name__, f) for f in (tasks, rates, results, announce, namespace))
-ROLES = {'announce': 'server', 'namespace': 'robot'}
+def flood(seconds, sealer):
+    proxies = [rospy.ServiceProxy(names.probe_service(s), LatencyProbe, persistent=True)
+               for s in SERVERS]
+    pubs = [rospy.Publisher(names.server_topic(s, names.SORT_TASK_TOPIC), numpy_msg(SortTask),
+                            queue_size=100) for s in SERVERS]
+    data = np.arange(100000, 0, -1, dtype=np.int32)
+    nonce = random.Random()
+
+    def admit(seq):
+        for server, proxy in zip(SERVERS, proxies):
+            request = LatencyProbeRequest(robot_id=FLOODER, seq=seq, stamp=rospy.Time.now(),
+                                          nonce=nonce.getrandbits(64))
+            try:
+                proxy(sealed(request, sealer, rospy.resolve_name(names.probe_service(server))))
+            except rospy.ServiceException:
+                pass
+    admit(1)
+    time.sleep(1.0)
+    sent, end, admitted = 0, time.monotonic() + seconds, time.monotonic()
+    while time.monotonic() < end:
+        if time.monotonic() - admitted > 1.0:
+            admit(sent + 2)
+            admitted = time.monotonic()
+        index = sent % len(SERVERS)
+        sent += 1
+        pubs[index].publish(numpy_msg(SortTask)(robot_id=FLOODER, task_id=sent,
+                                                server_id=SERVERS[index], data=data,
+                                                budget=2.0))
+        time.sleep(1.0 / 68)
+    return {'sorts of 100,000 values': sent}
+
+
+MODES = dict((f.__name__, f) for f in (tasks, rates, results, announce, namespace, flood))
+ROLES = {'announce': 'server', 'namespace': 'robot', 'flood': 'robot'}
 
 
 def main():

@@ -37,6 +37,14 @@ def answered_rate(rec, since, until):
     return done / (until - since)
 
 
+def round_trip_ms(rec, since, until):
+    """The median round trip of the robots' own tasks answered between ``since`` and
+    ``until``, ms."""
+    rtts = sorted(r.msg.rtt for r in rec.of(rec.reports, None, since) if r.time <= until
+                  and r.msg.ok and r.sender in ('/robot1', '/robot2'))
+    return round(1e3 * rtts[len(rtts) // 2], 2) if rtts else None
+
+
 def failed(rec, since):
     return [(r.msg.robot_id, r.msg.task_id, r.msg.error) for r in rec.of(rec.reports, None, since)
             if not r.msg.ok and r.sender in ('/robot1', '/robot2')]
@@ -64,7 +72,12 @@ def keyed_fleet(ros, tmp_path_factory):
         yield key
 
 
-def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None):
+def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None, source='attacker',
+           reported=(0.0, 1.0), kept=0.95, name=None):
+    """The attack of ``mode`` (by node ``name``; None: ``attacker``), its figures shown and
+    checked; ``source``: what the fleet's warnings name it by; ``reported``: the range
+    the most a server reports meanwhile must be in; ``kept``: the share of the robots'
+    answered tasks a second that must go on during it (and after it, at least 0.95)."""
     rec = ros['rec']
     argv = [sys.executable, os.path.join(HERE, 'attacker.py'), mode, str(SECONDS)]
     if role is not None:
@@ -73,6 +86,8 @@ def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None):
         argv.append(key)
     if namespace is not None:
         argv.append('__ns:=%s' % namespace)
+    if name is not None:
+        argv.append('__name:=%s' % name)
     t_base = time.monotonic()
     time.sleep(SECONDS)
     t_start = time.monotonic()
@@ -90,21 +105,39 @@ def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None):
         'answered a second before': round(answered_rate(rec, t_base, t_start), 2),
         'during': round(answered_rate(rec, t_start, t_end), 2),
         'after': round(answered_rate(rec, t_end, t_after), 2),
+        'round trip ms before, during': (round_trip_ms(rec, t_base, t_start),
+                                         round_trip_ms(rec, t_start, t_end)),
         'failed': len(failed(rec, t_base)),
         'most utilization a server reported': round(max(busy), 3),
         'flags of robot 2 naming the forged choice': sum(
             1 for r in rec.of(rec.flags, 2, t_start) if r.msg.reason == 'forged'),
         'warnings naming the attacker': sum(1 for r in rec.of(rec.logs, None, t_start)
-                                            if r.msg.level >= 4 and 'attacker' in r.msg.msg)}
+                                            if r.msg.level >= 4 and source in r.msg.msg)}
     show('keyed fleet, %s attack for %g s:' % (mode, SECONDS), [figures])
     base = figures['answered a second before']
-    for when in ('during', 'after'):
-        assert figures[when] >= 0.95 * base - 1.0 / SECONDS, figures
+    for when, share in (('during', kept), ('after', 0.95)):
+        assert figures[when] >= share * base - 1.0 / SECONDS, figures
     assert figures['failed'] == 0, failed(rec, t_base)
-    assert figures['most utilization a server reported'] < 1.0, figures
+    low, high = reported
+    assert low <= figures['most utilization a server reported'] < high, figures
     assert figures['flags of robot 2 naming the forged choice'] == 0, figures
     assert figures['warnings naming the attacker'] >= 1, figures
     return figures
+
+
+def test_a_robot_flooding_every_server_takes_only_its_share_of_their_queues(
+        ros, keyed_fleet, tmp_path):
+    """Robot 9, with a robot's key, sends 100,000-value sorts as fast as it can (68 a
+    second asked; 40-47 on this host). No task of the other robots fails, and they go on
+    at half their rate or more: the queue is shared, but the servers' CPU is not (a sort's
+    work holds the server's interpreter; and every node here shares two cores with the
+    flooder). (Before the share: 2 of the robots' tasks failed, 3.8 of 10 answered a
+    second; in the issue's run, robots at 2 a second fell to 1.0-1.6, all answered busy.)
+    A server reporting a utilization of 1 or more shows that the flood reached it. (First
+    of the attacks: the flooder finds the probe services by their names at the master,
+    which the ``results`` and ``announce`` attackers take and leave.)"""
+    attack(ros, keyed_fleet, 'flood', role='robot', tmp_path=tmp_path, source='robot 9',
+           reported=(1.0, float('inf')), kept=0.5, name='robot9')
 
 
 @pytest.mark.parametrize('mode', ['tasks', 'rates', 'results'])

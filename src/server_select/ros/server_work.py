@@ -14,11 +14,13 @@ class ServerWork(object):
     (:class:`~server_select.ros.endpoints.ServerEndpoint`), and answers each exactly once: a
     result from a worker, or at once a *busy* result when the task cannot be finished by
     the deadline its robot gave (``budget``), or the queue is full; a task whose deadline
-    passed while it waited is answered busy too, without doing the work."""
+    passed while it waited, or that a task of a robot holding less of the queue pushed
+    out, is answered busy too, without doing the work."""
 
     def __init__(self, server_id, workers, max_queue, max_queue_bytes=None):
         self.server_id = server_id
-        self.queue = WorkQueue(workers, max_queue, max_bytes=max_queue_bytes)
+        self.queue = WorkQueue(workers, max_queue, max_bytes=max_queue_bytes,
+                               on_pushed_out=lambda job, why: self._busy(*job.item, why))
         self._lock = threading.Lock()
         self.busy = 0
 

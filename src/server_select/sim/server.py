@@ -26,7 +26,8 @@ class SimServer(object):
         self.id = host.id
         self.cpu = host.cpu
         self.workers = int(math.ceil(self.cpu)) if self.cpu else cores
-        self.queue = WorkQueue(self.workers, max_queue, clock=loop.now)
+        self.queue = WorkQueue(self.workers, max_queue, clock=loop.now,
+                               on_pushed_out=self._pushed_out)
         self.rng = streams.rng('server', self.id)
         self.idle = self.workers
         self.waiting = 0          # accepted, not yet taken
@@ -114,6 +115,12 @@ class SimServer(object):
             return
         self.waiting += 1
         self._start_workers()
+
+    def _pushed_out(self, job, why):
+        """A task a robot holding less of the queue pushed out: answered busy."""
+        self.waiting -= 1
+        task, reply = job.item
+        reply(task, False, why, True)
 
     def _start_workers(self):
         now = self.loop.now()

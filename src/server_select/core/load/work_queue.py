@@ -23,7 +23,10 @@ Server side, :class:`WorkQueue` holds the tasks waiting for the workers. A task 
 its *deadline* (when its robot stops waiting): one that cannot be finished by then is
 refused at once (the robot hears "busy" and sends it elsewhere, or drops it for a newer
 frame) instead of waiting in the queue for an answer nobody wants; one whose deadline
-passes while it waits is shed when a worker takes it.
+passes while it waits is shed when a worker takes it. The queue is shared fairly between
+the robots (:class:`~server_select.core.load.fair_queue.FairQueue`): a task waits behind
+about as much of each other robot's work as its own robot has queued, and one robot's
+flood of tasks takes no place another robot's task needs.
 """
 
 import collections
@@ -31,6 +34,7 @@ import threading
 import time
 
 from server_select.core.load.demand import Demand
+from server_select.core.load.fair_queue import FairQueue, Job
 from server_select.core.load.service_times import ServiceTimes
 
 Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization '
@@ -41,24 +45,15 @@ Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per t
 ``service_error`` ``{kind: the standard error of that work}`` (None: not reported)."""
 
 
-class Job(object):
-    """A task in a :class:`WorkQueue`: what the worker needs, its kind, deadline and
-    owner (who sent it: a robot's id, or None)."""
-    __slots__ = ('kind', 'item', 'deadline', 'queued_at', 'started', 'owner', 'size')
-
-    def __init__(self, kind, item, deadline, queued_at, owner=None, size=0):
-        self.kind, self.item, self.deadline, self.queued_at = kind, item, deadline, queued_at
-        self.owner, self.size = owner, size
-        self.started = None
-
-
 class WorkQueue(object):
     """Tasks waiting for ``workers`` workers, at most ``max_queue`` of them holding at most
 ``max_bytes`` (None: any; a task alone in the queue is taken whatever its size)
 (thread-safe).
 
     :meth:`offer` queues a task or says at once why not (full, or it cannot be done by its
-    deadline: busy); workers :meth:`take` the oldest (None once closed), ask
+    deadline: busy); a task that a newer one of a robot holding less of the queue pushes
+    out is handed to ``on_pushed_out(job, why)`` (to be answered busy). Workers
+    :meth:`take` the next by the round robin of the robots (None once closed), ask
     :meth:`stale` whether its deadline has passed meanwhile, and call :meth:`done` with the
     seconds it took, which teach :class:`ServiceTimes`. :meth:`announce` hears what a
     robot's probe says it sends here (:class:`~server_select.core.load.demand.Demand`: kept
@@ -67,31 +62,53 @@ class WorkQueue(object):
     """
 
     def __init__(self, workers, max_queue, times=None, clock=time.monotonic, horizon=10.0,
-                 announce_age=3.0, max_bytes=None):
+                 announce_age=3.0, max_bytes=None, on_pushed_out=None):
         if workers < 1 or max_queue < 1:
             raise ValueError('workers and max_queue must be >= 1, got %r, %r'
                              % (workers, max_queue))
         self.workers, self.max_queue = int(workers), int(max_queue)
-        self.max_bytes, self.queued_bytes = max_bytes, 0
+        self.max_bytes = max_bytes
+        self.on_pushed_out = on_pushed_out
         self.times = times or ServiceTimes(clock=clock)
         self.demand = Demand(horizon, announce_age)
         self._clock = clock
         self._cond = threading.Condition()
-        self._queue = collections.deque()
+        self._queue = FairQueue()
+        self._sizes = {}          # kind -> the usual bytes of its tasks whose work was timed
         self._running = set()
         self._closed = False
-        self.refused = self.shed = self.finished = 0
+        self.refused = self.shed = self.finished = self.pushed_out = 0
+
+    @property
+    def queued_bytes(self):
+        return self._queue.bytes
 
     def _backlog(self, now, excluding=None):
         """Seconds until a worker is free for one more task (call with the lock held),
         leaving out the tasks of owner ``excluding`` (None: counting every task)."""
-        queued = [job for job in self._queue if excluding is None or job.owner != excluding]
+        queued = [job for job in self._queue.jobs()
+                  if excluding is None or job.owner != excluding]
         running = [job for job in self._running if excluding is None or job.owner != excluding]
         if len(running) + len(queued) < self.workers:
             return 0.0
-        work = sum(self._work(job.kind, now) for job in queued)
-        work += sum(max(0.0, self._work(job.kind, now) - (now - job.started)) for job in running)
+        work = sum(self._job_work(job, now) for job in queued)
+        work += sum(max(0.0, self._job_work(job, now) - (now - job.started)) for job in running)
         return work / self.workers
+
+    def _job_work(self, job, now, kind=None, size=0):
+        """Seconds of work of ``job`` (or of a task of ``kind`` holding ``size`` bytes; lock
+        held): its kind's, in proportion to its bytes against the kind's usual (one robot's
+        100,000-value sorts must not make another's 1,000-value ones look as long)."""
+        kind, size = (kind, size) if job is None else (job.kind, job.size)
+        usual = self._sizes.get(kind)
+        scale = size / usual if size and usual else 1.0
+        return self._work(kind, now) * scale
+
+    def _learn(self, job):
+        """``job``'s bytes, into its kind's usual (lock held)."""
+        if job.size:
+            usual = self._sizes.get(job.kind, job.size)
+            self._sizes[job.kind] = usual + 0.1 * (job.size - usual)
 
     def _work(self, kind, now):
         """Seconds of work per ``kind`` task (lock held): the recent median; while none is
@@ -110,40 +127,65 @@ class WorkQueue(object):
         refused (it was not queued)."""
         with self._cond:
             now = self._clock()
-            if self._closed:
-                why = 'the server is shutting down'
-            elif len(self._queue) >= self.max_queue:
-                why = 'busy: %d tasks queued already' % len(self._queue)
-            elif self._queue and self.max_bytes is not None and \
-                    self.queued_bytes + size > self.max_bytes:
-                why = 'busy: the tasks queued hold %d bytes; %d more is over %d' % (
-                    self.queued_bytes, size, self.max_bytes)
-            else:
-                why = None
-                if deadline is not None:
-                    finish = self._backlog(now) + self._work(kind, now)
-                    if now + finish > deadline:
-                        why = 'busy: would finish in %.3g s, its deadline is in %.3g s' % (
-                            finish, max(0.0, deadline - now))
+            room = None if self._closed else self._queue.room_for(
+                owner, size, self.max_queue, self.max_bytes)
+            why = self._refusal(kind, owner, size, deadline, now, room)
             if why is not None:
                 self.refused += 1
                 return why
-            self._queue.append(Job(kind, item, deadline, now, owner, size))
-            self.queued_bytes += size
+            self._queue.push_out(room)
+            self.pushed_out += len(room)
+            self._queue.push(Job(kind, item, deadline, now, owner, size))
             self.demand.arrived(owner, kind, now)
             self._cond.notify()
-            return None
+        for job in room:
+            if self.on_pushed_out is not None:
+                self.on_pushed_out(job, 'busy: pushed out of the queue by a task of a robot '
+                                   'holding less of it')
+        return None
+
+    def _refusal(self, kind, owner, size, deadline, now, room):
+        """Why a task is not queued, or None (lock held)."""
+        if self._closed:
+            return 'the server is shutting down'
+        if room is None and len(self._queue) >= self.max_queue:
+            return 'busy: %d tasks queued already' % len(self._queue)
+        if room is None:
+            return 'busy: the tasks queued hold %d bytes; %d more is over %d' % (
+                self._queue.bytes, size, self.max_bytes)
+        if deadline is not None:
+            cost = self._job_work(None, now, kind, size)
+            finish = self._wait(owner, cost, now, room) + cost
+            if now + finish > deadline:
+                return 'busy: would finish in %.3g s, its deadline is in %.3g s' % (
+                    finish, max(0.0, deadline - now))
+        return None
+
+    def _wait(self, owner, cost, now, leaving=()):
+        """Seconds until a worker takes one more task of ``owner`` (lock held): what the
+        running tasks have left, and the queued work the round robin serves before it
+        (:meth:`FairQueue.wait_work`; ``leaving``: jobs about to be pushed out)."""
+        if len(self._running) + len(self._queue) - len(leaving) < self.workers:
+            return 0.0
+        gone = set(map(id, leaving))
+
+        def work(job):
+            return 0.0 if id(job) in gone else self._job_work(job, now)
+        left = sum(max(0.0, self._job_work(job, now) - (now - job.started))
+                   for job in self._running)
+        return (left + self._queue.wait_work(owner, cost, work)) / self.workers
 
     def take(self):
-        """The oldest queued job, once there is one (blocks); None once closed."""
+        """The next queued job by the robots' round robin, once there is one (blocks);
+        None once closed."""
         with self._cond:
-            while not self._queue and not self._closed:
+            while not len(self._queue) and not self._closed:
                 self._cond.wait()
             if self._closed:
                 return None
-            job = self._queue.popleft()
-            self.queued_bytes -= job.size
-            job.started = self._clock()
+            now = self._clock()
+            job = self._queue.pop(lambda queued: self._job_work(queued, now))
+            job.started = now
             self._running.add(job)
             return job
 
@@ -153,7 +195,7 @@ class WorkQueue(object):
         if job.deadline is None:
             return None
         with self._cond:
-            work = self._work(job.kind, job.started)
+            work = self._job_work(job, job.started)
             if job.started + work <= job.deadline:
                 return None
             self._running.discard(job)
@@ -167,6 +209,8 @@ class WorkQueue(object):
         with self._cond:
             self._running.discard(job)
             self.finished += 1
+            if seconds is not None:
+                self._learn(job)
         if seconds is not None:
             self.times.add(job.kind, seconds)
 
@@ -201,7 +245,6 @@ class WorkQueue(object):
         """Wake every worker with None; what is still queued is dropped (returned)."""
         with self._cond:
             self._closed = True
-            dropped, self._queue = list(self._queue), collections.deque()
-            self.queued_bytes = 0
+            dropped = self._queue.clear()
             self._cond.notify_all()
             return dropped
