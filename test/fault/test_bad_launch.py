@@ -30,3 +30,38 @@ def test_an_invalid_parameter_of_one_node_ends_the_whole_launch(ros, tmp_path):
     assert ended, text[-3000:]
     assert fatal, text[-3000:]      # a robot (the first to read it ends the launch)
     assert wait_until(lambda: not any(Fleet.pid(n) for n in NODES), 10.0), left
+
+
+def launched(argv, tmp_path, name):
+    """``rosrun server_select launch ARGV`` to its end: (exit status, its output)."""
+    log = str(tmp_path / ('%s.log' % name))
+    with open(log, 'w') as stream:
+        proc = subprocess.Popen(['rosrun', 'server_select', 'launch'] + argv,
+                                stdout=stream, stderr=subprocess.STDOUT,
+                                start_new_session=True)
+    try:
+        assert wait_until(lambda: proc.poll() is not None, 30.0), open(log).read()[-3000:]
+    finally:
+        stop_group(proc)
+    return proc.returncode, open(log, errors='replace').read()
+
+
+def test_the_launch_command_exits_non_zero_when_a_node_ends_it_for_a_parameter(ros, tmp_path):
+    """(roslaunch itself exits 0 then, so a script or a systemd unit cannot tell.)"""
+    code, text = launched(['demo.launch', 'probe_rate:=abc', 'output:=screen'], tmp_path,
+                          'bad_value')
+    said = [line for line in text.splitlines()
+            if line.startswith('launch: ended for an invalid parameter: /robot')]
+    print('launch demo.launch probe_rate:=abc: exit status %d, %s' % (code, said))
+    assert code == 2 and said and '~probe_rate' in said[0], text[-3000:]
+    assert wait_until(lambda: not any(Fleet.pid(n) for n in NODES), 10.0)
+
+
+def test_the_launch_command_refuses_a_misspelled_argument_before_starting(ros, tmp_path):
+    """(roslaunch ignores it: ``duraton:=10`` ran the demo with no duration, for ever.)"""
+    code, text = launched(['demo.launch', 'duraton:=10'], tmp_path, 'misspelled')
+    print('launch demo.launch duraton:=10: exit status %d, %s' % (code, text.strip()))
+    assert code == 2
+    assert 'launch argument duraton:= is declared by no launch file of this launch; did ' \
+        'you mean duration:=?' in text, text
+    assert not any(Fleet.pid(n) for n in NODES)

@@ -11,8 +11,8 @@ from server_select.core.config import names
 from server_select.core.util import interrupts
 from server_select.core.config.params import ParamError
 from server_select.core.settings import PARAMS
-from server_select.ros import (bounded_read, diagnostics, handshake, launch_args, params_in_force,
-                               seal, xmlrpc_bound)
+from server_select.ros import (bounded_read, diagnostics, handshake, launch_args, launch_run,
+                               params_in_force, seal, xmlrpc_bound)
 from server_select.ros.master_watch import MasterWatch
 from server_select.ros.node import _LIVE, end_parent_launch, fleet, param, quiet_logging
 
@@ -73,6 +73,7 @@ def _start(node_class):
                             topic=fleet(names.MASTER_PID_TOPIC))
     except ParamError as error:
         rospy.logfatal('invalid parameter: %s', error)
+        launch_run.record_fatal(rospy.get_name(), error)    # for `rosrun ... launch`
         if end_parent_launch():     # no launch runs on half started, without this node
             rospy.logfatal('%s: the launch ends, this node\'s parameter being invalid',
                            rospy.get_name())
