@@ -23,7 +23,7 @@ def test_robots_and_servers_as_their_reports_and_probes_say():
         view.task(2, 2, 2, t % 2 == 0, float(t))
     view.flag(1, 1, [1, 2], 9.0)
     view.sample(1, 1, True, 0.0042, 9.0)
-    lines = view.lines(9.5)
+    lines = view.lines(10.0)
     assert lines[0].startswith('server_select top: 2 servers (2 up), 2 robots')
     assert row(lines, 'ROBOT', 1)[:6] == ['1', '1', '1', '2', '4.2', '1.0']
     assert row(lines, 'ROBOT', 2)[1] == '2' and row(lines, 'ROBOT', 2)[5] == '5'   # failed
@@ -87,3 +87,16 @@ def test_a_switch_the_log_did_not_explain_shows_the_flags_reason():
     view.flag(1, 1, [1, 3, 2], 5.1, 'server 1 faster than 3 by 0.2 ms')
     assert view.robots[1].switch == (5.0, 3, 1, 'server 1 faster than 3 by 0.2 ms')
     assert any('5 s ago, 3 -> 1: server 1 faster' in line for line in view.lines(10.0))
+
+
+def test_rates_count_over_what_the_view_heard_when_that_is_shorter_than_its_window():
+    """(``top --once --seconds 5`` showed 1.0 tasks a second for robots sending 2.)"""
+    view = FleetView(window=10.0)
+    for n in range(10):                  # 2 a second for 5 s
+        view.task(1, 1, 1, True, 100.0 + 0.5 * n)
+    lines = view.lines(105.0)
+    assert 'rates over 5 s' in lines[0]
+    assert row(lines, 'ROBOT', 1)[4] == '2.0'
+    for n in range(10, 40):              # and on, for 20 s in all: over the window
+        view.task(1, 1, 1, True, 100.0 + 0.5 * n)
+    assert row(view.lines(120.0), 'ROBOT', 1)[4] == '2.0'

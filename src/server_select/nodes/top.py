@@ -52,6 +52,11 @@ class Feed(object):
             elif kind in ('rosout_agg', 'rosout'):
                 self.view.log(msg.msg, now)
 
+    def update(self, now):
+        """The view brought to ``now`` (its alerts at their time), not rendered."""
+        with self.lock:
+            self.view.update(now)
+
     def lines(self, now=None):
         with self.lock:
             now = self.clock() if now is None else now
@@ -179,10 +184,13 @@ def bag_frames(args):
             now = stamp.to_sec()
             if next_frame is None:
                 next_frame = now + PERIOD
-            while now >= next_frame and not args.once:    # --once: the last view only
-                yield feed.lines(next_frame)
+            while now >= next_frame:    # --once: the last view only, its alerts in time
+                if args.once:
+                    feed.update(next_frame)
+                else:
+                    yield feed.lines(next_frame)
+                    time.sleep(PERIOD / args.speed)
                 next_frame += PERIOD
-                time.sleep(PERIOD / args.speed)
             if topic.endswith('server_announcements'):
                 feed.view.probe(msg.server_id, True, None, now)   # announced: up
             if topic.endswith('task_report'):

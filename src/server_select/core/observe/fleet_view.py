@@ -55,11 +55,17 @@ class FleetView(object):
         self.servers = collections.defaultdict(_Server)
         self.alerts = collections.deque(maxlen=ALERTS)
         self._gone = set()
+        self.first = None       # when the view first heard anything (rates count from it)
+
+    def _heard(self, now):
+        if self.first is None or now < self.first:
+            self.first = now
 
     # -- what is heard --------------------------------------------------------------------
 
     def task(self, robot, server, answered_by, ok, now):
         """A task report: first sent to ``server``, answered by ``answered_by``."""
+        self._heard(now)
         r = self.robots[robot]
         if server is not None and server >= 0:
             if r.server is not None and server != r.server and (
@@ -74,17 +80,20 @@ class FleetView(object):
     def flag(self, robot, server, ranking, now, reason=''):
         """A flag: ``server`` selected for ``reason`` (the robot's own words when it
         chooses per task)."""
+        self._heard(now)
         r = self.robots[robot]
         r.ranking, r.flagged, r.reason, r.alone = list(ranking), server, reason, False
         if r.switch is not None and r.switch[2] == server and not r.switch[3] and reason:
             r.switch = r.switch[:3] + (reason,)
 
     def sample(self, robot, server, ok, rtt, now):
+        self._heard(now)
         if ok:
             self.robots[robot].rtt[server] = rtt
 
     def probe(self, server, ok, load, now, why=''):
         """The viewer's own probe of ``server``: ``load`` a :data:`Load` when answered."""
+        self._heard(now)
         s = self.servers[server]
         if ok:
             s.seen, s.load, s.left = now, load, False
@@ -95,6 +104,7 @@ class FleetView(object):
             s.failed, s.why = now, why
 
     def announcement(self, server, lease, now):
+        self._heard(now)
         s = self.servers[server]
         if lease <= 0:
             s.left = True
@@ -103,6 +113,7 @@ class FleetView(object):
 
     def log(self, text, now):
         """A line of the fleet's log (warnings and the robots' switch lines)."""
+        self._heard(now)
         m = _SWITCH.search(text)
         if m:
             r = self.robots[int(m.group(1))]
@@ -146,9 +157,11 @@ class FleetView(object):
         """The view at ``now`` as lines of text (``clock(t)`` formats an alert's time)."""
         self.update(now)
         clock = clock or (lambda t: '%+.0f s' % (t - now))
-        span = self.window
+        # rates over the window, or over what was heard of it (a view of 5 s: over 5 s)
+        span = min(self.window, max(1.0, now - self.first if self.first is not None
+                                    else self.window))
         up = sum(1 for s in self.servers if not self.gone(s, now))
-        out = ['%s: %d servers (%d up), %d robots; rates over %g s'
+        out = ['%s: %d servers (%d up), %d robots; rates over %.3g s'
                % (title, len(self.servers), up, len(self.robots), span), '',
                '%-6s %-7s %-12s %8s %8s %7s  %s'
                % ('ROBOT', 'SERVER', 'RANKING', 'RTT ms', 'TASKS/s', 'FAILED', 'LAST SWITCH')]
