@@ -106,8 +106,10 @@ def test_rtt_follows_the_emulated_delay(runs):
     print('\nrobot 1 probe rounds: server 2 - server 1 median %.1f ms (%d rounds) before the '
           'step, server 1 - server 2 %.1f ms (%d) after'
           % (1e3 * median(before), len(before), 1e3 * median(after), len(after)))
-    assert 0.006 <= median(before) <= 0.010, before
-    assert 0.024 <= median(after) <= 0.032, after
+    # each bound halfway to the nearest wrong answer (a round's second probe waits for the
+    # first's answer on a loaded host: 10.4 ms once beside make test's other streams)
+    assert 0.006 <= median(before) <= 0.012, before
+    assert 0.021 <= median(after) <= 0.042, after
     moved = next(f for f in flags_of(run, 1) if f.t >= STEP_AT and f.server == 2)
     near = [r.rtt for r in run.reports if r.robot == 1 and r.ok and r.answered_by == 1]
     far = [r.rtt for r in run.reports if r.robot == 1 and r.ok and r.answered_by == 2

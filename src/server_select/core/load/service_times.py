@@ -84,3 +84,30 @@ class ServiceTimes(object):
         with self._lock:
             now = self._clock()
             return {kind: self._work(kind, now)[1] for kind in self._times}
+
+
+class SenderShares(object):
+    """How much of its kind's usual work each sender's tasks take (not thread-safe: the
+    :class:`~server_select.core.load.work_queue.WorkQueue` holds its lock). One robot's
+    100,000-value sorts and another's 1,000-value ones are both sorts, and frames of one
+    size take the same work raw or JPEG-encoded, so the work timed says it, not the bytes:
+    the ratio of the sender's moving mean to the kind's. At most ``most`` senders (the
+    least recent dropped); 1 for a sender not timed yet."""
+
+    def __init__(self, most=4096, weight=0.2):
+        self.most, self.weight = most, weight
+        self._senders = collections.OrderedDict()    # (sender, kind) -> its mean work
+        self._kinds = {}                             # kind -> every sender's mean work
+
+    def add(self, sender, kind, seconds):
+        key = (sender, kind)
+        old = self._senders.pop(key, None)
+        self._senders[key] = seconds if old is None else old + self.weight * (seconds - old)
+        if len(self._senders) > self.most:
+            self._senders.popitem(last=False)
+        old = self._kinds.get(kind)
+        self._kinds[kind] = seconds if old is None else old + self.weight * (seconds - old)
+
+    def ratio(self, sender, kind):
+        own, every = self._senders.get((sender, kind)), self._kinds.get(kind)
+        return own / every if own is not None and every else 1.0

@@ -35,7 +35,7 @@ import time
 
 from server_select.core.load.demand import Demand
 from server_select.core.load.fair_queue import FairQueue, Job
-from server_select.core.load.service_times import ServiceTimes
+from server_select.core.load.service_times import SenderShares, ServiceTimes
 
 Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization '
                               'service_error')
@@ -74,7 +74,7 @@ class WorkQueue(object):
         self._clock = clock
         self._cond = threading.Condition()
         self._queue = FairQueue()
-        self._sizes = {}          # kind -> the usual bytes of its tasks whose work was timed
+        self._shares = SenderShares()     # each robot's share of its kind's usual work
         self._running = set()
         self._closed = False
         self.refused = self.shed = self.finished = self.pushed_out = 0
@@ -95,20 +95,11 @@ class WorkQueue(object):
         work += sum(max(0.0, self._job_work(job, now) - (now - job.started)) for job in running)
         return work / self.workers
 
-    def _job_work(self, job, now, kind=None, size=0):
-        """Seconds of work of ``job`` (or of a task of ``kind`` holding ``size`` bytes; lock
-        held): its kind's, in proportion to its bytes against the kind's usual (one robot's
-        100,000-value sorts must not make another's 1,000-value ones look as long)."""
-        kind, size = (kind, size) if job is None else (job.kind, job.size)
-        usual = self._sizes.get(kind)
-        scale = size / usual if size and usual else 1.0
-        return self._work(kind, now) * scale
-
-    def _learn(self, job):
-        """``job``'s bytes, into its kind's usual (lock held)."""
-        if job.size:
-            usual = self._sizes.get(job.kind, job.size)
-            self._sizes[job.kind] = usual + 0.1 * (job.size - usual)
+    def _job_work(self, job, now, owner=None, kind=None):
+        """Seconds of work of ``job`` (or of a task of ``owner`` and ``kind``; lock held):
+        its kind's, times its robot's share of it (:class:`SenderShares`)."""
+        owner, kind = (owner, kind) if job is None else (job.owner, job.kind)
+        return self._work(kind, now) * self._shares.ratio(owner, kind)
 
     def _work(self, kind, now):
         """Seconds of work per ``kind`` task (lock held): the recent median; while none is
@@ -154,7 +145,7 @@ class WorkQueue(object):
             return 'busy: the tasks queued hold %d bytes; %d more is over %d' % (
                 self._queue.bytes, size, self.max_bytes)
         if deadline is not None:
-            cost = self._job_work(None, now, kind, size)
+            cost = self._job_work(None, now, owner, kind)
             finish = self._wait(owner, cost, now, room) + cost
             if now + finish > deadline:
                 return 'busy: would finish in %.3g s, its deadline is in %.3g s' % (
@@ -210,7 +201,7 @@ class WorkQueue(object):
             self._running.discard(job)
             self.finished += 1
             if seconds is not None:
-                self._learn(job)
+                self._shares.add(job.owner, job.kind, seconds)
         if seconds is not None:
             self.times.add(job.kind, seconds)
 
