@@ -35,12 +35,17 @@ class Nemesis(object):
         self.fleet, self.tb, self.roscore, self.say = fleet, tb, roscore, say
         self.core = None
         self.events, self.stops = [], []
+        self.over = 0.0     # scenario s by which the faults done so far are over, bound included
 
     def run(self, faults):
         """Each fault at its time; faults planned for one time (a wave of the short soak)
         at once, each in a thread of its own; the first error of a wave raised."""
         for at, wave in itertools.groupby(faults, key=lambda f: f.at):
-            self.tb.sleep_until(at)
+            wave = list(wave)
+            # not before the faults before are over, whatever their plan said (a restart
+            # on a loaded host takes longer: one that met a master restart lost the
+            # parameters its launch had set, and never served)
+            self.tb.sleep_until(max(at, self.over))
             errors = []
             threads = [threading.Thread(target=self._guarded, args=(f, errors), name=f.kind)
                        for f in wave]
@@ -49,6 +54,8 @@ class Nemesis(object):
             for thread in threads:
                 thread.join()
             self.events.sort(key=lambda e: e['start'])
+            ends = [e['end'] - self.tb.t0 + e['bound'] for e in self.events]
+            self.over = max([self.over] + ends)
             if errors:
                 raise errors[0]
 
@@ -79,6 +86,8 @@ class Nemesis(object):
         self.fleet.stop(name)
         self.stops.append((name, time.time(), killed))
         self.fleet.start(name)
+        # the fault lasts until the new copy is registered (as a key rotation's restarts)
+        wait_until(lambda: self.fleet.pid(name) not in (None, pid), 60.0, period=0.3)
         return 'pid %s killed' % pid
 
     def server_kill(self, fault):

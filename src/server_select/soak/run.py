@@ -111,7 +111,7 @@ def soak(args, say=print):
         sampler = Sampler(nemesis.MAIN_NODES + ['camera', EMULATOR], pid_of).start()
         try:
             chaos.run(faults)
-            tb.sleep_until(duration)
+            tb.sleep_until(max(duration, chaos.over + plan.TAIL[bool(args.short)]))
         finally:
             sampler.stop()
             measured = (measured_from, time.time() - TASK_TIMEOUT)
