@@ -52,13 +52,15 @@ class BroadcastRoute(object):
             self._pub().publish(request)
 
     def heard(self, server, node=None):
-        """``server`` answered a probe: the publisher is made anew when a connection of it
-        is stalled, or when the server's node ``node`` has not heard it for DEAF_GRACE s
-        (every server then connects again); the nodes it was made anew for."""
+        """``server`` answered a probe: the publisher is made anew when the server's node
+        ``node`` has not heard it for DEAF_GRACE s (every server then connects again); the
+        nodes it was made anew for. A stalled connection is kept, as the paper's robot
+        kept it (one publisher for every server: making it anew drops every server's)."""
         with self._lock:
             deaf = node is not None and node not in hearing(self._pub())
-            return renew(self.pubs, None, self._pub,
-                         [node] if self.deaf.held(server, deaf) else [])
+            if not self.deaf.held(server, deaf):
+                return []
+            return renew(self.pubs, None, self._pub, [node])
 
     def publishers(self):
         with self._lock:
