@@ -51,7 +51,8 @@ def main(argv=None):
     if not argv or argv[0] in ('-h', '--help'):
         print(__doc__.strip())
         return 0 if argv else INVALID
-    argv = ['server_select'] + argv if not os.path.isfile(argv[0]) else argv
+    if argv[0].endswith('.launch') and not os.path.isfile(argv[0]):
+        argv = ['server_select'] + argv      # one of this package's (roslaunch's PACKAGE)
     try:
         refused = _undeclared(argv)
     except Exception as error:        # roslaunch says why, in its own words
