@@ -94,11 +94,16 @@ def _close(sock, client_addr=None, why=None):
         sock.close()
     except OSError:
         pass
-    if why is None:
-        return
-    due, held = _THROTTLE.due()
+    if why is not None:
+        say_closed(_THROTTLE, 'a connection', client_addr, why)
+
+
+def say_closed(throttle, what, client_addr, why):
+    """A line, at most one a ``throttle`` period, that ``what`` from ``client_addr`` was
+    closed for ``why``, naming the peer (cut) and how many such lines were held back."""
+    due, held = throttle.due()
     if due:
         address = '%s:%s' % tuple(client_addr[:2]) if client_addr else 'an unknown peer'
-        rospy.logwarn('%s: closed a connection from %s: %s%s' % (
-            rospy.get_name(), peer(address), peer(why, 2 * PEER_CHARS),
+        rospy.logwarn('%s: closed %s from %s: %s%s' % (
+            rospy.get_name(), what, peer(address), peer(why, 2 * PEER_CHARS),
             '; %d more before' % held if held else ''))

@@ -13,11 +13,10 @@ itself).
 
 import threading
 
-import rospy
 from rosgraph import xmlrpc
 
 from server_select.core.trust.senders import Throttle
-from server_select.core.util.bounded import peer
+from server_select.ros.handshake import say_closed
 
 DEADLINE = 3.0           # s a connection has for each request
 MOST_AT_ONCE = 64        # connections served at once
@@ -62,8 +61,4 @@ def _process_request_thread(server, request, client_address):
 
 def _refuse(server, request, client_address, why):
     server.shutdown_request(request)
-    due, held = _THROTTLE.due()
-    if due:
-        address = '%s:%s' % tuple(client_address[:2]) if client_address else 'an unknown peer'
-        rospy.logwarn('%s: closed an XML-RPC connection from %s: %s%s' % (
-            rospy.get_name(), peer(address), why, '; %d more before' % held if held else ''))
+    say_closed(_THROTTLE, 'an XML-RPC connection', client_address, why)
