@@ -35,7 +35,7 @@ class BroadcastRoute(object):
         self.sub = None
         self.deaf = Lasting(DEAF_GRACE)
 
-    def _pub(self, _server=None):
+    def _pub(self):
         pub = self.pubs.get(None)
         if pub is None:
             pub = self.pubs[None] = rospy.Publisher(

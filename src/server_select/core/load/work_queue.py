@@ -92,8 +92,12 @@ class WorkQueue(object):
         if len(running) + len(queued) < self.workers:
             return 0.0
         work = sum(self._job_work(job, now) for job in queued)
-        work += sum(max(0.0, self._job_work(job, now) - (now - job.started)) for job in running)
-        return work / self.workers
+        return (work + self._left(running, now)) / self.workers
+
+    def _left(self, running, now):
+        """Seconds of work the ``running`` jobs have left (lock held)."""
+        return sum(max(0.0, self._job_work(job, now) - (now - job.started))
+                   for job in running)
 
     def _job_work(self, job, now, owner=None, kind=None):
         """Seconds of work of ``job`` (or of a task of ``owner`` and ``kind``; lock held):
@@ -162,9 +166,8 @@ class WorkQueue(object):
 
         def work(job):
             return 0.0 if id(job) in gone else self._job_work(job, now)
-        left = sum(max(0.0, self._job_work(job, now) - (now - job.started))
-                   for job in self._running)
-        return (left + self._queue.wait_work(owner, cost, work)) / self.workers
+        return (self._left(self._running, now)
+                + self._queue.wait_work(owner, cost, work)) / self.workers
 
     def take(self):
         """The next queued job by the robots' round robin, once there is one (blocks);
