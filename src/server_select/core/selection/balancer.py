@@ -37,7 +37,7 @@ its estimate}`` (None: no answer in the window). The fleet's rule's ``choose`` r
 
 class Balancer(object):
     """The state every peer keeps: this robot's attempts out per server, the newest probe
-    answer of each, and a random source (``rng``), drawn from once per attempt (``draw``:
+    answer of each, and a random source (``rng``), drawn from once per task (``draw``:
     the next decision's numbers, so that asking draws nothing). Thread-safe."""
 
     name = None
@@ -51,7 +51,7 @@ class Balancer(object):
         self.out = collections.Counter()     # server -> this robot's attempts out there
         self.probes = {}                     # server -> its newest ProbeAnswer
         self.last = None                     # where the last task went
-        self.why = ''                        # why tasks go there (the move's reason)
+        self.why = ''                        # why tasks go there (the last decision's)
         self.on_move = None                  # on_move(server, why): the rule moved, why
         self.draw = self._draws()
 
@@ -85,10 +85,14 @@ class Balancer(object):
             self._started(server, kind, now)
             if first and order is not None:
                 self._chosen(server, kind, now, order)
-            self.draw = self._draws()
+            if first:       # a decision's draw is spent (a re-send or a hedge takes the next
+                self.draw = self._draws()    # in the order, and draws nothing)
+            said = getattr(order, 'reasons', {}).get(server) if first else None
             if first and server != self.last:
-                moved = getattr(order, 'reasons', {}).get(server)   # (a peer's: unexplained)
-                self.last, self.why = server, moved or ''
+                moved = said                          # (a peer's: unexplained)
+                self.last, self.why = server, said or ''
+            elif said:      # kept: why, as the last decision said ("kept: the fastest")
+                self.why = said
         if moved is not None and self.on_move is not None:
             self.on_move(server, moved)
 

@@ -40,16 +40,15 @@ class Selection(object):
                                       fail_fast, policy.robust,
                                       task_memory if passive else 0.0, keep, horizon)
         self.window = self.rankings.window
-        # probes only, what a task sample is compared with: a window of its own only when
-        # task samples share the main one (``passive``)
-        self.passive = passive
+        # probes only (what a task sample is compared with): a window of its own only
+        self.passive = passive     # when task samples share the main one
         self.probes = LatencyWindow(window, keep=keep, horizon=horizon) if passive \
             else self.window
         self._chooser = Chooser(policy)
         # a rule asked per task, drawing from ``rng`` (None: the ranking decides);
         # ``rule_args``: its own (the league's ablations)
-        rule_args = dict(rule_args or {}, **({'window': window} if policy.kind == 'least_latency'
-                                             else {}))
+        rule_args = dict(rule_args or {}, **({'window': window}
+                                             if policy.kind == 'least_latency' else {}))
         self.balancer = balancers.make(policy.kind, clock=clock, rng=rng, **rule_args) \
             if policy.per_task else None
         self.on_change = None      # on_change(): a sample may have changed view()
@@ -222,15 +221,16 @@ class Selection(object):
     def heading(self):
         """Where the next task would go by the last decision, without making one (a
         robot deciding alone decides when it sends): the manager's selection while its
-        flags are fresh, else the robot's own; the next candidate when that one is
-        ejected; NO_SERVER: none."""
+        flags are fresh, else the robot's own; when that one is ejected, where the rule
+        sends the next task; NO_SERVER: none."""
         if self.mode != 'select':
             return self.target()
         if self.balancer is not None:
-            last = self.balancer.last
-            usable = last is not None and (self.health is None or self.health.usable(last)
-                                           or last in self._usable())
-            return last if usable else NO_SERVER
+            last, usable = self.balancer.last, self._usable()
+            if last is None or self.health is None or self.health.usable(last) \
+                    or last in usable:
+                return NO_SERVER if last is None else last
+            return self.balancer.order(usable)[0] if usable else NO_SERVER
         ranking = self.manager_ranking()
         if ranking is None:
             with self._lock:

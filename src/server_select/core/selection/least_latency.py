@@ -166,10 +166,14 @@ class LeastLatency(Balancer):
         return dict((s, e._replace(error=max(e.error, spread)) if e and e.answers == 1 else e)
                     for s, e in estimates.items())
 
+    def _main_kind(self, now):
+        """The kind the robot sent most of lately (None: none sent)."""
+        counts = dict((k, self._sent(k, now)) for k in self.sends)
+        return max(sorted(counts, key=str), key=counts.get) if any(counts.values()) else None
+
     def _estimates(self, servers, now):
         """``{server: Estimate or None}`` for the kind the robot sent most of lately."""
-        counts = dict((k, self._sent(k, now)) for k in self.sends)
-        kind = max(sorted(counts, key=str), key=counts.get) if any(counts.values()) else None
+        kind = self._main_kind(now)
         rate = self.rate(kind, now)
         return self._pooled(dict((s, self.estimate(s, kind, now, rate)) for s in servers))
 
@@ -186,6 +190,12 @@ class LeastLatency(Balancer):
 
     def view(self, servers):
         """The robot's servers ranked by the estimates the choice uses (for its manager
-        and its views)."""
+        and its views): where tasks go first, or, when that server is no longer usable,
+        where the next task will go and why."""
         with self._lock:
-            return by_estimate(self._estimates(servers, self._clock()), self.last, self.why)
+            now = self._clock()
+            selected, why = self.last, self.why
+            if servers and selected not in servers:
+                decision = self._decide(list(servers), self._main_kind(now), now)
+                selected, why = decision.server, decision.reason
+            return by_estimate(self._estimates(servers, now), selected, why)

@@ -49,9 +49,11 @@ def rank_servers(pair_stats, fail_fast=0):
 def by_estimate(estimates, selected=None, reason=''):
     """A :class:`Ranking` of ``{server: estimate or None}`` (a rule's own: ``latency``,
     ``error``, ``wait``, ``answers``), ``selected`` where tasks go and ``reason`` why (when
-    ranked; else the best); servers with no estimate left out."""
+    ranked; else the best); servers with no estimate left out. ``selected`` comes first
+    (every view names where tasks go first; when its estimate is not the least, ``reason``
+    says why it is kept), the others by estimate."""
     ranked = sorted((s for s, e in estimates.items() if e is not None),
-                    key=lambda s: (estimates[s].latency, s))
+                    key=lambda s: (s != selected, estimates[s].latency, s))
     return Ranking(selected if selected in ranked else ranked[0] if ranked else NO_SERVER,
                    ranked, [estimates[s].latency for s in ranked],
                    [estimates[s].answers for s in ranked],
@@ -73,8 +75,8 @@ def view_key(ranking, policy, current):
 def from_view(ranking, means, errors, counts, waits, excluded, selected=0, reason=''):
     """A :class:`Ranking` from a robot's message (parallel arrays; ``waits`` may be empty,
     NaN: not known; ``selected``: where a robot that chooses per task sends its tasks, 0:
-    the first ranked; ``reason``: its words for why). ValueError says what is wrong with
-    it."""
+    the first ranked, first when named, the others ascending; ``reason``: its words for
+    why). ValueError says what is wrong with it."""
     ranking = [int(s) for s in ranking]
     if selected and selected not in ranking:
         raise ValueError('it selects server %d, which its ranking %s lacks' % (selected, ranking))
@@ -86,8 +88,9 @@ def from_view(ranking, means, errors, counts, waits, excluded, selected=0, reaso
         raise ValueError('a server is named twice in ranking %s, excluded %s'
                          % (ranking, list(excluded)))
     means = [float(m) for m in means]
+    rest = means[1:] if selected and ranking[:1] == [selected] else means
     if not all(0.0 < m < float('inf') for m in means) or \
-            any(b < a for a, b in zip(means, means[1:])):
+            any(b < a for a, b in zip(rest, rest[1:])):
         raise ValueError('latencies %s are not positive and ascending' % means)
     errors = [float(e) for e in errors]
     if not all(0.0 <= e < float('inf') for e in errors):
