@@ -16,14 +16,14 @@ import textwrap
 import xml.etree.ElementTree as ET
 
 from server_select.core.config import limits
+from server_select.core.robot.tuning import LIVE, LIVE_DOC
 from server_select.core.selection.policy import POLICIES
 from server_select.core.settings import PARAMS, PROFILES, REQUIRED
 from server_select.ros.paths import package_file
 
 TOP = package_file()       # the package's folder (the source tree: docs/ is not installed)
 DOC = os.path.join('docs', 'parameters.md')
-
-# The launch files of the roles, in the document's order.
+# the roles' launch files, in the document's order
 ROLE_FILES = ('server.launch', 'robot.launch', 'manager.launch', 'top_manager.launch',
               'oracle.launch')
 # Nodes started without a role launch file of their own, and the parameters they read.
@@ -167,10 +167,9 @@ def render(top=TOP):
            'Made by `python3 -m server_select.paramdoc --write` from the parameter table '
            '(`src/server_select/core/settings.py`) and the launch files; `make test` checks '
            'that it is current and that the two agree. Every parameter is private (`~name`). '
-           'A launch argument left at `-` (the default of all but ids; empty is the same) '
-           'leaves the node\'s default, the `paper` column or, with `profile:=fleet`, the '
-           '`fleet` column; a '
-           'parameter set explicitly always wins. Id lists are YAML lists or strings: '
+           'A launch argument left at `-` (the default of all but ids; empty is the same) leaves '
+           'the node\'s default, the `paper` column or, with `profile:=fleet`, the `fleet` '
+           'column; a parameter set explicitly always wins. Id lists are YAML lists or strings: '
            '`[1, 2, 3]`, `"1,2,3"`, `"1 2 3"`. An invalid value stops the node with one '
            '`invalid parameter` line and exit status 2.', '']
     for name in ROLE_FILES:
@@ -190,7 +189,8 @@ def render(top=TOP):
             '|---|---|---|---|---|']
     for node, params in OTHER_NODES.items():
         out += [row(p).replace('| ', '| `%s` | ' % node, 1) for p in params]
-    out += ['', '## Message size limits', ''] + limits.table()
+    out += ['', '## Live on a running robot', '', LIVE_DOC % ', '.join('`%s`' % n for n in LIVE),
+            '', '## Message size limits', ''] + limits.table()
     return '\n'.join(out) + '\n'
 
 

@@ -43,9 +43,9 @@ def test_a_frame_is_fresh_until_the_next_one_is_due_and_for_twice_its_best_answe
     load = RobotLoad({'image': 1.0}, lambda: 1)
     answer = LatencyProbeResponse(server_id=1, workers=1, backlog=3.0, utilization=0.5,
                                   kinds=['image'], service_time=[0.6])
-    fresh = load.fresh_for('image', 2.0, 1.0 / 0.5)        # a frame every 2 s
+    fresh = load.fresh_for('image', 2.0, lambda: 1.0 / 0.5)        # a frame every 2 s
     assert fresh(1) is None                                 # nothing heard of server 1
     load.on_answer(1, load_of(answer), 0.05)
     assert fresh(1) == pytest.approx(2.0)                   # the next frame is due first
-    fast = load.fresh_for('image', 2.0, 1.0 / 5.0)          # 5 frames/s: past capacity
+    fast = load.fresh_for('image', 2.0, lambda: 1.0 / 5.0)          # 5 frames/s: past capacity
     assert fast(1) == pytest.approx(2.0 * (0.05 + 0.6))     # the queue (3 s) left out

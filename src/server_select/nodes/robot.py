@@ -12,6 +12,7 @@ from server_select.msg import SelectionFlag
 from server_select.ros.camera import TopicSource
 from server_select.ros.flags import flag_topic
 from server_select.ros.graph import ServiceProviders, publisher_of
+from server_select.ros.live_tuning import LiveTuning
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
 from server_select.ros.robot_parts import RobotWire, fixed_server
 from server_select.ros.node import fleet, param
@@ -51,7 +52,8 @@ class RobotNode(object):
           ``processed_data``, ``processed_image``, or
           ``robot_<robot_id>/processed_data``, ... (fleet); ``detections``,
           ``found_targets``; ``fleet_servers`` (``~discover``) or ``group_assignments``
-    :ROS Services: ``~known_targets`` (KnownTargets); calls ``latency_S<s>``
+    :ROS Services: ``~known_targets`` (KnownTargets); ``~set_parameters`` (dynamic_reconfigure:
+        the settings it takes while running, ros/live_tuning.py); calls ``latency_S<s>``
     """
     SEAL_ROLE = 'robot'  # what it signs as with a fleet key (core/trust/seal.py)
     DIAGNOSTICS = 'robot'  # its statuses on /diagnostics (ros/diagnostics.py)
@@ -102,6 +104,8 @@ class RobotNode(object):
             else None
         self._start_after, self._local_decision = None, False
         self.timers = []
+        self.tuning = LiveTuning('robot %d' % self.robot_id, self.robot, param,
+                                 after=lambda: [s.pacer.poke() for s in self.streams])
 
     def start(self):
         self._start_after = time.monotonic() + self.robot.start_delay
@@ -123,6 +127,7 @@ class RobotNode(object):
         for part in (self.announcements, self.view):
             if part is not None:
                 part.start()
+        self.tuning.start()     # dynparam set /robot<r> window 3.0 (ros/live_tuning.py)
         self.timers = [rospy.Timer(rospy.Duration(self.summary_period),
                                    lambda _e: rospy.loginfo(self.summary())),
                        rospy.Timer(rospy.Duration(0.5), self.on_decision_timer)]

@@ -27,6 +27,16 @@ def write_default(name, value):
     rospy.set_param('~' + name, value)
 
 
+def changed_live(name, value):
+    """``~name`` was tuned to ``value`` while the node runs (dynamic_reconfigure wrote it): a
+    default this node wrote is still taken back at its end, as tuned."""
+    if name not in _WRITTEN:
+        return      # set by the launch: stays as tuned, as dynamic_reconfigure leaves it
+    _WRITTEN[name] = value
+    if rospy.has_param('~' + RECORD):
+        rospy.set_param('~' + RECORD, {'pid': os.getpid(), 'values': dict(_WRITTEN)})
+
+
 def set_here(name):
     """Whether ``~name`` was set for this node (by a launch file, rosrun or rosparam), not
     written back as a default by it."""

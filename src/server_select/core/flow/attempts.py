@@ -82,8 +82,8 @@ class AttemptClock(object):
         return fresh - elapsed <= (expected or 0.0)
 
 
-def from_params(get, kind, rate, newest_wins, load=None):
-    """The :class:`AttemptClock` of a robot's ``kind`` stream at ``rate`` tasks a second
+def from_params(get, kind, period, newest_wins, load=None):
+    """The :class:`AttemptClock` of a robot's ``kind`` stream, one task every ``period()`` s,
     from its parameters (``get(name)``), with ``load`` (a load-aware robot's
     :class:`~server_select.core.load.robot_load.RobotLoad`, or None): a load-aware robot's
     first answers from a server may take half the timeout (its work is not known yet; its
@@ -93,5 +93,5 @@ def from_params(get, kind, rate, newest_wins, load=None):
     return AttemptClock(timeout, factor=get('retry_factor'), floor=get('retry_floor'),
                         first=timeout / 2.0 if load else 1.0,
                         expected=load.expected(kind) if load else None,
-                        fresh=load.fresh_for(kind, fresh, 1.0 / rate)
+                        fresh=load.fresh_for(kind, fresh, period)
                         if load and newest_wins and fresh > 0 else None)

@@ -48,15 +48,19 @@ class LoadBoard(object):
     """
 
     def __init__(self, mix, max_age=2.0, clock=time.monotonic):
-        total = float(sum(mix.values()))
-        if not mix or not total > 0:
-            raise ValueError('mix must give a positive weight to some kind, got %r' % (mix,))
-        self.mix = dict((k, w / total) for k, w in mix.items())
+        self.set_mix(mix)
         self.max_age = max_age
         self._clock = clock
         self._lock = threading.Lock()
         self._reports = {}       # server -> [Load, time, tasks sent since]
         self._rtts = {}          # server -> its last probes' round trips
+
+    def set_mix(self, mix):
+        """The robot's streams' rates are now ``mix`` (at start, and when one is tuned)."""
+        total = float(sum(mix.values()))
+        if not mix or not total > 0:
+            raise ValueError('mix must give a positive weight to some kind, got %r' % (mix,))
+        self.mix = dict((k, w / total) for k, w in mix.items())
 
     def update(self, server, load, rtt=None):
         """``load``, the newest report of ``server``; ``rtt``, the probe's round trip (s)."""

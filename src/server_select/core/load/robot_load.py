@@ -51,6 +51,12 @@ class RobotLoad(object):
             return self.kinds, [rates.get((None, kind), 0.0 if self._sends.seen(None, kind)
                                           else self.mix[kind]) for kind in self.kinds]
 
+    def set_rate(self, kind, rate):
+        """The robot's ``kind`` stream sends ``rate`` tasks a second from now (tuned)."""
+        with self._lock:
+            self.mix[kind] = rate
+            self.board.set_mix(self.mix)
+
     def expected(self, kind):
         """``(server) -> seconds``: backlog + work of a ``kind`` task there (None: unknown),
         what an attempt's deadline follows."""
@@ -58,11 +64,12 @@ class RobotLoad(object):
 
     def fresh_for(self, kind, factor, period):
         """``(server) -> seconds``: how long a ``kind`` task (a camera frame, one every
-        ``period`` s) is worth waiting for at a server: until the next frame is due, and at
-        least ``factor`` x (round trip + work) there with no queue (None: unknown)."""
+        ``period()`` s, the stream's period as it is now) is worth waiting for at a server: until
+        the next frame is due, and at least ``factor`` x (round trip + work) there with no
+        queue (None: unknown)."""
         def seconds(server):
             unqueued = self.board.unqueued(server, kind)
-            return None if unqueued is None else max(period, factor * unqueued)
+            return None if unqueued is None else max(period(), factor * unqueued)
         return seconds
 
     def forget(self, server):

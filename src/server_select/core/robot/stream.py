@@ -47,7 +47,8 @@ class Stream(object):
             publish=self._publish, check=kind.check, report=self._report,
             run_local=kind.run_local, on_failure=robot.on_failure,
             on_success=robot.health.task_ok,
-            deadlines=attempts.from_params(get, kind.kind, rate, kind.newest_wins, robot.load),
+            deadlines=attempts.from_params(get, kind.kind, lambda: self.period,
+                                           kind.newest_wins, robot.load),
             ids=ids, clock=robot.clock, hedge=HEDGE_QUANTILE if get('hedge') else None,
             budget=robot.budget, max_in_flight=get('max_in_flight'),
             newest_wins=kind.newest_wins, on_busy=functools.partial(robot.on_busy, kind.kind),
@@ -58,6 +59,12 @@ class Stream(object):
         self.started = False
         self.next_send = None
         self._no_input_since = None
+
+    def set_rate(self, rate):
+        """``rate`` tasks a second from the next send on (tuned while running)."""
+        self.rate, self.period = rate, 1.0 / rate
+        if self.next_send is not None:
+            self.next_send = min(self.next_send, self.robot.clock() + self.period)
 
     def start(self, now):
         self.next_send = now + self.period * (1.0 + self.random.random())

@@ -1,0 +1,153 @@
+"""One answer at every moment (fleet profile): at each switch of a robot, provoked by
+stopping the server its tasks go to (SIGSTOP), the robot's log, its flag (server and
+ranking), the manager's log and /diagnostics name the same server; and ``dynparam set``
+changes a running robot's rule, or refuses with the reason."""
+
+import os
+import re
+import signal
+import subprocess
+import threading
+
+import pytest
+import rospy
+from diagnostic_msgs.msg import DiagnosticArray
+
+from server_select.core.util.procs import wait_until
+from server_select.msg import SelectionFlag
+
+from support.fleet import Fleet
+from test_faults import current_server, show, warm_up
+
+MOVE = re.compile(r'^robot 1: tasks go to server (\d+) now \((.*)\)$')
+SETTLE = 0.3      # s after a move for a view to have heard of it (one message's way)
+
+
+class Views(object):
+    """Robot 1's flags and its 'selection' statuses on /diagnostics, by their stamps."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.flags, self.statuses = [], []
+        self.subs = [rospy.Subscriber('/robot_1/server_select_flag', SelectionFlag,
+                                      self.on_flag, queue_size=1000),
+                     rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_array,
+                                      queue_size=1000)]
+
+    def on_flag(self, flag):
+        with self.lock:
+            self.flags.append((flag.header.stamp.to_sec(), flag))
+
+    def on_array(self, array):
+        for status in array.status:
+            if status.name == 'robot1: selection':
+                values = dict((v.key, v.value) for v in status.values)
+                with self.lock:
+                    self.statuses.append((array.header.stamp.to_sec(), values['server'],
+                                          status.message))
+
+    def close(self):
+        for sub in self.subs:
+            sub.unregister()
+
+
+@pytest.fixture(scope='module')
+def fleet(ros):
+    with Fleet(ros['log'], profile='fleet', task_rate=5) as running:
+        warm_up(ros['rec'])
+        yield running
+
+
+def moves(rec, since):
+    """Robot 1's moves logged after ``since`` (a stamp): ``[(stamp, server, why)]``."""
+    with rec.lock:
+        lines = [(r.msg.header.stamp.to_sec(), r.msg.msg) for r in rec.logs
+                 if r.msg.name == '/robot1']
+    return [(t, int(m.group(1)), m.group(2)) for t, m in
+            ((t, MOVE.match(text)) for t, text in lines) if m and t >= since]
+
+
+def disagreements(views, rec, found):
+    """What any view said against the robot's own moves ``found``."""
+    wrong = []
+    manager = [(r.msg.header.stamp.to_sec(), r.msg.msg) for r in rec.of(rec.logs)
+               if r.msg.name == '/manager' and r.msg.msg.startswith('manager: robot 1 -> ')]
+    for (t, server, why), (t_next, after, _) in zip(found, found[1:] + [(1e18, None, '')]):
+        if not any(t <= s < min(t_next, t + 1.0) and f.server_id == server
+                   for s, f in views.flags):
+            wrong.append(('no flag of the move within 1 s', t, server, why))
+        for stamp, flag in views.flags:
+            if t + SETTLE <= stamp < t_next and (flag.server_id not in (server, after) or
+                                                 list(flag.ranking[:1]) != [flag.server_id]):
+                wrong.append(('flag', stamp, flag.server_id, list(flag.ranking), server))
+        for stamp, named, message in views.statuses:
+            if t + SETTLE <= stamp < t_next and named not in (str(server), str(after)):
+                wrong.append(('diagnostics', stamp, named, message, server))
+        if not any(t - SETTLE <= s < t_next and 'robot 1 -> server %d (' % server in m
+                   for s, m in manager):
+            wrong.append(('manager log', t, server))
+    return wrong
+
+
+def test_every_view_names_where_a_robots_tasks_go_at_each_switch(ros, fleet):
+    rec, views = ros['rec'], Views()
+    try:
+        start = rospy.get_time()
+        for _cycle in range(3):
+            victim = current_server(rec, 1)
+            before = len(moves(rec, start))
+            pid = fleet.signal('/server%d' % victim, signal.SIGSTOP)
+            assert wait_until(lambda: len(moves(rec, start)) > before, 15.0), \
+                'robot 1 never left stopped server %d' % victim
+            os.kill(pid, signal.SIGCONT)
+            warm_up(rec, robots=(1,), tasks=len([r for r in rec.of(rec.reports, 1)
+                                                 if r.msg.ok]) + 5)
+        last = moves(rec, start)[-1][0]
+        assert wait_until(lambda: any(s > last + 1.5 for s, _, _ in views.statuses), 10.0)
+        found = moves(rec, start)
+        wrong = disagreements(views, rec, found)
+    finally:
+        views.close()
+    show('every view at each of robot 1\'s switches (3 servers stopped in turn):', [{
+        'switches': len(found), 'flags': len(views.flags), 'statuses': len(views.statuses),
+        'disagreements': len(wrong)}] + [{'move': '%.2f server %d (%s)' % m} for m in found] +
+        [{'against': w} for w in wrong])
+    assert len(found) >= 3
+    assert not wrong, wrong
+
+
+def dynparam(*args):
+    return subprocess.run(['rosrun', 'dynamic_reconfigure', 'dynparam'] + list(args),
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=30)
+
+
+def counted(views):
+    """The answers behind the robot's server in its newest flag."""
+    with views.lock:
+        return views.flags[-1][1].sample_count[0] if views.flags else 0
+
+
+def test_dynparam_set_changes_a_running_robots_rule(ros, fleet):
+    rec, views = ros['rec'], Views()
+    try:
+        assert wait_until(lambda: len(views.flags) >= 3, 10.0)
+        before = max(f.sample_count[0] for _, f in views.flags)
+        done = dynparam('set', '/robot1', 'window', '6.0')
+        logged = wait_until(lambda: rec.log_lines(
+            '/robot1', 'robot 1: ~window 2.0 -> 6.0 (dynamic_reconfigure)'), 10.0)
+        grew = wait_until(lambda: counted(views) > 2 * before, 15.0)
+        after = counted(views)
+        bad = dynparam('set', '/robot1', 'window', '-1')
+        kept = rospy.get_param('/robot1/window')
+        dynparam('set', '/robot1', 'window', '2.0')
+    finally:
+        views.close()
+    show('dynparam set /robot1 window 6.0, then -1:', [{
+        'exit': done.returncode, 'logged': bool(logged),
+        "answers behind the robot's server (2 s window)": before, '(6 s window)': after,
+        'exit of -1': bad.returncode, 'window after -1': kept}])
+    assert done.returncode == 0, done.stdout
+    assert logged and grew, (before, after)
+    assert bad.returncode != 0 and 'refused: ~window: expected a positive number' in bad.stdout
+    assert kept == 6.0
