@@ -84,6 +84,7 @@ def param_server(monkeypatch):
     monkeypatch.setattr(rospy, 'get_param', get_param)
     monkeypatch.setattr(rospy, 'has_param', lambda name: name in table)
     monkeypatch.setattr(rospy, 'set_param', table.__setitem__)
+    monkeypatch.setattr(rospy, 'delete_param', table.__delitem__)
     monkeypatch.setattr(params_in_force, '_WRITTEN', {})
     monkeypatch.setattr(node, '_PROFILE', None)
     monkeypatch.setattr(node, '_FLEET_NS', None)
@@ -125,6 +126,15 @@ def test_the_defaults_a_node_uses_are_written_back(param_server):
     assert param_server['~servers'] == '1,2,3'
     assert params_in_force._WRITTEN['contender_rate'] == 4.0
     assert 'window' not in params_in_force._WRITTEN
+    # what a fleet robot reads but does not use is not shown (its probes go at
+    # ~contender_rate; its rule fixes the ejections and has no ranking policy)
+    assert not set(['~probe_rate', '~eject_time', '~dwell', '~fixed_server']) & set(param_server)
+
+
+def test_a_paper_robot_shows_the_probe_rate_it_uses(param_server):
+    param_server.update(private_params(ROBOT_OK))
+    NODES['robot']()
+    assert param_server['~probe_rate'] == 1.0 and param_server['~eject_time'] == 1.0
 
 
 def test_an_unknown_private_parameter_is_named_with_the_nearest_known_one(monkeypatch):

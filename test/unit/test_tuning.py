@@ -24,6 +24,7 @@ def test_a_fleet_robot_takes_its_rule_window_stream_rate_and_probe_rates_live():
     made, tuning = robot()
     assert 'window' in tuning.names and 'task_rate' in tuning.names
     assert 'contender_rate' in tuning.names and 'probe_rate' not in tuning.names  # adaptive
+    assert tuning.names == ['window', 'task_rate', 'hedge', 'retry_budget', 'contender_rate']
     assert 'frame_rate' not in tuning.names        # no camera stream
     assert 'seed' not in tuning.names and 'restart' in why_not_live('seed')
 
@@ -58,9 +59,17 @@ def test_hedging_and_the_retry_budget_change_for_every_stream():
 
 def test_a_request_is_taken_whole_or_not_at_all():
     made, tuning = robot()
-    with pytest.raises(ValueError, match='eject_time 100 would be longer than ~eject_max 30'):
-        tuning.set_all({'window': 3.0, 'eject_time': 100.0})
+    with pytest.raises(ValueError, match='below ~background_rate 1'):
+        tuning.set_all({'window': 3.0, 'contender_rate': 0.5})
     assert tuning.values['window'] == 2.0 and made.balancer.window == 2.0
+    assert made.plan.contender_rate == 4.0
+
+
+def test_what_the_fleets_rule_fixes_is_not_tuned_either():
+    made, tuning = robot()
+    assert 'eject_time' not in tuning.names and 'background_rate' not in tuning.names
+    with pytest.raises(ValueError, match='fixed by least_latency'):
+        tuning.set('eject_time', 5.0)
     assert made.health.base == 1.0
 
 
@@ -76,8 +85,12 @@ def test_probing_chosen_at_start_stays_so():
 
 def test_a_paper_robot_following_its_manager_has_no_rule_window_to_tune():
     made, tuning = robot('paper')
-    assert 'window' not in live_names(made) and 'probe_rate' in tuning.names
+    assert 'window' not in live_names(made, default) and 'probe_rate' in tuning.names
     with pytest.raises(ValueError, match="the manager's window"):
         tuning.set('window', 3.0)
     tuning.set('probe_rate', 2.0)
     assert made.plan.tick == pytest.approx(0.5)
+    with pytest.raises(ValueError, match='eject_time 100 would be longer than ~eject_max 30'):
+        tuning.set('eject_time', 100.0)
+    tuning.set_all({'eject_time': 100.0, 'eject_max': 200.0})
+    assert (made.health.base, made.health.longest) == (100.0, 200.0)

@@ -14,7 +14,7 @@ from server_select.ros.flags import flag_topic
 from server_select.ros.graph import ServiceProviders, publisher_of
 from server_select.ros.live_tuning import LiveTuning
 from server_select.ros.membership import GroupFollower, ServerAnnouncements
-from server_select.ros.robot_parts import RobotWire, fixed_server
+from server_select.ros.robot_parts import RobotWire, fixed_server, not_in_force
 from server_select.ros.node import fleet, param
 from server_select.ros.runner import run
 from server_select.ros.senders import SenderGate
@@ -106,6 +106,7 @@ class RobotNode(object):
         self.timers = []
         self.tuning = LiveTuning('robot %d' % self.robot_id, self.robot, param,
                                  after=lambda: [s.pacer.poke() for s in self.streams])
+        not_in_force()      # rosparam shows only what this robot uses
 
     def start(self):
         self._start_after = time.monotonic() + self.robot.start_delay

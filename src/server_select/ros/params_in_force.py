@@ -27,6 +27,15 @@ def write_default(name, value):
     rospy.set_param('~' + name, value)
 
 
+def not_in_force(names):
+    """The defaults of ``names`` were read but are not in force in this node's profile (a
+    fleet robot does not probe at ``~probe_rate``): off the parameter server again, so that
+    ``rosparam get`` shows only what the node uses."""
+    for name in names:
+        if _WRITTEN.pop(name, None) is not None:
+            _delete(name)
+
+
 def changed_live(name, value):
     """``~name`` was tuned to ``value`` while the node runs (dynamic_reconfigure wrote it): a
     default this node wrote is still taken back at its end, as tuned."""

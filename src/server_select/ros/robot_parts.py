@@ -7,7 +7,7 @@ import rospy
 
 from server_select.core.config.params import ParamError, parse_fixed_server
 from server_select.core.robot.world import Events, Transport
-from server_select.core.selection.effect import ineffective, refusal
+from server_select.core.selection.effect import ineffective, not_for_setting, refusal
 from server_select.ros import params_in_force, seal
 from server_select.ros.load import load_of
 from server_select.ros.node import param
@@ -16,6 +16,13 @@ from server_select.ros.probe_seal import ProbeAddresses
 from server_select.ros.prober import Prober
 from server_select.ros.routing import ROUTES
 from server_select.ros.task_stream import TaskStream
+
+
+def not_in_force():
+    """The parameters a robot read but does not use in its configuration: off the parameter
+    server (as its defaults they were written back)."""
+    params_in_force.not_in_force([name for name, _ in not_for_setting(param)] +
+                                 (['fixed_server'] if param('mode') != 'fixed' else []))
 
 
 def fixed_server(servers, mode):

@@ -11,6 +11,7 @@ routing, the task sizes...): they need a restart, and :func:`why_not_live` says 
 import collections
 
 from server_select.core.flow.task_flow import HEDGE_QUANTILE
+from server_select.core.selection.effect import not_for_setting
 
 # name -> its type (what dynamic_reconfigure describes); the parameter's parser checks values
 LIVE = collections.OrderedDict([
@@ -36,13 +37,14 @@ def why_not_live(name):
     return 'read once at start: restart the robot (roslaunch) to change ~%s' % name
 
 
-def live_names(robot):
-    """The live settings that apply to ``robot`` (a stream rate only if it has the stream,
-    the window only for a rule that chooses per task, the probe rates of its probing)."""
+def live_names(robot, get):
+    """The live settings that apply to ``robot`` (its parameters read by ``get(name)``): a
+    stream rate only if it has the stream, the window only for a rule that chooses per
+    task, the probe rates of its probing, nothing its rule fixes."""
     kinds = set(s.kind.kind for s in robot.streams)
-    plan = robot.plan
+    plan, fixed = robot.plan, set(name for name, _ in not_for_setting(get))
     return [name for name in LIVE
-            if (name not in STREAM_RATES or STREAM_RATES[name] in kinds)
+            if name not in fixed and (name not in STREAM_RATES or STREAM_RATES[name] in kinds)
             and (name != 'window' or _rule_window(robot) is not None)
             and (name != 'probe_rate' or not plan.adaptive)
             and (name not in ('contender_rate', 'contender_budget') or plan.adaptive)]
@@ -70,7 +72,8 @@ class Tuning(object):
 
     def __init__(self, robot, get):
         self.robot = robot
-        self.names = live_names(robot)
+        self.names = live_names(robot, get)
+        self._fixed = dict(not_for_setting(get))
         self.values = dict((name, get(name)) for name in self.names)
 
     def set_all(self, wanted):
@@ -78,7 +81,7 @@ class Tuning(object):
         old, new)]`` of those that changed; ValueError with the reason when one cannot."""
         for name in wanted:
             if name not in self.names:
-                raise ValueError(why_not_live(name) or _not_here(name))
+                raise ValueError(why_not_live(name) or self._fixed.get(name) or _not_here(name))
         with self.robot._lock:
             changes = [(name, self.values[name], value)
                        for name, value in sorted(wanted.items()) if value != self.values[name]]
@@ -98,17 +101,19 @@ class Tuning(object):
         return old
 
     def _check(self, values):
-        if values['eject_time'] > values['eject_max']:
-            raise ValueError('~eject_time %g would be longer than ~eject_max %g'
-                             % (values['eject_time'], values['eject_max']))
-        if not self.robot.plan.adaptive:
+        health, plan = self.robot.health, self.robot.plan
+        eject = values.get('eject_time', health.base), values.get('eject_max', health.longest)
+        if eject[0] > eject[1]:
+            raise ValueError('~eject_time %g would be longer than ~eject_max %g' % eject)
+        if not plan.adaptive:
             return
-        if not values['contender_rate'] > 0:
+        rates = (values.get('contender_rate', plan.contender_rate),
+                 values.get('background_rate', plan.background_rate))
+        if not rates[0] > 0:
             raise ValueError('~contender_rate 0 would turn adaptive probing off, which is '
                              'chosen at start: restart the robot to change it')
-        if values['contender_rate'] < values['background_rate']:
-            raise ValueError('~contender_rate %g would be below ~background_rate %g'
-                             % (values['contender_rate'], values['background_rate']))
+        if rates[0] < rates[1]:
+            raise ValueError('~contender_rate %g would be below ~background_rate %g' % rates)
 
     # -- what each setting changes ---------------------------------------------------------
     def _window(self, seconds):

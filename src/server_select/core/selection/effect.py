@@ -38,20 +38,28 @@ FIXED_BY_RULE = {
 }
 
 
-def ineffective(get, is_set):
-    """``[(name, why)]`` of the parameters set explicitly (``is_set(name)``) that are not
-    for setting with the others' values (``get(name)``): no effect, or fixed by the rule."""
+def not_for_setting(get):
+    """``[(name, why)]`` of the robot parameters that are not for setting with the others'
+    values (``get(name)``): no effect, or fixed by the rule. The node neither takes them
+    nor shows them on the parameter server."""
     found = []
     if get('policy') in PER_TASK:
         found += [(name, '%s; ~policy %s chooses per task' % (why, get('policy')))
-                  for name, why in sorted(RANKING_ONLY.items()) if is_set(name)]
+                  for name, why in sorted(RANKING_ONLY.items())]
         if get('policy') == 'least_latency':
             found += [(name, 'fixed by least_latency: %s (its knobs: %s)'
                        % (why, ', '.join(FLEET_KNOBS)))
-                      for name, why in sorted(FIXED_BY_RULE.items()) if is_set(name)]
-        if is_set('probe_rate') and get('contender_rate'):
+                      for name, why in sorted(FIXED_BY_RULE.items())]
+        if get('contender_rate'):
             found.append(('probe_rate', 'probes are paced by ~contender_rate %g'
                           % get('contender_rate')))
+    return found
+
+
+def ineffective(get, is_set):
+    """``[(name, why)]`` of the parameters set explicitly (``is_set(name)``) that are not
+    for setting (:func:`not_for_setting`), or set to what the rule cannot work with."""
+    found = [(name, why) for name, why in not_for_setting(get) if is_set(name)]
     if get('policy') == 'least_latency' and not get('load_aware'):
         found.append(('load_aware', 'least_latency estimates from the servers\' load: false '
                       'would leave it blind'))
