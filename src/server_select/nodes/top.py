@@ -15,6 +15,7 @@ run through the same view (no probes: a server is up while it answers tasks).
 import argparse
 import concurrent.futures
 import curses
+import re
 import sys
 import threading
 import time
@@ -23,9 +24,17 @@ from server_select.core.observe.fleet_view import FleetView, Load
 
 TOPICS = ('task_report', 'server_select_flag', 'latency_samples', 'server_announcements',
           'rosout_agg', 'rosout')
+PAIR_SAMPLES = re.compile(r'latency_R[0-9]+S[0-9]+$')    # the paper's topic per pair
 PERIOD = 0.5           # s between frames
 PROBE_PERIOD = 1.0     # s between the probes of a server
 PROBE_TIMEOUT = 0.5
+
+
+def samples_of(msg):
+    """``(server, ok, rtt)`` of a fleet robot's probe round or of one paper sample."""
+    if isinstance(msg.server_id, int):
+        return [(msg.server_id, msg.ok, msg.rtt)]
+    return list(zip(msg.server_id, msg.ok, msg.rtt))
 
 
 class Feed(object):
@@ -44,8 +53,8 @@ class Feed(object):
             elif kind == 'server_select_flag':
                 self.view.flag(msg.robot_id, msg.server_id, msg.ranking, now,
                                getattr(msg, 'reason', ''))   # (older bags: none)
-            elif kind == 'latency_samples':
-                for server, ok, rtt in zip(msg.server_id, msg.ok, msg.rtt):
+            elif kind == 'latency_samples' or PAIR_SAMPLES.match(kind):  # fleet, paper
+                for server, ok, rtt in samples_of(msg):
                     self.view.sample(msg.robot_id, server, ok, rtt, now)
             elif kind == 'server_announcements':
                 self.view.announcement(msg.server_id, msg.lease, now)
@@ -179,7 +188,8 @@ def bag_frames(args):
     next_frame, now, last_task = None, None, None
     with rosbag.Bag(args.bag) as bag:
         for topic, msg, stamp in bag.read_messages():
-            if topic.rsplit('/', 1)[-1] not in TOPICS:
+            kind = topic.rsplit('/', 1)[-1]
+            if kind not in TOPICS and not PAIR_SAMPLES.match(kind):
                 continue
             now = stamp.to_sec()
             if next_frame is None:
@@ -193,6 +203,9 @@ def bag_frames(args):
                 next_frame += PERIOD
             if topic.endswith('server_announcements'):
                 feed.view.probe(msg.server_id, True, None, now)   # announced: up
+            if kind == 'latency_samples' or PAIR_SAMPLES.match(kind):   # a robot heard it
+                for server in [s for s, ok, _ in samples_of(msg) if ok]:
+                    feed.view.probe(server, True, None, now)
             if topic.endswith('task_report'):
                 last_task = now
                 if msg.ok and msg.answered_by > 0:
