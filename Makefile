@@ -78,8 +78,9 @@ build: deps
 demo: build
 	@$(ROSENV) cd $(TOP) && if $(PY) -c 'import sys; from server_select.testbed.netns import available; \
 	    ok, why = available(); print("" if ok else why); sys.exit(0 if ok else 1)'; then \
-	  echo "demo: testbed experiment on config/demo_short.yaml (select, fixed, oracle; ~2 min)"; \
-	  $(PY) scripts/evaluate --scenario config/demo_short.yaml --out $(BUILD)/demo_eval; \
+	  echo "demo: testbed experiment on config/demo_short.yaml (select, fixed, oracle, and the fleet profile; ~3 min)"; \
+	  $(PY) scripts/evaluate --scenario config/demo_short.yaml --modes select,fixed,oracle,fleet \
+	    --out $(BUILD)/demo_eval; \
 	else \
 	  echo "demo: the testbed is not available here (see above): running the loopback demo"; \
 	  echo "demo: manager + 3 servers + 2 robots on this host for $(DEMO_DURATION) s"; \

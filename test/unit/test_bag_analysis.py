@@ -2,7 +2,7 @@ import pytest
 
 from server_select.testbed.bag_analysis import (Flag, Report, felt_changes, mode_summary,
                                                 oracle_changes, reaction_times, switches)
-from server_select.testbed.bag_tables import compare, legend, table, verdict
+from server_select.testbed.bag_tables import compare, legend, profiles, table, verdict
 from server_select.testbed.scenario import Scenario
 
 
@@ -116,3 +116,11 @@ def test_columns_that_apply_to_no_row_are_left_out_of_the_table():
     assert header == ('| mode | tasks | failed | mean ms | median ms | p95 ms | p99 ms | '
                       'max ms | switches |')
     assert table(plain).splitlines()[2].startswith('| run | 2 | 1 |')
+
+
+def test_the_profiles_are_compared_on_the_same_scenario_in_one_line():
+    summaries = {'select': {'rtt_ms': {'mean': 10.0}, 'failed': 2, 'tasks': 40},
+                 'fleet': {'rtt_ms': {'mean': 8.0}, 'failed': 0, 'tasks': 40}}
+    line = profiles(summaries)
+    assert line.startswith("the fleet profile was 20 % faster than the paper's on this "
+                           'scenario (8.0 ms against 10.0 ms), 0 against 2 tasks failed'), line

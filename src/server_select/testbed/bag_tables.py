@@ -51,6 +51,8 @@ def table(summaries, first='mode'):
 
 
 LEGEND = (
+    ('mode', "select: the paper's system; fixed: one server for all (the paper's baseline); "
+     'oracle: the truly nearest server; fleet: the system in the fleet profile'),
     ('tasks, failed', "the robots' task reports, and those that got no right answer in time"),
     ('mean ... max ms', 'task round trip, each failed task counted at the task timeout'),
     ('vs fixed', "how much lower the mean is than the fixed server's (+: faster)"),
@@ -75,6 +77,19 @@ def legend(summaries):
         lines.append('(left out: %s)' % '; '.join(
             '%s, %s' % (name, WHY_LEFT_OUT[name]) for name in left_out))
     return '\n'.join(lines)
+
+
+def profiles(summaries):
+    """One line comparing the fleet profile's run (``fleet``) with the paper's (``select``)
+    on the same scenario, by mean task round trip and failed tasks."""
+    paper, fleet = summaries['select'], summaries['fleet']
+    a, b = paper['rtt_ms']['mean'], fleet['rtt_ms']['mean']
+    change = 100.0 * (a - b) / a if a else 0.0
+    return ('the fleet profile was %.0f %% %s than the paper\'s on this scenario (%.1f ms '
+            'against %.1f ms), %d against %d tasks failed; the paper profile reproduces the '
+            'papers, the fleet profile is for work that must live through faults and '
+            'overload.' % (abs(change), 'faster' if change >= 0 else 'slower', b, a,
+                           fleet['failed'], paper['failed']))
 
 
 def verdict(summaries, mode='select'):

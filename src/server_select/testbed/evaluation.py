@@ -7,7 +7,9 @@ started with the package's own launch files inside the hosts' namespaces, and
 
 - ``select``: the system (manager + robots following its flag);
 - ``fixed``: the paper's baseline, every robot pinned to one server (no manager runs);
-- ``oracle``: robots follow the truly nearest server per the scenario file.
+- ``oracle``: robots follow the truly nearest server per the scenario file;
+- ``fleet``: the system in the fleet profile (``profile:=fleet``: servers found at run
+  time, each robot choosing per task), on the same scenario.
 
 The bags (with a ``<bag>.json`` of run metadata beside each) are the only input of the
 analysis (:mod:`server_select.testbed.bag_analysis`).
@@ -25,14 +27,17 @@ from server_select.testbed.netns import Testbed
 from server_select.testbed.runner import HostRun, RunOptions, at_once, guarded
 from server_select.testbed.scenario import Scenario, ScenarioError
 
-MODES = ('select', 'fixed', 'oracle')
+MODES = ('select', 'fixed', 'oracle', 'fleet')
+PROFILE_OF_MODE = {'fleet': 'fleet'}     # a mode that is the system in another profile
 
 
 def run_mode(scenario_path, mode, out_dir, options=None, log=print):
     """Run ``mode`` on the scenario; return the path of the recorded bag."""
     if mode not in MODES:
         raise ValueError('unknown mode %r, expected one of %s' % (mode, ', '.join(MODES)))
-    options = options or RunOptions()
+    options = copy.copy(options or RunOptions())
+    if mode in PROFILE_OF_MODE:
+        options.profile = PROFILE_OF_MODE[mode]
     scenario_path = os.path.abspath(scenario_path)
     scenario = Scenario.load(scenario_path)
     if mode == 'fixed' and options.fixed_server not in [s.id for s in scenario.of_role('server')]:
@@ -46,7 +51,7 @@ def run_mode(scenario_path, mode, out_dir, options=None, log=print):
     with Testbed(scenario, scenario_path, run_dir, prefix=options.prefix) as tb:
         run = HostRun(tb, scenario, run_dir)
         run.start_master()
-        run.start_nodes(mode, options, bag)
+        run.start_nodes('select' if mode in PROFILE_OF_MODE else mode, options, bag)
         log('%s: %s running until scenario time %.0f s (%s)'
             % (scenario.name, mode, scenario.duration, run_dir))
         tb.sleep_until(scenario.duration)
@@ -89,7 +94,8 @@ def main(argv=None):
         description='Run the selection experiment on the testbed and analyse the bags.')
     parser.add_argument('--scenario', required=True, help='scenario YAML file')
     parser.add_argument('--modes', default='select,fixed,oracle',
-                        help='comma-separated modes (default: select,fixed,oracle)')
+                        help='comma-separated modes of %s (default: select,fixed,oracle)'
+                        % ', '.join(MODES))
     parser.add_argument('--out', default='results/eval', help='output folder')
     parser.add_argument('--fixed-server', type=int, default=1)
     parser.add_argument('--task-rate', type=float, default=default('task_rate'))
@@ -126,5 +132,8 @@ def main(argv=None):
     print('\n%s\n\n%s\n' % (bag_tables.table(summaries), bag_tables.legend(summaries)))
     print('report: %s (plots beside it: task_rtt.png, latency_<mode>.png)'
           % os.path.join(out, 'report.md'))
-    print('verdict: %s' % bag_tables.verdict(summaries))
+    for mode in [m for m in ('select', 'fleet') if m in summaries] or ['select']:
+        print('verdict: %s' % bag_tables.verdict(summaries, mode))
+    if 'select' in summaries and 'fleet' in summaries:
+        print('profiles: %s' % bag_tables.profiles(summaries))
     return 0
