@@ -15,16 +15,15 @@ run through the same view (no probes: a server is up while it answers tasks).
 import argparse
 import concurrent.futures
 import curses
-import re
 import sys
 import threading
 import time
 
 from server_select.core.observe.fleet_view import FleetView, Load
+from server_select.ros import bags
 
 TOPICS = ('task_report', 'server_select_flag', 'latency_samples', 'server_announcements',
           'rosout_agg', 'rosout')
-PAIR_SAMPLES = re.compile(r'latency_R[0-9]+S[0-9]+$')    # the paper's topic per pair
 PERIOD = 0.5           # s between frames
 PROBE_PERIOD = 1.0     # s between the probes of a server
 PROBE_TIMEOUT = 0.5
@@ -46,14 +45,14 @@ class Feed(object):
 
     def message(self, topic, msg, now=None):
         now = self.clock() if now is None else now
-        kind = topic.rsplit('/', 1)[-1]
+        kind = bags.kind_of(topic)
         with self.lock:
             if kind == 'task_report':
                 self.view.task(msg.robot_id, msg.server_id, msg.answered_by, msg.ok, now)
             elif kind == 'server_select_flag':
                 self.view.flag(msg.robot_id, msg.server_id, msg.ranking, now,
                                getattr(msg, 'reason', ''))   # (older bags: none)
-            elif kind == 'latency_samples' or PAIR_SAMPLES.match(kind):  # fleet, paper
+            elif kind in ('latency_samples', bags.PAIR):      # fleet, paper
                 for server, ok, rtt in samples_of(msg):
                     self.view.sample(msg.robot_id, server, ok, rtt, now)
             elif kind == 'server_announcements':
@@ -186,31 +185,26 @@ def bag_frames(args):
         raise OSError('%s: %s' % (args.bag, error))
     feed = Feed(FleetView(), None)
     next_frame, now, last_task = None, None, None
-    with rosbag.Bag(args.bag) as bag:
-        for topic, msg, stamp in bag.read_messages():
-            kind = topic.rsplit('/', 1)[-1]
-            if kind not in TOPICS and not PAIR_SAMPLES.match(kind):
-                continue
-            now = stamp.to_sec()
-            if next_frame is None:
-                next_frame = now + PERIOD
-            while now >= next_frame:    # --once: the last view only, its alerts in time
-                if args.once:
-                    feed.update(next_frame)
-                else:
-                    yield feed.lines(next_frame)
-                    time.sleep(PERIOD / args.speed)
-                next_frame += PERIOD
-            if topic.endswith('server_announcements'):
-                feed.view.probe(msg.server_id, True, None, now)   # announced: up
-            if kind == 'latency_samples' or PAIR_SAMPLES.match(kind):   # a robot heard it
-                for server in [s for s, ok, _ in samples_of(msg) if ok]:
-                    feed.view.probe(server, True, None, now)
-            if topic.endswith('task_report'):
-                last_task = now
-                if msg.ok and msg.answered_by > 0:
-                    feed.view.probe(msg.answered_by, True, None, now)
-            feed.message(topic, msg, now)
+    for kind, msg, now, _sender in bags.read(args.bag, TOPICS + (bags.PAIR,)):
+        if next_frame is None:
+            next_frame = now + PERIOD
+        while now >= next_frame:    # --once: the last view only, its alerts in time
+            if args.once:
+                feed.update(next_frame)
+            else:
+                yield feed.lines(next_frame)
+                time.sleep(PERIOD / args.speed)
+            next_frame += PERIOD
+        if kind == 'server_announcements':
+            feed.view.probe(msg.server_id, True, None, now)   # announced: up
+        if kind in ('latency_samples', bags.PAIR):   # a robot's probe reached it
+            for server in [s for s, ok, _ in samples_of(msg) if ok]:
+                feed.view.probe(server, True, None, now)
+        if kind == 'task_report':
+            last_task = now
+            if msg.ok and msg.answered_by > 0:
+                feed.view.probe(msg.answered_by, True, None, now)
+        feed.message(kind, msg, now)
     if now is not None:     # the run as its last task saw it (then the robots stopped)
         yield feed.lines(last_task if last_task is not None else now)
 

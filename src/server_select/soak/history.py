@@ -11,6 +11,8 @@ import collections
 import glob
 import os
 
+from server_select.ros import bags
+
 Report = collections.namedtuple('Report', 't robot task kind ok error rtt server answered_by '
                                 'copies')
 Ranking = collections.namedtuple('Ranking', 't robot ranking counts')
@@ -18,6 +20,7 @@ Flag = collections.namedtuple('Flag', 't robot server sender')
 Sent = collections.namedtuple('Sent', 't robot task server sender')
 Line = collections.namedtuple('Line', 't node level text')
 History = collections.namedtuple('History', 'reports rankings flags sent logs bags')
+KINDS = ('task_report', 'robot_rankings', 'server_select_flag', 'data', 'rosout')
 
 
 def _stamp(msg):
@@ -26,26 +29,20 @@ def _stamp(msg):
 
 def _of_bag(path):
     """{kind: Counter of records} of one bag."""
-    import rosbag
     found = collections.defaultdict(collections.Counter)
-    with rosbag.Bag(path) as bag:
-        for topic, msg, _t, header in bag.read_messages(return_connection_header=True):
-            last = topic.rsplit('/', 1)[-1]
-            sender = header.get('callerid', b'')
-            sender = sender.decode() if isinstance(sender, bytes) else sender
-            if last == 'task_report':
-                found['reports'][(_stamp(msg), msg.robot_id, msg.task_id, msg.kind, msg.ok,
-                                  msg.error, repr(msg.rtt), msg.server_id,
-                                  msg.answered_by)] += 1
-            elif last == 'robot_rankings':
-                found['rankings'][(_stamp(msg), msg.robot_id, tuple(msg.ranking),
-                                   tuple(msg.sample_count))] += 1
-            elif last == 'server_select_flag':
-                found['flags'][(_stamp(msg), msg.robot_id, msg.server_id, sender)] += 1
-            elif last == 'data':
-                found['sent'][(_stamp(msg), msg.robot_id, msg.task_id, msg.server_id, sender)] += 1
-            elif topic.endswith('rosout'):
-                found['logs'][(_stamp(msg), msg.name, msg.level, msg.msg)] += 1
+    for kind, msg, _t, sender in bags.read(path, KINDS):
+        if kind == 'task_report':
+            found['reports'][(_stamp(msg), msg.robot_id, msg.task_id, msg.kind, msg.ok,
+                              msg.error, repr(msg.rtt), msg.server_id, msg.answered_by)] += 1
+        elif kind == 'robot_rankings':
+            found['rankings'][(_stamp(msg), msg.robot_id, tuple(msg.ranking),
+                               tuple(msg.sample_count))] += 1
+        elif kind == 'server_select_flag':
+            found['flags'][(_stamp(msg), msg.robot_id, msg.server_id, sender)] += 1
+        elif kind == 'data':
+            found['sent'][(_stamp(msg), msg.robot_id, msg.task_id, msg.server_id, sender)] += 1
+        else:
+            found['logs'][(_stamp(msg), msg.name, msg.level, msg.msg)] += 1
     return found
 
 

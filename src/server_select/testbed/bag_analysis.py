@@ -36,31 +36,29 @@ def load(bag_path):
     component, so namespaced or remapped recordings work too). Times are seconds since the
     scenario's t0 when the evaluation's ``<bag>.json`` is beside the bag, else since the
     bag's first message; ``meta`` is that JSON, or ``{}``."""
-    import rosbag  # only here: the pure functions below need no ROS
+    from server_select.ros import bags  # only here: the pure functions below need no ROS
     meta = {}
     if os.path.exists(bag_path + '.json'):
         with open(bag_path + '.json') as stream:
             meta = json.load(stream)
     flags, reports, samples, servers = [], [], [], []
-    with rosbag.Bag(bag_path) as bag:
-        t0 = meta.get('t0', bag.get_start_time() if bag.get_message_count() else 0.0)
-        for topic, msg, stamp in bag.read_messages():
-            t = stamp.to_sec() - t0
-            name = topic.rsplit('/', 1)[-1]
-            if name == 'server_select_flag':
-                flags.append(Flag(t, msg.robot_id, msg.server_id, list(msg.ranking),
-                                  list(msg.mean_latency), getattr(msg, 'reason', '')))
-            elif name == 'task_report' and not cut_off(msg.error):
-                reports.append(Report(t, msg.robot_id, msg.task_id, msg.ok, msg.rtt,
-                                      msg.server_id, msg.answered_by, msg.error, msg.attempts,
-                                      msg.kind))
-            elif name.startswith('latency_R'):
-                samples.append(Sample(t, msg.robot_id, msg.server_id, msg.ok, msg.rtt))
-            elif name == 'latency_samples':     # the fleet profile's batch per probe round
-                samples += [Sample(t, msg.robot_id, s, ok, rtt)
-                            for s, ok, rtt in zip(msg.server_id, msg.ok, msg.rtt)]
-            elif name == 'fleet_servers':
-                servers.append(Servers(t, list(msg.servers)))
+    t0 = meta.get('t0')
+    for name, msg, stamp, _sender in bags.read(bag_path):
+        t0 = stamp if t0 is None else t0        # (no metadata: since the first message)
+        t = stamp - t0
+        if name == 'server_select_flag':
+            flags.append(Flag(t, msg.robot_id, msg.server_id, list(msg.ranking),
+                              list(msg.mean_latency), getattr(msg, 'reason', '')))
+        elif name == 'task_report' and not cut_off(msg.error):
+            reports.append(Report(t, msg.robot_id, msg.task_id, msg.ok, msg.rtt, msg.server_id,
+                                  msg.answered_by, msg.error, msg.attempts, msg.kind))
+        elif name == bags.PAIR:
+            samples.append(Sample(t, msg.robot_id, msg.server_id, msg.ok, msg.rtt))
+        elif name == 'latency_samples':     # the fleet profile's batch per probe round
+            samples += [Sample(t, msg.robot_id, s, ok, rtt)
+                        for s, ok, rtt in zip(msg.server_id, msg.ok, msg.rtt)]
+        elif name == 'fleet_servers':
+            servers.append(Servers(t, list(msg.servers)))
     return Run(meta, flags, reports, samples, servers)
 
 

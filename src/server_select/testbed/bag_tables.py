@@ -20,9 +20,10 @@ def compare(summaries):
 
 def _applies(summaries):
     """Which optional columns have a figure in some row: vs fixed (a fixed run), gap to
-    oracle (an oracle run), reaction (a scenario)."""
+    oracle (an oracle run), reaction (a scenario); and whether the rows are modes."""
     rows = summaries.values()
-    return {'vs fixed': any(s.get('vs_fixed_pct') is not None for s in rows),
+    return {'mode': bool(set(summaries) & {'select', 'fixed', 'oracle', 'fleet'}),
+            'vs fixed': any(s.get('vs_fixed_pct') is not None for s in rows),
             'gap to oracle': any(s.get('gap_to_oracle_pct') is not None for s in rows),
             'reaction': any(s.get('reactions') for s in rows)}
 
