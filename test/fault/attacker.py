@@ -12,7 +12,9 @@ leaves. ``namespace`` (a
 robot's key; run in ``/robot2``, as ``/robot2/attacker``): rankings of robot 2 naming
 server 3 and failed task reports of robot 2, 20 a second. ``flood`` (a robot's key): robot
 9, admitted by a sealed probe of each server every second, sends 100,000-value sort tasks
-to servers 1-3 in turn, 68 a second, ignoring every answer.
+to servers 1-3 in turn, 68 a second, ignoring every answer. ``spoof``: sort tasks of robot 1
+to servers 1-3, 20 a second each, over connections whose header claims ``callerid
+/robot1`` (rospy lets a publisher override its header's fields).
 
 Prints what it sent as one line of JSON.
 """
@@ -52,6 +54,21 @@ def tasks(seconds, _sealer):
             sent += 1
         time.sleep(0.05)
     return {'tasks': sent}
+
+
+def spoof(seconds, _sealer):
+    pubs = [rospy.Publisher(names.server_topic(s, names.SORT_TASK_TOPIC), numpy_msg(SortTask),
+                            queue_size=100, headers={'callerid': '/robot1'}) for s in SERVERS]
+    time.sleep(1.0)
+    sent, end, task_id = 0, time.monotonic() + seconds, 10 ** 6
+    while time.monotonic() < end:
+        task_id += 1
+        for server, pub in zip(SERVERS, pubs):
+            pub.publish(numpy_msg(SortTask)(robot_id=1, task_id=task_id, server_id=server,
+                                            data=np.arange(1000, 0, -1, dtype=np.int32)))
+            sent += 1
+        time.sleep(0.05)
+    return {'tasks as robot 1': sent}
 
 
 def rates(seconds, _sealer):
@@ -158,7 +175,8 @@ def flood(seconds, sealer):
     return {'sorts of 100,000 values': sent}
 
 
-MODES = dict((f.__name__, f) for f in (tasks, rates, results, announce, namespace, flood))
+MODES = dict((f.__name__, f) for f in (tasks, rates, results, announce, namespace, flood,
+                                       spoof))
 ROLES = {'announce': 'server', 'namespace': 'robot', 'flood': 'robot'}
 
 

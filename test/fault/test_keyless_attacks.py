@@ -5,7 +5,7 @@ Each attack is measured against the robots' own 5 s before it: their answered ta
 second during and in the 5 s after (within 5 %, less one task of each robot for the
 count's edges), no failed task, and nothing steered. Before: made-up robots' tasks made a
 server answer 2 of 46 of the robots' tasks; announced rates moved both robots to the
-slowest server;
+slowest server; a node claiming robot 1's callerid had its tasks taken as robot 1's;
 services registered at the master by a keyless node failed 18 of 19 tasks; a server's key
 announcing server 2 and leaving made it unusable for minutes; a robot's key in
 ``/robot2/evil`` steered 30 of 48 of robot 2's flags.
@@ -144,6 +144,13 @@ def test_a_robot_flooding_every_server_takes_only_its_share_of_their_queues(
 @pytest.mark.parametrize('mode', ['tasks', 'rates', 'results'])
 def test_a_keyless_node_neither_loads_nor_steers_the_fleet(ros, keyed_fleet, mode):
     attack(ros, keyed_fleet, mode)
+
+
+def test_a_node_claiming_robot_1s_callerid_is_not_robot_1(ros, keyed_fleet):
+    """Its tasks come over connections the servers made to its own URI, not to the one
+    robot 1's sealed probes name: dropped, and the line says so. (Before: taken as robot
+    1's, worked on, their results sent to robot 1, and no line.)"""
+    attack(ros, keyed_fleet, 'spoof', source='dropped a task of robot 1 from /robot1 at')
 
 
 def test_a_servers_key_cannot_take_another_servers_id(ros, keyed_fleet, tmp_path):

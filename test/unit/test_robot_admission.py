@@ -1,5 +1,6 @@
-"""A keyed server's binding of robot ids to nodes (ros/robot_admission.py): a lease ends by
-the clock at every check, and a flood of made-up senders keeps a bounded table."""
+"""A keyed server's binding of robot ids to nodes (ros/robot_admission.py): a task counts
+when its connection goes to the URI the robot's sealed probe named, a lease ends by the
+clock at every check, and a flood of made-up senders keeps a bounded table."""
 
 import types
 
@@ -11,8 +12,14 @@ from server_select.ros.robot_admission import ROBOT_LEASE, RobotAdmission
 from support.clock import Clock
 
 
-def task(robot_id, sender):
-    return types.SimpleNamespace(robot_id=robot_id, _connection_header={'callerid': sender})
+ROBOT1_URI = 'http://robot1:40001/'
+
+
+def task(robot_id, sender, connected_to=ROBOT1_URI):
+    """A task as rospy hands it over: the callerid its publisher claims, and the URI this
+    node connected to for it (what the master listed)."""
+    return types.SimpleNamespace(robot_id=robot_id, _connection_header={
+        'callerid': sender, robot_admission.PUBLISHER_URI: connected_to})
 
 
 @pytest.fixture(autouse=True)
@@ -28,9 +35,11 @@ def admission(clock):
 def test_a_robots_tasks_count_until_its_lease_ends_and_not_after():
     clock = Clock()
     gate = admission(clock)
-    gate.leases.renew(1, '/robot1', clock(), ROBOT_LEASE)
+    gate.leases.renew(1, robot_admission.binding('/robot1', ROBOT1_URI), clock(), ROBOT_LEASE)
     assert gate.admits(task(1, '/robot1'))
     assert not gate.admits(task(1, '/robot1_impostor'))
+    # a publisher elsewhere that claims robot 1's callerid in its header is not robot 1
+    assert not gate.admits(task(1, '/robot1', connected_to='http://attacker:40666/'))
     clock.now += ROBOT_LEASE + 0.1      # no signed probe since: the binding is over
     assert not gate.admits(task(1, '/robot1'))
 

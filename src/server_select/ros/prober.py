@@ -115,7 +115,8 @@ class Prober(object):
         # the nonce makes a sealed answer fit one request: without a key, none is drawn
         request = LatencyProbeRequest(robot_id=self.robot_id, seq=seq, stamp=stamp,
                                       nonce=self._nonce.getrandbits(64) if self._keyed else 0,
-                                      task_kinds=kinds, task_rates=rates)
+                                      task_kinds=kinds, task_rates=rates,
+                                      node_uri=rospy.core.get_node_uri() or '')
         return self.seal.sign(server, request)
 
     def _then(self, server, seq, request, proxy):

@@ -1,19 +1,23 @@
 """Which node is which robot, at a server with a fleet key: the probes say.
 
-ROS 1 lets any node publish a task under any robot id, and name rates in a probe. With a
-fleet key a robot seals a probe request (robot role) when what it announces changes, and
-once a second; a sealed probe binds its robot id to the node that sent it for
-:data:`ROBOT_LEASE` s, renewed by each (another node's claim meanwhile is refused; a robot
-restarted under another name is bound again once the old lease ends). Only a bound
-robot's sealed probes announce rates and prepare its result topics, and only its node's
-tasks are taken; the others are dropped unanswered (an answer to a made-up robot costs a
-publisher), counted by sender, in a line at most every 5 s that also says how many tasks
-were taken meanwhile. Without a key everything counts.
+ROS 1 lets any node publish a task under any robot id, claim any callerid in its
+connection header, and name rates in a probe. With a fleet key a robot seals a probe
+request (robot role) when what it announces changes, and once a second; a sealed probe
+binds its robot id to the node that sent it and to that node's XML-RPC URI, which the
+probe names, for :data:`ROBOT_LEASE` s, renewed by each (another node's claim meanwhile is
+refused; a robot restarted under another name is bound again once the old lease ends).
+Only a bound robot's sealed probes announce rates and prepare its result topics, and only
+tasks that come over a connection this server made to that URI are taken (the URI is
+where this node connected, from the master's list of publishers: a publisher claiming
+``callerid=/robot1`` from elsewhere is not robot 1). The others are dropped unanswered (an
+answer to a made-up robot costs a publisher), counted by sender, in a line at most every
+5 s that also says how many tasks were taken meanwhile. Without a key everything counts.
 """
 
 import threading
 
 import rospy
+from rospy.impl import tcpros_base
 
 from server_select.core.fleet.leases import Leases
 from server_select.core.trust.senders import Throttle
@@ -23,6 +27,29 @@ from server_select.ros.graph import publisher_of
 from server_select.ros.senders import warn
 
 ROBOT_LEASE = 10.0       # s a signed probe binds its robot id (robots probe every ~0.5 s)
+# the connection header key under which this node notes where it connected (any value a
+# publisher sent under it is replaced)
+PUBLISHER_URI = 'server_select_connected_to'
+_VALIDATE = []
+
+
+def note_where_connected():
+    """From now on, every connection this node makes to a publisher notes in its header
+    (``msg._connection_header``) the URI it connected to (idempotent)."""
+    if _VALIDATE:
+        return
+    _VALIDATE.append(tcpros_base.TCPROSTransport._validate_header)
+
+    def validate(transport, header):
+        header[PUBLISHER_URI] = transport.endpoint_id    # (set before the socket's connect)
+        _VALIDATE[0](transport, header)
+    tcpros_base.TCPROSTransport._validate_header = validate
+
+
+def binding(node, uri):
+    """What a robot id is bound to: a node, at its XML-RPC URI (each cut to a peer name's
+    length: a longer one binds nothing any connection matches)."""
+    return '%s at %s' % (peer(node), peer(uri or '?', 2 * PEER_CHARS))
 
 
 class RobotAdmission(object):
@@ -39,6 +66,8 @@ class RobotAdmission(object):
         self.taken = 0
         self.refused = PeerCounter()      # sender -> tasks dropped (the latest senders)
         self._probe_throttle, self._task_throttle = Throttle(5.0), Throttle(5.0)
+        if self.keyed:
+            note_where_connected()
 
     def probe(self, request):
         """Whether ``request`` is its robot's own (then it binds the robot id to its node):
@@ -48,13 +77,14 @@ class RobotAdmission(object):
         if request.robot_id == 0:
             return False
         sender = (getattr(request, '_connection_header', None) or {}).get('callerid', '?')
-        if not request.seal.mac and self.leases.holder(request.robot_id, self._clock()) == sender:
+        bound = binding(sender, request.node_uri)
+        if not request.seal.mac and self.leases.holder(request.robot_id, self._clock()) == bound:
             return False          # its robot's, between the ones it seals (once a second)
         why = seal.request_refusal(request, self.service)
         if why is None:
             now = self._clock()
             self._expire(now)
-            _changed, holder = self.leases.renew(request.robot_id, sender, now, ROBOT_LEASE)
+            _changed, holder = self.leases.renew(request.robot_id, bound, now, ROBOT_LEASE)
             if holder is None:
                 return True
             why = 'robot %d is %s\'s until its probes stop for %g s' % (
@@ -76,7 +106,8 @@ class RobotAdmission(object):
         key)."""
         if not self.keyed:
             return True
-        sender = publisher_of(task)
+        sender = binding(publisher_of(task), (getattr(task, '_connection_header', None) or {})
+                         .get(PUBLISHER_URI))
         bound = self.leases.holder(task.robot_id, self._clock())    # a lease ends in time
         with self._lock:
             if bound is not None and sender == bound:

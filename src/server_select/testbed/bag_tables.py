@@ -80,6 +80,16 @@ def legend(summaries):
     return '\n'.join(lines)
 
 
+def verdicts(summaries):
+    """The lines that end an evaluation: a verdict for each profile's run, and the two
+    profiles compared when both ran."""
+    lines = ['verdict: %s' % verdict(summaries, mode) for mode in
+             [m for m in ('select', 'fleet') if m in summaries] or ['select']]
+    if 'select' in summaries and 'fleet' in summaries:
+        lines.append('profiles: %s' % profiles(summaries))
+    return lines
+
+
 def profiles(summaries):
     """One line comparing the fleet profile's run (``fleet``) with the paper's (``select``)
     on the same scenario, by mean task round trip and failed tasks."""

@@ -132,8 +132,5 @@ def main(argv=None):
     print('\n%s\n\n%s\n' % (bag_tables.table(summaries), bag_tables.legend(summaries)))
     print('report: %s (plots beside it: task_rtt.png, latency_<mode>.png)'
           % os.path.join(out, 'report.md'))
-    for mode in [m for m in ('select', 'fleet') if m in summaries] or ['select']:
-        print('verdict: %s' % bag_tables.verdict(summaries, mode))
-    if 'select' in summaries and 'fleet' in summaries:
-        print('profiles: %s' % bag_tables.profiles(summaries))
+    print('\n'.join(bag_tables.verdicts(summaries)))
     return 0
