@@ -154,7 +154,8 @@ def flood(seconds, sealer):
     def admit(seq):
         for server, proxy in zip(SERVERS, proxies):
             request = LatencyProbeRequest(robot_id=FLOODER, seq=seq, stamp=rospy.Time.now(),
-                                          nonce=nonce.getrandbits(64))
+                                          nonce=nonce.getrandbits(64),
+                                          node_uri=rospy.core.get_node_uri())
             try:
                 proxy(sealed(request, sealer, rospy.resolve_name(names.probe_service(server))))
             except rospy.ServiceException:

@@ -28,6 +28,29 @@ def keyed(monkeypatch):
     monkeypatch.setattr(robot_admission.seal, 'enabled', lambda: True)
 
 
+def bind(gate, clock, robot, node, uri):
+    """What a valid sealed probe of ``robot`` from ``node`` naming ``uri`` binds."""
+    gate.leases.renew(robot, node, clock(), ROBOT_LEASE)
+    gate._uris[robot] = robot_admission.binding(node, uri)
+
+
+def sealed_probe(robot, node, uri):
+    return types.SimpleNamespace(robot_id=robot, node_uri=uri, seal=types.SimpleNamespace(
+        mac=b'sealed'), _connection_header={'callerid': node})
+
+
+def test_a_robot_restarted_under_its_name_is_bound_at_its_new_uri_at_once(monkeypatch):
+    monkeypatch.setattr(robot_admission.seal, 'request_refusal', lambda request, _: None)
+    clock = Clock()
+    gate = admission(clock)
+    assert gate.probe(sealed_probe(1, '/robot1', ROBOT1_URI))
+    assert gate.admits(task(1, '/robot1'))
+    assert gate.probe(sealed_probe(1, '/robot1', 'http://robot1:40002/'))   # restarted
+    assert gate.admits(task(1, '/robot1', connected_to='http://robot1:40002/'))
+    assert not gate.admits(task(1, '/robot1'))                    # (the old copy's)
+    assert not gate.probe(sealed_probe(1, '/robot1_other', 'http://x:1/'))  # another node
+
+
 def admission(clock):
     return RobotAdmission('server 1', '/latency_S1', clock=clock)
 
@@ -35,7 +58,7 @@ def admission(clock):
 def test_a_robots_tasks_count_until_its_lease_ends_and_not_after():
     clock = Clock()
     gate = admission(clock)
-    gate.leases.renew(1, robot_admission.binding('/robot1', ROBOT1_URI), clock(), ROBOT_LEASE)
+    bind(gate, clock, 1, '/robot1', ROBOT1_URI)
     assert gate.admits(task(1, '/robot1'))
     assert not gate.admits(task(1, '/robot1_impostor'))
     # a publisher elsewhere that claims robot 1's callerid in its header is not robot 1

@@ -47,8 +47,8 @@ def note_where_connected():
 
 
 def binding(node, uri):
-    """What a robot id is bound to: a node, at its XML-RPC URI (each cut to a peer name's
-    length: a longer one binds nothing any connection matches)."""
+    """A node at its XML-RPC URI, as the log names it (each cut to a peer name's length: a
+    longer URI binds nothing any connection matches)."""
     return '%s at %s' % (peer(node), peer(uri or '?', 2 * PEER_CHARS))
 
 
@@ -60,7 +60,8 @@ class RobotAdmission(object):
         self.who, self.service = who, service
         self.keyed = seal.enabled()
         self._clock = clock or rospy.get_time
-        self.leases = Leases()
+        self.leases = Leases()        # robot id -> its node (by name)
+        self._uris = {}               # robot id -> its node's URI, as its last sealed probe said
         self._lock = threading.Lock()
         self._expired_at = 0.0
         self.taken = 0
@@ -77,15 +78,16 @@ class RobotAdmission(object):
         if request.robot_id == 0:
             return False
         sender = (getattr(request, '_connection_header', None) or {}).get('callerid', '?')
-        bound = binding(sender, request.node_uri)
-        if not request.seal.mac and self.leases.holder(request.robot_id, self._clock()) == bound:
+        if not request.seal.mac and self.leases.holder(request.robot_id, self._clock()) == sender:
             return False          # its robot's, between the ones it seals (once a second)
         why = seal.request_refusal(request, self.service)
         if why is None:
             now = self._clock()
             self._expire(now)
-            _changed, holder = self.leases.renew(request.robot_id, bound, now, ROBOT_LEASE)
-            if holder is None:
+            _changed, holder = self.leases.renew(request.robot_id, sender, now, ROBOT_LEASE)
+            if holder is None:      # (a robot restarted under its name: at its new URI)
+                with self._lock:
+                    self._uris[request.robot_id] = binding(sender, request.node_uri)
                 return True
             why = 'robot %d is %s\'s until its probes stop for %g s' % (
                 request.robot_id, holder, ROBOT_LEASE)
@@ -99,7 +101,10 @@ class RobotAdmission(object):
             if now - self._expired_at < 1.0:
                 return
             self._expired_at = now
-        self.leases.expire(now)
+        for robot in self.leases.expire(now):
+            with self._lock:
+                if self.leases.holder(robot) is None:     # (not bound again meanwhile)
+                    self._uris.pop(robot, None)
 
     def admits(self, task):
         """Whether ``task`` comes from the node its robot id is bound to (always without a
@@ -108,8 +113,9 @@ class RobotAdmission(object):
             return True
         sender = binding(publisher_of(task), (getattr(task, '_connection_header', None) or {})
                          .get(PUBLISHER_URI))
-        bound = self.leases.holder(task.robot_id, self._clock())    # a lease ends in time
+        held = self.leases.holder(task.robot_id, self._clock()) is not None   # ends in time
         with self._lock:
+            bound = self._uris.get(task.robot_id) if held else None
             if bound is not None and sender == bound:
                 self.taken += 1
                 return True
