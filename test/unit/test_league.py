@@ -43,10 +43,11 @@ def test_goodput_is_also_given_against_what_the_static_assignments_servers_did()
 
 def test_network_table_gives_the_mean_to_the_oracle_of_the_same_run():
     def figures(mean):
-        return dict(mean=mean, p99=2 * mean, failed=0, switches_per_min=1.0,
-                    reaction_mean=0.5, extra_sends=0.0, samples_per_s=10.0, robot_cpu=2.0)
+        return dict(mean=mean, p99=2 * mean, failed=0, switches=1.0,
+                    reaction=0.5, extra=0.0, probes=10.0, robot_cpu=2.0)
     runs = [{'oracle_fleet': figures(0.010), 'prequal': figures(0.012)},
             {'oracle_fleet': figures(0.020), 'prequal': figures(0.021)}]
     lines = network_table(runs).splitlines()
-    assert lines[3].startswith('| prequal | 2 | 16.5 (12.0-21.0) | 33 (24-42) | '
+    assert lines[0].startswith('| variant | runs | mean ms | p99 ms | mean / oracle | failed |')
+    assert lines[3].startswith('| prequal | 2 | 16.50 (12.00-21.00) | 33.0 (24.0-42.0) | '
                                '1.125 (1.050-1.200) |')

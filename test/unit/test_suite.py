@@ -57,9 +57,9 @@ def test_figures_count_failed_tasks_at_the_timeout_and_switches_per_minute():
     f = suite_report.figures(reports, flags, [11], changes, 10.0, 70.0, 2.0)
     assert (f.tasks, f.failed) == (61, 1)
     assert f.mean == pytest.approx((60 * 0.01 + 2.0) / 61)
-    assert f.switches_per_min == pytest.approx(1.0)      # one switch in 60 s, one robot
-    assert (f.reaction_mean, f.missed) == (2.0, 0)
-    assert f.extra_sends == pytest.approx(100.0 / 61)
+    assert f.switches == pytest.approx(1.0)      # one switch in 60 s, one robot
+    assert (f.reaction, f.missed) == (2.0, 0)
+    assert f.extra == pytest.approx(1.0 / 61)
     assert suite_report.flag_switches(flags, 50.0, 70.0) == 0
 
 

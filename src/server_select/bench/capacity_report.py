@@ -12,7 +12,7 @@ from server_select.core.util.tables import fmt, markdown_table, median_range
 
 COLUMNS = (('offered', 'offered /s', '%.2f', 1.0), ('sent', 'sent /s', '%.2f', 1.0),
            ('goodput', 'goodput /s', '%.2f', 1.0),
-           ('goodput_share', 'goodput / measured capacity %', '%.0f', 100.0),
+           ('share', 'goodput / measured capacity %', '%.0f', 100.0),
            ('failed', 'failed', '%d', 1.0), ('mean', 'mean ms', '%.0f', 1e3),
            ('p50', 'p50 ms', '%.0f', 1e3), ('p99', 'p99 ms', '%.0f', 1e3),
            ('oldest', 'oldest answer ms', '%.0f', 1e3), ('extra', 'extra sends %', '%.1f', 100.0),
@@ -150,7 +150,7 @@ def table(kind, runs, capacity):
     groups = collections.OrderedDict()
     capacity = measured(runs) or capacity
     for row in sorted(runs, key=lambda r: (r['load'], r['variant'])):
-        row = dict(row, goodput_share=row['goodput'] / capacity)
+        row = dict(row, share=row['goodput'] / capacity)
         groups.setdefault((row['load'], row['variant']), []).append(row)
     keys = [c for c in COLUMNS if all(r.get(c[0]) is not None for g in groups.values()
                                       for r in g)]

@@ -5,6 +5,7 @@ import collections
 import os
 
 from server_select.core.selection.balancers import PEERS
+from server_select.core.util import league_columns
 from server_select.core.util.tables import markdown_table, median_range
 
 NETWORK_VARIANTS = ('oracle_fleet', 'fleet', 'fleet_hysteresis') + PEERS
@@ -23,38 +24,20 @@ def _cell(values, spec, scale=1.0):
     return median_range(known, spec) if known else '-'
 
 
-NETWORK_COLUMNS = (('mean', 'mean ms', '%.1f', 1e3), ('p99', 'p99 ms', '%.0f', 1e3),
-                   ('failed', 'failed', '%d', 1), ('switches_per_min', 'switches /min /robot',
-                                                   '%.2f', 1),
-                   ('reaction_mean', 'reaction s', '%.2f', 1),
-                   ('reaction_felt', 'reaction felt s', '%.2f', 1),
-                   ('extra_sends', 'extra sends %', '%.1f', 1),
-                   ('samples_per_s', 'probes /s', '%.0f', 1), ('robot_cpu', 'robot CPU %',
-                                                               '%.1f', 1))
-CAPACITY_COLUMNS = (('goodput_share', 'goodput % of capacity', '%.0f', 100),
-                    ('of_static', "goodput % of static's work", '%.0f', 100),
-                    ('wanted', 'work still wanted %', '%.0f', 100),
-                    ('failed', 'failed', '%d', 1), ('mean', 'mean ms', '%.0f', 1e3),
-                    ('p99', 'p99 ms', '%.0f', 1e3),
-                    ('switches', 'switches /min /robot', '%.1f', 1),
-                    ('settled', 'settled switches', '%.1f', 1),
-                    ('extra', 'extra sends %', '%.0f', 100))
-
-
 def network_table(per_run):
-    """One row per variant; mean and p99 also as a ratio to the oracle of the same run."""
-    variants = [v for v in per_run[0]]
-    rows = []
-    for v in variants:
-        runs = [r[v] for r in per_run if v in r]
-        oracle = [r.get('oracle_fleet') for r in per_run if v in r]
-        ratio = [f['mean'] / o['mean'] if o and o['mean'] and f['mean'] else None
-                 for f, o in zip(runs, oracle)]
-        cells = [_cell([f.get(k) for f in runs], spec, scale)
-                 for k, _, spec, scale in NETWORK_COLUMNS]
-        rows.append([v, len(runs)] + cells[:2] + [_cell(ratio, '%.3f')] + cells[2:])
-    return markdown_table(['variant', 'runs', 'mean ms', 'p99 ms', 'mean / oracle'] +
-                          [t for _, t, _, _ in NETWORK_COLUMNS[2:]], rows)
+    """One row per variant (the league's columns); ``ratio``: its mean over the oracle's of
+    the same run."""
+    for run in per_run:
+        oracle = run.get('oracle_fleet') or {}
+        for figures in run.values():
+            figures['ratio'] = figures['mean'] / oracle['mean'] \
+                if oracle.get('mean') and figures.get('mean') else None
+    columns = league_columns.shown(league_columns.NETWORK,
+                                   [f for run in per_run for f in run.values()])
+    rows = [[v, len(runs)] + [_cell([f.get(k) for f in runs], spec, scale)
+                              for k, _, spec, scale in columns]
+            for v, runs in ((v, [r[v] for r in per_run if v in r]) for v in per_run[0])]
+    return markdown_table(['variant', 'runs'] + [t for _, t, _, _ in columns], rows)
 
 
 def capacity_table(rows):
@@ -68,11 +51,10 @@ def capacity_table(rows):
     for row in sorted(rows, key=lambda r: (r['load'], CAPACITY_VARIANTS.index(r['variant'])
                                            if r['variant'] in CAPACITY_VARIANTS else 99)):
         done = static.get((row['load'], row['repeat']))
-        row = dict(row, goodput_share=row['goodput'] / row['capacity'],
+        row = dict(row, share=row['goodput'] / row['capacity'],
                    of_static=row['goodput'] / done if done else None)
         groups.setdefault((row['load'], row['variant']), []).append(row)
-    columns = [c for c in CAPACITY_COLUMNS
-               if any(r.get(c[0]) is not None for g in groups.values() for r in g)]
+    columns = league_columns.shown(league_columns.CAPACITY, [r for g in groups.values() for r in g])
     rows = [['%gx' % load, variant, len(group)] +
             [_cell([r.get(k) for r in group], spec, scale) for k, _, spec, scale in columns]
             for (load, variant), group in groups.items()]

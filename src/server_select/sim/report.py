@@ -12,23 +12,11 @@ below 0: the fleet is better beyond the noise).
 import json
 import os
 
+from server_select.core.util.league_columns import CAPACITY, NETWORK, shown
 from server_select.core.util.tables import markdown_table
 from server_select.sim.stats import median_interval, paired
 
 ORACLE, FLEET = 'oracle_fleet', 'fleet'
-NETWORK_COLUMNS = (('mean', 'mean ms', '%.2f', 1e3), ('p99', 'p99 ms', '%.1f', 1e3),
-                   ('ratio', 'mean / oracle', '%.3f', 1), ('failed', 'failed', '%.0f', 1),
-                   ('switches', 'switches /min /robot', '%.2f', 1),
-                   ('reaction', 'reaction s', '%.2f', 1), ('extra', 'extra sends %', '%.1f', 100),
-                   ('probes', 'probes /s /robot', '%.1f', 1))
-CAPACITY_COLUMNS = (('share', 'goodput % of capacity', '%.0f', 100),
-                    ('of_static', "goodput % of static's work", '%.0f', 100),
-                    ('wanted', 'work still wanted %', '%.0f', 100),
-                    ('failed', 'failed', '%.0f', 1), ('mean', 'mean ms', '%.0f', 1e3),
-                    ('p99', 'p99 ms', '%.0f', 1e3),
-                    ('switches', 'switches /min /robot', '%.1f', 1),
-                    ('extra', 'extra sends %', '%.0f', 100),
-                    ('probes', 'probes /s /robot', '%.1f', 1))
 
 
 def cell(values, spec, scale=1.0):
@@ -55,11 +43,12 @@ def with_ratios(variants, seeds):
 
 def network_tables(name, variants, seeds):
     with_ratios(variants, seeds)
+    columns = shown(NETWORK, [r for runs in variants.values() for r in runs.values()])
     rows = [[v] + [cell(_series(runs, seeds, key), spec, scale)
-                   for key, _, spec, scale in NETWORK_COLUMNS]
+                   for key, _, spec, scale in columns]
             for v, runs in variants.items()]
     text = '### %s\n\n%s\n' % (name, markdown_table(
-        ['variant'] + [title for _, title, _, _ in NETWORK_COLUMNS], rows))
+        ['variant'] + [title for _, title, _, _ in columns], rows))
     if FLEET in variants and ORACLE in variants:
         text += '\n' + paired_table(variants, seeds) + '\n'
     return text + '\n' + pick(variants, seeds) + '\n'
@@ -122,11 +111,12 @@ def capacity_tables(name, variants, seeds):
             row['share'] = row['goodput'] / row['capacity']
             base = static.get(seed, {}).get('work')
             row['of_static'] = row['goodput'] / base if base else None
+    columns = shown(CAPACITY, [r for runs in variants.values() for r in runs.values()])
     rows = [[v] + [cell(_series(runs, seeds, key), spec, scale)
-                   for key, _, spec, scale in CAPACITY_COLUMNS]
+                   for key, _, spec, scale in columns]
             for v, runs in variants.items()]
     return '### %s (capacity)\n\n%s\n' % (name, markdown_table(
-        ['variant'] + [title for _, title, _, _ in CAPACITY_COLUMNS], rows))
+        ['variant'] + [title for _, title, _, _ in columns], rows))
 
 
 def plot(results, seeds, path):

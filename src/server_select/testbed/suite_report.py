@@ -21,9 +21,10 @@ from server_select.testbed.bag_analysis import felt_changes, oracle_changes, rea
 from server_select.testbed.scenario import Scenario
 from server_select.testbed.suite import VARIANTS
 
-Figures = collections.namedtuple('Figures', 'tasks failed mean p99 switches_per_min '
-                                 'reaction_mean reaction_max missed samples_per_s robot_cpu '
-                                 'extra_sends reaction_felt')
+# the league's keys (core/util/league_columns.py): switches a minute per robot, mean
+# reaction (s), probe samples a second per robot, extra sends per task (a fraction)
+Figures = collections.namedtuple('Figures', 'tasks failed mean p99 switches reaction '
+                                 'reaction_max missed probes robot_cpu extra reaction_felt')
 Figures.__new__.__defaults__ = (None, None, None, None)
 TARGETS = {      # scenario: what the fleet profile is to reach
     'paper_moving': dict(mean=1.05, p99=1.2, failed=0, reaction=1.5),
@@ -95,9 +96,9 @@ def figures(reports, flags, robots, changes, start, end, timeout, samples=(), cp
     return Figures(len(measured), sum(1 for r in measured if not r.ok), rtt.get('mean'),
                    rtt.get('p99'), flag_switches(flags, start, end) / minutes / len(robots),
                    _mean(reached), max(reached) if reached else None, missed,
-                   sum(1 for x in samples if start <= x.t <= end) / max(1e-9, end - start),
-                   cpu, 100.0 * sum(max(0, r.attempts - 1) for r in measured)
-                   / max(1, len(measured)),
+                   sum(1 for x in samples if start <= x.t <= end)
+                   / max(1e-9, end - start) / len(robots),
+                   cpu, sum(max(0, r.attempts - 1) for r in measured) / max(1, len(measured)),
                    _mean(_reactions(flags, felt, robots, start, end)[0]) if flags else None)
 
 
@@ -166,19 +167,19 @@ def scenario_rows(per_run):
                      _cell([x[0] for x in ratio], '%.3f'),
                      _cell([f.p99 * 1e3 for f in runs if f.p99], '%.1f'),
                      _cell([x[1] for x in ratio], '%.2f'),
-                     _cell([f.switches_per_min for f in runs], '%.2f'),
-                     _cell([f.reaction_mean for f in runs], '%.2f'),
+                     _cell([f.switches for f in runs], '%.2f'),
+                     _cell([f.reaction for f in runs], '%.2f'),
                      _cell([f.reaction_max for f in runs], '%.2f'),
                      _cell([f.missed for f in runs], '%d'),
-                     _cell([f.samples_per_s for f in runs], '%.0f'),
+                     _cell([f.probes for f in runs], '%.1f'),
                      _cell([f.robot_cpu for f in runs], '%.1f'),
-                     _cell([f.extra_sends for f in runs], '%.1f')])
+                     _cell([100.0 * f.extra for f in runs if f.extra is not None], '%.1f')])
     return rows
 
 
 HEADER = ('variant', 'runs', 'tasks', 'failed', 'mean ms', 'mean / oracle', 'p99 ms',
           'p99 / oracle', 'switches /min /robot', 'reaction mean s', 'reaction max s',
-          'changes not reached', 'probe samples /s', 'robot CPU %',
+          'changes not reached', 'probes /s /robot', 'robot CPU %',
           'extra sends % (hedged, re-sent)')
 
 
@@ -219,8 +220,8 @@ def targets_table(results, variant='fleet'):
             'mean': _median([r[variant][0] for r in rel if variant in r]),
             'p99': _median([r[variant][1] for r in rel if variant in r]),
             'failed': _median([f.failed for f in runs]),
-            'reaction': _median([f.reaction_mean for f in runs]),
-            'switches': _median([f.switches_per_min for f in runs]),
+            'reaction': _median([f.reaction for f in runs]),
+            'switches': _median([f.switches for f in runs]),
         }
         for key, goal in target.items():
             value = measured[key]
