@@ -1,22 +1,27 @@
-"""One answer at every moment (fleet profile): at each switch of a robot, provoked by
+"""One fleet profile run, seen as a user sees it: at each switch of a robot, provoked by
 stopping the server its tasks go to (SIGSTOP), the robot's log, its flag (server and
-ranking), the manager's log and /diagnostics name the same server; and ``dynparam set``
-changes a running robot's rule, or refuses with the reason."""
+ranking), the manager's log and /diagnostics name the same server; ``dynparam set``
+changes a running robot's rule, or refuses with the reason; and /diagnostics, as
+rosdiagnostic and rqt_robot_monitor read it, has every node OK, then a server killed
+(SIGKILL) as an error, or stale, in the manager's status of it within 3 s, its robots
+naming it."""
 
 import os
 import re
 import signal
 import subprocess
 import threading
+import time
 
 import pytest
 import rospy
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 
 from server_select.core.util.procs import wait_until
 from server_select.msg import SelectionFlag
 
 from support.fleet import Fleet
+from support.output import output_until
 from test_faults import current_server, show, warm_up
 
 MOVE = re.compile(r'^robot 1: tasks go to server (\d+) now \((.*)\)$')
@@ -151,3 +156,74 @@ def test_dynparam_set_changes_a_running_robots_rule(ros, fleet):
     assert logged and grew, (before, after)
     assert bad.returncode != 0 and 'refused: ~window: expected a positive number' in bad.stdout
     assert kept == 6.0
+
+
+LEVELS = {DiagnosticStatus.OK: 'OK', DiagnosticStatus.WARN: 'WARN',
+          DiagnosticStatus.ERROR: 'ERROR', DiagnosticStatus.STALE: 'STALE'}
+
+
+class Statuses(object):
+    """The newest status of each name on /diagnostics, with when it changed level."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.now, self.changes = {}, []
+        self.sub = rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_array,
+                                    queue_size=100)
+
+    def on_array(self, array):
+        with self.lock:
+            for status in array.status:
+                before = self.now.get(status.name)
+                if before is None or before.level != status.level:
+                    self.changes.append((time.monotonic(), status.name, status.level,
+                                         status.message))
+                self.now[status.name] = status
+
+    def level(self, name):
+        with self.lock:
+            status = self.now.get(name)
+        return None if status is None else status.level
+
+    def first(self, name, levels, since):
+        with self.lock:
+            return next((t for t, n, level, _ in self.changes
+                         if n == name and level in levels and t >= since), None)
+
+
+def test_a_killed_server_is_an_error_on_diagnostics_within_3_s(ros, fleet):
+    """(Last of the module: it kills server 2.)"""
+    statuses = Statuses()
+    names = ['manager: server %d' % s for s in (1, 2, 3)] + \
+        ['robot%d: selection' % r for r in (1, 2)] + ['server%d: load' % s for s in (1, 2, 3)]
+    try:
+        healthy = wait_until(lambda: all(statuses.level(n) == DiagnosticStatus.OK
+                                         for n in names), 15.0)
+        before = dict((n, '%s: %s' % (LEVELS.get(statuses.level(n)), statuses.now[n].message)
+                       if n in statuses.now else None) for n in names)
+        t_kill = time.monotonic()
+        fleet.signal('/server2', signal.SIGKILL)
+        seen = wait_until(lambda: statuses.first(
+            'manager: server 2', (DiagnosticStatus.ERROR, DiagnosticStatus.STALE), t_kill),
+            10.0, period=0.05)
+        after = statuses.first('manager: server 2', (DiagnosticStatus.ERROR,
+                                                     DiagnosticStatus.STALE), t_kill)
+        robots_say = [statuses.now['robot%d: selection' % r].message for r in (1, 2)]
+        shown = diagnostics('--filter', '^manager: server 2$', '-l', '2')
+    finally:
+        statuses.sub.unregister()
+    took = after - t_kill if after else None
+    show('/diagnostics, a fleet profile run, server 2 killed (SIGKILL):', [{
+        'every node OK before': healthy, 'levels before': before,
+        "manager's status of server 2 ERROR/STALE after s": '%.2f' % took if took else 'never',
+        'the robots say': robots_say, 'diagnostics': shown.strip()}])
+    assert healthy, before
+    assert seen and took <= 3.0, took
+    assert '[ ERROR ] manager: server 2 - not answering robots 1, 2' in shown, shown
+
+
+def diagnostics(*args, until='[ ERROR ]', timeout=10.0):
+    """What ``rosrun server_select diagnostics`` (ROS's own rosdiagnostic, on /diagnostics)
+    prints with ``--follow`` until a line holds ``until``, at most ``timeout`` s."""
+    return output_until(['rosrun', 'server_select', 'diagnostics', '--nocolor', '--follow'] +
+                        list(args), until, timeout)
