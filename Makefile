@@ -245,15 +245,17 @@ check: deps
 test: build
 	@$(ROSENV) cd $(TOP) && $(LINT) && bash test/alongside.sh \
 	  'bash test/catkin_workspace.sh; c=$$?; $(PY) -m pytest -q -rs --durations=5 test/bench \
-	    --ignore=$(BENCH_AFTER_FAULTS) && exit $$c' \
+	    --ignore=$(BENCH_LAST) && exit $$c' \
 	  bash -c '$(PY) -m pytest -q -rs $(QUIET_TESTS); quiet=$$?; bash test/alongside.sh --nice 0 \
-	    "$(FAULT_TEST); f=\$$?; $(PY) -m pytest -q -rs $(BENCH_AFTER_FAULTS) && exit \$$f" \
-	    $(PY) -m pytest -q -rs --durations=20 --ignore=$(QUIET_TESTS) \
-	    test/unit test/ros test/testbed && exit $$quiet'
+	    "$(FAULT_TEST)" \
+	    bash -c "$(PY) -m pytest -q -rs --durations=20 --ignore=$(QUIET_TESTS) \
+	      test/unit test/ros test/testbed; t=\$$?; $(PY) -m pytest -q -rs $(BENCH_LAST) \
+	      && exit \$$t" && exit $$quiet'
 # Tests that measure this machine's CPU: first, while only the lowest priority runs beside.
 QUIET_TESTS := test/testbed/test_cpu_limit.py
-# The longest benchmark smoke runs: after the fault tests, which end first.
-BENCH_AFTER_FAULTS := test/bench/test_bench_reports.py
+# The longest benchmark smoke runs: after the unit, ros and testbed tests, which end before
+# the fault tests (the longest stream).
+BENCH_LAST := test/bench/test_bench_reports.py
 
 # The package in a fresh catkin workspace with Debian's packages only: catkin_make,
 # catkin_make run_tests, the timed demo.

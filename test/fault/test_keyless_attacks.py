@@ -73,6 +73,21 @@ def keyed_fleet(ros, tmp_path_factory):
         yield key
 
 
+CALM = {}      # since when the module's fleet has run with no attack (the last one's end)
+
+
+def calm_since(rec):
+    """The start of the robots' last :data:`SECONDS` s without an attack: the previous
+    attack's after-window when it has just ended (it is such seconds), else the
+    :data:`SECONDS` s waited now."""
+    since = CALM.get('since')
+    if since is not None and time.monotonic() - since < SECONDS + 1.0:
+        return since
+    since = time.monotonic()
+    time.sleep(SECONDS)
+    return since
+
+
 def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None, source='attacker',
            reported=(0.0, 1.0), kept=0.95, name=None):
     """The attack of ``mode`` (by node ``name``; None: ``attacker``), its figures shown and
@@ -89,8 +104,7 @@ def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None, sourc
         argv.append('__ns:=%s' % namespace)
     if name is not None:
         argv.append('__name:=%s' % name)
-    t_base = time.monotonic()
-    time.sleep(SECONDS)
+    t_base = calm_since(rec)
     t_start = time.monotonic()
     busy = []
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, universal_newlines=True)
@@ -101,6 +115,7 @@ def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None, sourc
     t_end = time.monotonic()
     time.sleep(SECONDS)
     t_after = time.monotonic()
+    CALM['since'] = t_end      # the next attack's seconds before it, if it follows at once
     figures = {
         'sent': sent,
         'answered a second before': round(answered_rate(rec, t_base, t_start), 2),
