@@ -77,7 +77,8 @@ def disagreements(views, rec, found):
     wrong = []
     manager = [(r.msg.header.stamp.to_sec(), r.msg.msg) for r in rec.of(rec.logs)
                if r.msg.name == '/manager' and r.msg.msg.startswith('manager: robot 1 -> ')]
-    for (t, server, why), (t_next, after, _) in zip(found, found[1:] + [(1e18, None, '')]):
+    for (t_before, _, _), (t, server, why), (t_next, after, _) in zip(
+            [(0.0, None, '')] + found, found, found[1:] + [(1e18, None, '')]):
         if not any(t <= s < min(t_next, t + 1.0) and f.server_id == server
                    for s, f in views.flags):
             wrong.append(('no flag of the move within 1 s', t, server, why))
@@ -88,7 +89,9 @@ def disagreements(views, rec, found):
         for stamp, named, message in views.statuses:
             if t + SETTLE <= stamp < t_next and named not in (str(server), str(after)):
                 wrong.append(('diagnostics', stamp, named, message, server))
-        if not any(t - SETTLE <= s < t_next and 'robot 1 -> server %d (' % server in m
+        # (the manager may say it first: once the robot's server is ejected, the robot's
+        # view names where its next task goes)
+        if not any(t_before < s < t_next and 'robot 1 -> server %d (' % server in m
                    for s, m in manager):
             wrong.append(('manager log', t, server))
     return wrong

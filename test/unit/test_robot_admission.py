@@ -51,6 +51,23 @@ def test_a_robot_restarted_under_its_name_is_bound_at_its_new_uri_at_once(monkey
     assert not gate.probe(sealed_probe(1, '/robot1_other', 'http://x:1/'))  # another node
 
 
+def test_a_restarted_robots_task_before_its_sealed_probe_counts_where_the_master_lists_it(
+        monkeypatch):
+    class Master(object):
+        def __init__(self, _caller):
+            pass
+
+        def lookupNode(self, node):
+            return {'/robot1': 'http://robot1:40002/'}[node]
+    monkeypatch.setattr(robot_admission.rosgraph, 'Master', Master)
+    clock = Clock()
+    gate = admission(clock)
+    bind(gate, clock, 1, '/robot1', ROBOT1_URI)
+    assert gate.admits(task(1, '/robot1', connected_to='http://robot1:40002/'))
+    assert not gate.admits(task(1, '/robot1', connected_to='http://attacker:40666/'))
+    assert not gate.admits(task(1, '/robot2', connected_to='http://robot1:40002/'))
+
+
 def admission(clock):
     return RobotAdmission('server 1', '/latency_S1', clock=clock)
 

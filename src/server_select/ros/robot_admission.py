@@ -9,13 +9,16 @@ refused; a robot restarted under another name is bound again once the old lease 
 Only a bound robot's sealed probes announce rates and prepare its result topics, and only
 tasks that come over a connection this server made to that URI are taken (the URI is
 where this node connected, from the master's list of publishers: a publisher claiming
-``callerid=/robot1`` from elsewhere is not robot 1). The others are dropped unanswered (an
+``callerid=/robot1`` from elsewhere is not robot 1; a robot restarted under its name is
+taken at its new URI once the master lists it there, before its next sealed probe comes).
+The others are dropped unanswered (an
 answer to a made-up robot costs a publisher), counted by sender, in a line at most every
 5 s that also says how many tasks were taken meanwhile. Without a key everything counts.
 """
 
 import threading
 
+import rosgraph
 import rospy
 from rospy.impl import tcpros_base
 
@@ -62,6 +65,7 @@ class RobotAdmission(object):
         self._clock = clock or rospy.get_time
         self.leases = Leases()        # robot id -> its node (by name)
         self._uris = {}               # robot id -> its node's URI, as its last sealed probe said
+        self._asked = {}              # node -> (when, the URI the master listed it at)
         self._lock = threading.Lock()
         self._expired_at = 0.0
         self.taken = 0
@@ -96,6 +100,26 @@ class RobotAdmission(object):
              % (self.who, request.robot_id, peer(sender), peer(why, 4 * PEER_CHARS)))
         return False
 
+    def _restarted_at(self, node, uri):
+        """Whether the master lists ``node`` (the bound robot's name) at ``uri`` now: the
+        robot restarted there, and a task came before its first sealed probe did. A
+        publisher elsewhere claiming the name is not listed there. Asked once a second per
+        node at most."""
+        now = self._clock()
+        with self._lock:
+            asked = self._asked.get(node)
+            if asked is not None and now - asked[0] < 1.0:
+                return asked[1] == uri
+        try:
+            listed = rosgraph.Master(rospy.get_name()).lookupNode(node)
+        except (rosgraph.MasterError, OSError):
+            listed = None
+        with self._lock:
+            if len(self._asked) >= 64 and node not in self._asked:
+                self._asked.clear()
+            self._asked[node] = (now, listed)
+        return listed is not None and listed == uri
+
     def _expire(self, now):
         with self._lock:
             if now - self._expired_at < 1.0:
@@ -111,11 +135,17 @@ class RobotAdmission(object):
         key)."""
         if not self.keyed:
             return True
-        sender = binding(publisher_of(task), (getattr(task, '_connection_header', None) or {})
-                         .get(PUBLISHER_URI))
-        held = self.leases.holder(task.robot_id, self._clock()) is not None   # ends in time
+        name = publisher_of(task)
+        uri = (getattr(task, '_connection_header', None) or {}).get(PUBLISHER_URI)
+        sender = binding(name, uri)
+        holder = self.leases.holder(task.robot_id, self._clock())      # ends in time
         with self._lock:
-            bound = self._uris.get(task.robot_id) if held else None
+            bound = self._uris.get(task.robot_id) if holder is not None else None
+        if bound is not None and sender != bound and name == holder and \
+                self._restarted_at(name, uri):
+            with self._lock:        # its sealed probe there may not have come yet
+                self._uris[task.robot_id] = bound = sender
+        with self._lock:
             if bound is not None and sender == bound:
                 self.taken += 1
                 return True
