@@ -21,6 +21,7 @@ import pytest
 import rospy
 
 from server_select.core.trust.keys import make_key, make_role_key
+from server_select.core.util.procs import wait_until
 from server_select.srv import LatencyProbe, LatencyProbeRequest
 
 from support.fleet import Fleet
@@ -113,14 +114,20 @@ def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None, sourc
         time.sleep(0.5)
     sent = json.loads(proc.stdout.read().strip().splitlines()[-1])
     t_end = time.monotonic()
+    # after: once no server is saturated any more (a flood leaves queued work behind that
+    # the servers finish first), then for SECONDS
+    drained = wait_until(lambda: max(utilization(s) for s in (1, 2, 3)) < 1.0, 10.0,
+                         period=0.5)
+    t_calm = time.monotonic()
     time.sleep(SECONDS)
     t_after = time.monotonic()
-    CALM['since'] = t_end      # the next attack's seconds before it, if it follows at once
+    CALM['since'] = t_calm     # the next attack's seconds before it, if it follows at once
     figures = {
         'sent': sent,
         'answered a second before': round(answered_rate(rec, t_base, t_start), 2),
         'during': round(answered_rate(rec, t_start, t_end), 2),
-        'after': round(answered_rate(rec, t_end, t_after), 2),
+        'after': round(answered_rate(rec, t_calm, t_after), 2),
+        'servers drained after s': round(t_calm - t_end, 1) if drained else 'not in 10 s',
         'round trip ms before, during': (round_trip_ms(rec, t_base, t_start),
                                          round_trip_ms(rec, t_start, t_end)),
         'failed': len(failed(rec, t_base)),

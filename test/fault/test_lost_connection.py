@@ -79,5 +79,7 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
             outcomes])
     assert destroyed >= 1 and dropped
     assert again, 'server %d never heard robot %d\'s tasks again' % (server, ROBOT)
-    assert said
+    # the robot's line when it made the connection anew; none when rospy's own reconnection
+    # of the server's subscriber came first (before DEAF_GRACE, once in CI: after 4.2 s)
+    assert said or t_again < DEAF_GRACE, t_again
     assert (outcomes['never answered'], outcomes['duplicates']) == (0, 0), outcomes
