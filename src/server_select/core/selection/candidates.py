@@ -226,11 +226,11 @@ class Selection(object):
         if self.mode != 'select':
             return self.target()
         if self.balancer is not None:
-            last, usable = self.balancer.last, self._usable()
-            if last is None or self.health is None or self.health.usable(last) \
-                    or last in usable:
+            last = self.balancer.last
+            if last is None or self.health is None or self.health.usable(last):
                 return NO_SERVER if last is None else last
-            return self.balancer.order(usable)[0] if usable else NO_SERVER
+            usable = self._usable()     # (only then: heading() is asked at every probe)
+            return last if last in usable else (self.balancer.order(usable) or [NO_SERVER])[0]
         ranking = self.manager_ranking()
         if ranking is None:
             with self._lock:

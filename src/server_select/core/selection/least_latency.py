@@ -194,8 +194,7 @@ class LeastLatency(Balancer):
         where the next task will go and why."""
         with self._lock:
             now = self._clock()
-            selected, why = self.last, self.why
-            if servers and selected not in servers:
+            if servers and self.last not in servers:    # (its estimates are the view's)
                 decision = self._decide(list(servers), self._main_kind(now), now)
-                selected, why = decision.server, decision.reason
-            return by_estimate(self._estimates(servers, now), selected, why)
+                return by_estimate(decision.estimates, decision.server, decision.reason)
+            return by_estimate(self._estimates(servers, now), self.last, self.why)
