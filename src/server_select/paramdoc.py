@@ -17,7 +17,7 @@ import xml.etree.ElementTree as ET
 
 from server_select.core.config import limits
 from server_select.core.robot.tuning import LIVE, LIVE_DOC
-from server_select.core.selection.policy import POLICIES
+from server_select.core.ranking.policy import POLICIES
 from server_select.core.settings import PARAMS, PROFILES, REQUIRED
 from server_select.ros.paths import package_file
 

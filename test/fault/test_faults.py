@@ -18,7 +18,7 @@ import xmlrpc.client
 import pytest
 import rosgraph
 
-from server_select.core.selection.rank import NO_SERVER
+from server_select.core.ranking.rank import NO_SERVER
 from server_select.core.util.procs import stop_group, wait_until
 
 from support.fleet import NODES, Fleet, kill

@@ -3,8 +3,8 @@ when its prober says when a batch ended, and still goes out when it changed."""
 
 import rospy.rostime
 
-from server_select.core.selection.candidates import Selection
-from server_select.core.selection.policy import Policy
+from server_select.core.robot.selection import Selection
+from server_select.core.ranking.policy import Policy
 from server_select.ros.view import RankingSender
 
 

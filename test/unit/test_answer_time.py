@@ -1,6 +1,6 @@
 """A probe still out is late once older than twice the server's longest recent answer."""
 
-from server_select.core.selection.answer_time import KEEP, AnswerTimes
+from server_select.core.robot.answer_time import KEEP, AnswerTimes
 
 
 def test_a_server_without_answers_is_late_at_once():

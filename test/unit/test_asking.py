@@ -12,8 +12,8 @@ import pytest
 
 from server_select.core.load.work_queue import Load
 from server_select.core.robot.robot import Robot
-from server_select.core.selection import balancers
-from server_select.core.selection.health import ServerHealth
+from server_select.core.peers import balancers
+from server_select.core.robot.health import ServerHealth
 from server_select.core.settings import default
 from test_least_latency import Clock
 

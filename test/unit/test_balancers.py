@@ -1,4 +1,4 @@
-"""The league's peers, each on its defining behaviour (core/selection/balancers.py)."""
+"""The league's peers, each on its defining behaviour (core/peers/balancers.py)."""
 
 import collections
 import random
@@ -6,8 +6,8 @@ import random
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from server_select.core.selection import balancers
-from server_select.core.selection.balancers import PeakEwma, Prequal
+from server_select.core.peers import balancers
+from server_select.core.peers.balancers import PeakEwma, Prequal
 from server_select.core.util.stats import percentile
 from server_select.core.load.work_queue import Load
 from server_select.core.flow.task_flow import TaskFlow
@@ -69,7 +69,7 @@ def test_two_choice_rules_never_take_the_worse_of_the_pair_they_drew(seed, out, 
         first = send(p2c, servers)
         assert a != b and first in (a, b) and cost[first] <= min(cost.values())
         a, b = lr._two(servers)
-        out = dict(lr.out)
+        out = dict(lr.attempts_out)
         first = send(lr, servers)
         assert a != b and first in (a, b) and out.get(first, 0) <= min(out.get(a, 0),
                                                                        out.get(b, 0))
@@ -92,7 +92,8 @@ def test_least_request_spreads_one_robots_tasks_over_every_server():
     b = balancers.make('least_request', rng=random.Random(3))
     for _ in range(30):
         send(b, [1, 2, 3])
-    assert max(b.out.values()) - min(b.out.values()) <= 2 and sum(b.out.values()) == 30
+    out = b.attempts_out.values()
+    assert max(out) - min(out) <= 2 and sum(out) == 30
 
 
 def test_attempts_that_end_are_no_longer_out():
@@ -100,7 +101,7 @@ def test_attempts_that_end_are_no_longer_out():
     b.started(1)
     b.ended(1, None)
     b.ended(1, None)          # never below zero
-    assert b.out[1] == 0
+    assert b.attempts_out[1] == 0
 
 
 # -- Prequal ------------------------------------------------------------------------------
@@ -208,12 +209,12 @@ def test_replicated_task_goes_to_two_servers_and_the_first_answer_wins():
     b.probed(3, 0.03)
     f = flow(b, clock, published, reports, copies=b.copies)
     task = f.send_next('s')
-    assert published == [(task, 1), (task, 2)] and b.out == {1: 1, 2: 1}
+    assert published == [(task, 1), (task, 2)] and b.attempts_out == {1: 1, 2: 1}
     clock.now += 0.05
     assert f.resolve(task, 2, True).status == 'ended'
     assert f.resolve(task, 1, True).status == 'outrun'
     assert len(reports) == 1 and reports[0].answered_by == 2 and reports[0].attempts == 2
-    assert sum(b.out.values()) == 0 and f.replicated == 1
+    assert sum(b.attempts_out.values()) == 0 and f.replicated == 1
 
 
 def test_every_attempt_ends_once_whatever_ends_the_task():
@@ -224,10 +225,10 @@ def test_every_attempt_ends_once_whatever_ends_the_task():
     f.send_next('c')                                        # never answered
     f.resolve(ok, published[0][1], True)
     f.resolve(errs, published[1][1], False, 'bad')       # re-sent elsewhere
-    assert sum(b.out.values()) == 2                        # errs' second attempt, late's
+    assert sum(b.attempts_out.values()) == 2                        # errs' second attempt, late's
     clock.now += 2.5
     f.tick()                                               # both past the 2 s timeout
-    assert sum(b.out.values()) == 0 and len(reports) == 3
+    assert sum(b.attempts_out.values()) == 0 and len(reports) == 3
     f.send_next('d')
     f.abandon('stopping')
-    assert sum(b.out.values()) == 0 and len(reports) == 4
+    assert sum(b.attempts_out.values()) == 0 and len(reports) == 4

@@ -1,4 +1,4 @@
-from server_select.core.selection.health import DOWN, EJECTED, HEALTHY, PROBATION, ServerHealth
+from server_select.core.robot.health import DOWN, EJECTED, HEALTHY, PROBATION, ServerHealth
 
 from support.clock import Clock
 

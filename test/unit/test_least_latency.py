@@ -1,5 +1,5 @@
 """The fleet profile's rule, least_latency, on its defining behaviour
-(core/selection/least_latency.py)."""
+(core/rule/least_latency.py)."""
 
 import collections
 import copy
@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from server_select.core.selection import balancers
+from server_select.core.peers import balancers
 from server_select.core.load.work_queue import Load
 
 from support.clock import Clock
@@ -89,21 +89,21 @@ def test_least_latency_asking_changes_nothing_and_the_send_moves():
     rule = least_latency(clock)
     rule.started(1, 'image')
     feed(rule, clock, {1: (0.030, 0, 0.0), 2: (0.010, 0, 0.0)})
-    state = copy.deepcopy((dict(rule.answers), rule.out, rule.last, dict(rule.sends),
-                           rule.draw, rule.rng.getstate()))
+    state = copy.deepcopy((dict(rule.answers), rule.attempts_out, rule.chosen, dict(rule.sends),
+                           rule.next_draw, rule.rng.getstate()))
     decisions = [rule.choose([1, 2], 'image') for _ in range(50)]
     orders = [rule.order([1, 2], 'image') for _ in range(50)]
     rule.choose([1, 2, 3], 'sort')          # a server and a kind it never heard of
-    assert state == (dict(rule.answers), rule.out, rule.last, dict(rule.sends), rule.draw,
-                     rule.rng.getstate())
+    assert state == (dict(rule.answers), rule.attempts_out, rule.chosen, dict(rule.sends),
+                     rule.next_draw, rule.rng.getstate())
     assert set(d.server for d in decisions) == {2} and orders == [[2, 1]] * 50
     assert set(rule.answers) == {1, 2} and set(rule.sends) == {'image'}
     assert 'faster than 1' in decisions[0].reason
     assert set(decisions[0].estimates) == {1, 2}
     rule.started(2, 'image', first=False)    # a re-send or hedge there is no move
-    assert rule.last == 1
+    assert rule.chosen == 1
     rule.started(2, 'image')                 # a task's first attempt is
-    assert rule.last == 2
+    assert rule.chosen == 2
 
 
 def test_least_latency_an_answer_older_than_the_window_no_longer_counts():

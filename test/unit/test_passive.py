@@ -3,8 +3,8 @@ import random
 
 import pytest
 
-from server_select.core.selection.passive import TaskBaseline, TaskCost
-from server_select.core.selection.window import median, trimmed_mean, LatencyWindow
+from server_select.core.ranking.passive import TaskBaseline, TaskCost
+from server_select.core.ranking.window import median, trimmed_mean, LatencyWindow
 
 
 def test_a_task_sample_is_its_round_trip_less_the_fastest_servers_overhead():

@@ -5,9 +5,9 @@ import random
 
 import pytest
 
-from server_select.core.selection.policy import Chooser, Policy, from_params
-from server_select.core.selection.rank import NO_SERVER, rank_servers
-from server_select.core.selection.window import LatencyWindow
+from server_select.core.ranking.policy import Chooser, Policy, from_params
+from server_select.core.ranking.rank import NO_SERVER, rank_servers
+from server_select.core.ranking.window import LatencyWindow
 
 
 def run(truth, policy, statistic='mean', rate=1.0, window=5.0, until=60.0, outliers=()):
@@ -200,7 +200,7 @@ def test_probes_a_busy_cpu_capped_server_answers_late_do_not_move_a_load_aware_r
 def test_every_choice_says_why_in_the_words_the_views_show():
     """What the flag's ``reason`` carries: the manager policy's words, or the robot's own
     when it chooses per task (its ranking's reason, passed through)."""
-    from server_select.core.selection.rank import Ranking
+    from server_select.core.ranking.rank import Ranking
     ranking = Ranking(selected=2, ranking=[2, 1], means=[0.001, 0.0015], counts=[5, 5],
                       excluded=[3])
     chooser = Chooser(Policy('mean', margin=0.001))

@@ -1,8 +1,8 @@
 import pytest
 
-from server_select.core.selection.policy import Policy
-from server_select.core.selection.rank import NO_SERVER, rank_servers
-from server_select.core.selection.window import LatencyWindow, PairStats
+from server_select.core.ranking.policy import Policy
+from server_select.core.ranking.rank import NO_SERVER, rank_servers
+from server_select.core.ranking.window import LatencyWindow, PairStats
 
 
 def stats(**means):

@@ -4,14 +4,14 @@ import random
 
 import pytest
 
-from server_select.core.selection.policy import Chooser, Policy
-from server_select.core.selection.rank import NO_SERVER, rank_servers
-from server_select.core.selection.fleet_rankings import FleetRankings
+from server_select.core.ranking.policy import Chooser, Policy
+from server_select.core.ranking.rank import NO_SERVER, rank_servers
+from server_select.core.manager.sample_rankings import SampleRankings
 from server_select.core.settings import PARAMS, PROFILES, default
 
 
 def test_a_robot_is_ranked_as_the_paper_ranks_it():
-    r = FleetRankings(5.0, robots=[1], servers=[1, 2, 3])
+    r = SampleRankings(5.0, robots=[1], servers=[1, 2, 3])
     for t, server, rtt in [(0.0, 1, 0.004), (0.1, 2, 0.002), (0.2, 3, 0.003)]:
         r.add(1, server, t, True, rtt)
     ranking = r.rank(1, 0.5)
@@ -20,10 +20,10 @@ def test_a_robot_is_ranked_as_the_paper_ranks_it():
 
 
 def test_fixed_lists_refuse_others_learned_lists_take_whoever_comes():
-    fixed = FleetRankings(5.0, robots=[1], servers=[1, 2])
+    fixed = SampleRankings(5.0, robots=[1], servers=[1, 2])
     assert 'robot 7' in fixed.refusal(7, 1) and 'server 9' in fixed.refusal(1, 9)
     assert fixed.refusal(1, 2) is None
-    learned = FleetRankings(5.0)
+    learned = SampleRankings(5.0)
     assert learned.refusal(7, 9) is None and learned.robots() == []
     learned.add(7, 9, 0.0, True, 0.001)
     learned.add(3, 9, 0.0, False, 0.0)
@@ -32,7 +32,7 @@ def test_fixed_lists_refuse_others_learned_lists_take_whoever_comes():
 
 
 def test_a_server_with_no_sample_left_in_the_window_has_left():
-    r = FleetRankings(5.0)
+    r = SampleRankings(5.0)
     r.add(1, 1, 0.0, True, 0.001)
     r.add(1, 2, 0.0, True, 0.002)
     for t in range(1, 9):
@@ -42,7 +42,7 @@ def test_a_server_with_no_sample_left_in_the_window_has_left():
 
 
 def test_a_server_that_left_the_fleet_leaves_every_ranking_at_once():
-    r = FleetRankings(1.5, statistic='mean', task_memory=5.0, keep=3, horizon=8.0)
+    r = SampleRankings(1.5, statistic='mean', task_memory=5.0, keep=3, horizon=8.0)
     for robot in (1, 2, 3):
         r.add(robot, 1, 0.0, True, 0.001)
         if robot != 3:
@@ -56,7 +56,7 @@ def test_a_server_that_left_the_fleet_leaves_every_ranking_at_once():
 
 
 def test_add_says_when_a_flag_may_change():
-    r = FleetRankings(5.0)
+    r = SampleRankings(5.0)
     assert r.add(1, 1, 0.0, True, 0.002)          # a new server
     assert r.add(1, 2, 0.0, True, 0.004)
     r.selected(1, 1)
@@ -70,7 +70,7 @@ def test_add_says_when_a_flag_may_change():
 
 
 def test_departures_name_the_robots_a_server_left_selected_or_not():
-    r = FleetRankings(5.0, robots=[1, 2], servers=[1, 2])
+    r = SampleRankings(5.0, robots=[1, 2], servers=[1, 2])
     for t in range(3):
         for robot in (1, 2):
             r.add(robot, 1, float(t), True, 0.001)
@@ -90,7 +90,7 @@ def test_a_lazy_manager_ranks_the_same_servers_as_ranking_on_every_sample():
     """Random streams with servers dying and coming back: re-ranking only when add() or
     departures() say so, the ranked servers are at every step those of ranking always."""
     rng = random.Random(5)
-    lazy, eager = FleetRankings(2.0), FleetRankings(2.0)
+    lazy, eager = SampleRankings(2.0), SampleRankings(2.0)
     ranked = []
     alive = dict((s, True) for s in range(1, 6))
     for step in range(6000):
@@ -114,7 +114,7 @@ def test_updating_only_when_add_says_so_gives_the_flags_of_updating_always():
     """Random streams: a manager that re-ranks only on add() == True publishes the same
     selection as one re-ranking on every sample (the paper's manager)."""
     rng = random.Random(11)
-    lazy, eager = FleetRankings(5.0), FleetRankings(5.0)
+    lazy, eager = SampleRankings(5.0), SampleRankings(5.0)
     lazy_flag = eager_flag = NO_SERVER
     for step in range(4000):
         t = step * 0.05
@@ -145,7 +145,7 @@ def test_profiles_only_name_known_parameters():
 
 
 def test_a_group_manager_ranks_only_its_members():
-    r = FleetRankings(5.0)
+    r = SampleRankings(5.0)
     r.set_members([], [])                         # no table from the top manager yet
     assert r.robots() == [] and 'robot 1' in r.refusal(1, 1)
     r.set_members([2, 1], [4, 5])
@@ -164,7 +164,7 @@ def _loaded_server_switches(task_memory, seconds=60.0, seed=3):
     probes at 4 Hz to both, task samples at 10 Hz from the selected server. Returns the
     selections made, one per 0.1 s."""
     rng = random.Random(seed)
-    r = FleetRankings(1.5, robust=True, task_memory=task_memory)
+    r = SampleRankings(1.5, robust=True, task_memory=task_memory)
     chooser = Chooser(Policy('hysteresis', margin=0.0003, dwell=3.0, z=3.0))
     probe = {1: 0.010, 2: 0.012}
     task = {1: 0.035, 2: 0.012}
@@ -198,7 +198,7 @@ def test_task_memory_keeps_a_robot_off_a_loaded_server_it_has_left():
 
 
 def test_task_memory_of_a_server_that_left_is_dropped():
-    r = FleetRankings(1.0, task_memory=5.0)
+    r = SampleRankings(1.0, task_memory=5.0)
     for t in range(5):
         r.add(1, 1, t * 0.1, True, 0.010)
         r.add(1, 2, t * 0.1, True, 0.012)
@@ -220,7 +220,7 @@ def test_task_samples_count_their_queueing_as_spread_not_as_a_difference():
     got the tasks and looked slower in turn); 15 now."""
     rng = random.Random(5)
     policy = Policy('hysteresis', margin=0.0003, z=3.0, dwell=3.0)
-    rankings = FleetRankings(1.5, robots=[1], servers=[1, 2], robust=True, task_memory=5.0)
+    rankings = SampleRankings(1.5, robots=[1], servers=[1, 2], robust=True, task_memory=5.0)
     chooser = Chooser(policy)
     moves, current = 0, 1
     for i in range(4 * 600):

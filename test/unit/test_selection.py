@@ -2,9 +2,9 @@ import math
 
 import pytest
 
-from server_select.core.selection.health import ServerHealth
-from server_select.core.selection.policy import Policy
-from server_select.core.selection.candidates import Selection
+from server_select.core.robot.health import ServerHealth
+from server_select.core.ranking.policy import Policy
+from server_select.core.robot.selection import Selection
 from server_select.core.flow.task_flow import LOCAL, NO_SERVER
 
 from support.clock import Clock
@@ -194,11 +194,11 @@ def test_asking_whether_a_per_task_rule_is_ready_or_where_it_heads_decides_nothi
     rule = s.balancer
     assert not s.ready(set())                         # no server has answered a probe
     assert s.ready({2}) and s.heading() == NO_SERVER
-    assert rule.last is None and not rule.sends
+    assert rule.chosen is None and not rule.sends
     first = s.candidates('sort')[0]                   # a send asks with its kind
-    assert rule.last is None and s.heading() == NO_SERVER    # asking is not sending
+    assert rule.chosen is None and s.heading() == NO_SERVER    # asking is not sending
     rule.started(first, 'sort')
-    assert rule.last == first and s.heading() == first
+    assert rule.chosen == first and s.heading() == first
     for _ in range(3):
         assert s.ready({2}) and s.heading() == first and s.candidates('sort')[0] == first
     assert len(rule.sends['sort']) == 1

@@ -117,7 +117,7 @@ def test_every_oracle_variant_follows_the_oracles_flags():
     """An oracle variant's robots must take the oracle's flags: a robot whose rule
     chooses per task (the fleet profile's least_latency) treats flags as a record only, and
     would be one more copy of the fleet's own rule, not the bound."""
-    from server_select.core.selection.policy import Policy
+    from server_select.core.ranking.policy import Policy
     from server_select.core.settings import default
     from server_select.testbed.suite import VARIANTS
     oracles = [(n, v) for n, v in VARIANTS.items() if v.mode == 'oracle']

@@ -1,15 +1,15 @@
-"""Robots that rank for themselves (~sample_stream view): core/selection/robot_views.py and
-core/selection/rank.py."""
+"""Robots that rank for themselves (~sample_stream view): core/manager/view_rankings.py and
+core/ranking/rank.py."""
 
 import math
 
 import pytest
 
-from server_select.core.selection.policy import Policy
-from server_select.core.selection.rank import Ranking, from_view, only, rank_servers, view_key
-from server_select.core.selection.fleet_rankings import FleetRankings
-from server_select.core.selection.candidates import Selection
-from server_select.core.selection.robot_views import EMPTY, ViewRankings
+from server_select.core.ranking.policy import Policy
+from server_select.core.ranking.rank import Ranking, from_view, only, rank_servers, view_key
+from server_select.core.manager.sample_rankings import SampleRankings
+from server_select.core.robot.selection import Selection
+from server_select.core.manager.view_rankings import EMPTY, ViewRankings
 
 
 def ranking(servers, means, excluded=()):
@@ -104,8 +104,8 @@ def test_a_robots_view_is_the_ranking_the_manager_made_from_its_samples():
     selection = Selection(1, [1, 2, 3], 'select', policy=policy, window=1.5, clock=lambda:
                           clock[0], passive=True, task_memory=5.0, keep=3, horizon=8.0,
                           fail_fast=2)
-    manager = FleetRankings(1.5, statistic=policy.statistic(), fail_fast=2,
-                            robust=policy.robust, task_memory=5.0, keep=3, horizon=8.0)
+    manager = SampleRankings(1.5, statistic=policy.statistic(), fail_fast=2,
+                             robust=policy.robust, task_memory=5.0, keep=3, horizon=8.0)
     compared = 0
     for step in range(80):
         t = clock[0] = step * 0.1

@@ -1,6 +1,6 @@
 import pytest
 
-from server_select.core.selection.window import LatencyWindow
+from server_select.core.ranking.window import LatencyWindow
 
 
 def test_mean_of_successful_samples_in_window():
@@ -89,7 +89,7 @@ def test_a_pair_without_samples_is_forgotten():
 
 
 def test_round_trips_beyond_an_hour_are_refused_so_sums_cannot_overflow():
-    from server_select.core.selection.window import MAX_RTT, valid_rtt
+    from server_select.core.ranking.window import MAX_RTT, valid_rtt
     assert valid_rtt(MAX_RTT) and not valid_rtt(MAX_RTT * 1.001) and not valid_rtt(1.7e308)
     w = LatencyWindow(5.0)
     for _ in range(3):

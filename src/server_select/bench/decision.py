@@ -12,7 +12,7 @@ import time
 
 from server_select.bench.cli import parser, write
 from server_select.core.load.work_queue import Load
-from server_select.core.selection.balancers import make
+from server_select.core.peers.balancers import make
 from server_select.core.settings import default
 from server_select.core.util.tables import markdown_table, median_range
 

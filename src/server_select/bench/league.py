@@ -1,5 +1,5 @@
 """The league (``make league``): the fleet profile beside the rules a user would pick instead
-(core/selection/balancers.py), on every scenario at once. Root and TUN (testbed).
+(core/peers/balancers.py), on every scenario at once. Root and TUN (testbed).
 
 Network scenarios (the suite's): every variant side by side in one run (shared servers and
 links, robots of their own), ``--repeats`` runs each. Capacity scenarios (the capacity

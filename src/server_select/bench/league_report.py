@@ -4,7 +4,7 @@ runs, the tables (median (min-max) of the runs per variant) and the plot."""
 import collections
 import os
 
-from server_select.core.selection.balancers import PEERS
+from server_select.core.peers.balancers import PEERS
 from server_select.core.util import league_columns
 from server_select.core.util.tables import markdown_table, median_range
 

@@ -18,10 +18,12 @@ import sys
 from server_select.core.util.tables import markdown_table
 
 PARTS = (   # (part, what the file of the innermost frame of ours contains)
-    ('probes', ('ros/prober.py', 'ros/probe_client.py', 'selection/probing.py',
-                'core/robot/probes.py')),
-    ('windows and ranking', ('core/selection/', 'core/load/', 'ros/load.py', 'ros/passive.py',
-                             'core/fleet/health')),
+    ('probes', ('ros/prober.py', 'ros/probe_client.py', 'core/robot/probe_plan.py',
+                'core/robot/probes.py', 'core/robot/answer_time.py')),
+    ('windows and ranking', ('core/rule/', 'core/peers/', 'core/ranking/', 'core/manager/',
+                             'core/robot/selection', 'core/robot/health.py',
+                             'core/robot/refusals.py', 'core/load/', 'ros/load.py',
+                             'ros/passive.py', 'core/fleet/health')),
     ('ranking messages', ('ros/view.py',)),
     ('flags', ('ros/flags.py',)),
     ('task path', ('core/flow/', 'core/robot/stream.py', 'ros/task_stream.py',

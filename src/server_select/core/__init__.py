@@ -9,12 +9,16 @@ checks the direction and that there is no cycle):
 - ``config``: parameter parsers, graph names and the ids that stand for no server.
 - ``trust``: fleet key files, seals (who may sign what) and the publisher check.
 - ``load``: a server's work queue and load reports; what robots announce they send.
-- ``selection``: latency windows, rankings, the selection rules (``least_latency`` and the
-  peers), probing plans, passive samples, a robot's health table.
+- ``ranking``: the paper profile's ranking: latency windows, the stable sort, the
+  policies (mean, hysteresis), answered tasks as samples.
+- ``rule``: the fleet profile's per-task rule, ``least_latency``, and what every per-task
+  rule is told.
+- ``peers``: the league's peers, per-task balancers a user might put there instead.
+- ``manager``: the manager's stores of every robot's ranking.
 - ``flow``: a task's life at the robot: send, re-send, hedge, check, report once.
 - ``fleet``: membership by leases, server groups.
-- ``robot``: the robot whole, one object over selection, load and flow, driven alike by
-  the robot node and the simulator.
+- ``robot``: the robot whole, one object over its selection (which servers a task may go
+  to, health, probe plan), load and flow, driven alike by the robot node and the simulator.
 - ``settings``: the table of every node parameter (a module: it names every rule's choices).
 - ``observe``: what a run did (summaries) and what ``top`` shows.
 """

@@ -9,8 +9,8 @@ import collections
 
 from server_select.core.fleet.groups import parse_groups
 from server_select.core.fleet.leases import LEASE_PERIODS
-from server_select.core.selection.policy import POLICIES
-from server_select.core.selection.window import STATISTICS
+from server_select.core.ranking.policy import POLICIES
+from server_select.core.ranking.window import STATISTICS
 from server_select.core.config.params import (one_of, parse_bool, parse_count, parse_id,
                                               parse_members, parse_mode, parse_names,
                                               parse_node_names, parse_non_negative,

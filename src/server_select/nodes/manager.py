@@ -6,10 +6,10 @@ import rospy
 
 from server_select.core.config import names
 from server_select.core.config.params import ParamError
-from server_select.core.selection.policy import Chooser, from_params
-from server_select.core.selection.fleet_rankings import FleetRankings
+from server_select.core.ranking.policy import Chooser, from_params
+from server_select.core.manager.sample_rankings import SampleRankings
 from server_select.core.trust.senders import node_pattern_of
-from server_select.core.selection.robot_views import ViewRankings
+from server_select.core.manager.view_rankings import ViewRankings
 from server_select.msg import LatencySample, LatencySamples, RobotRanking
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.membership import GroupAssignmentsListener, ServerRegistry
@@ -54,7 +54,7 @@ class ManagerNode(object):
         - ``~discover``: list the servers that announce themselves (leases of 3 x
           ``~announce_period``) on ``fleet_servers``
         - ``~window``, ``~publish_rate``, ``~update_rate``, ``~policy`` and its options
-          (``core/selection/policy.py``), ``~passive``, ``~task_memory``
+          (``core/ranking/policy.py``), ``~passive``, ``~task_memory``
         - ``~group``: a grouped deployment's manager of that group, for the robots
           ``~top_manager_node`` assigns to it
     :ROS Subscribers:
@@ -80,11 +80,11 @@ class ManagerNode(object):
             self.rankings = ViewRankings(STALE_VIEWS / param('view_rate'), param('robots'),
                                          param('servers'))
         else:
-            self.rankings = FleetRankings(param('window'), param('robots'), param('servers'),
-                                          statistic, param('fail_fast'),
-                                          self.policy.robust,
-                                          param('task_memory') if param('passive') else 0.0,
-                                          param('window_samples'), param('window_max'))
+            self.rankings = SampleRankings(param('window'), param('robots'), param('servers'),
+                                           statistic, param('fail_fast'),
+                                           self.policy.robust,
+                                           param('task_memory') if param('passive') else 0.0,
+                                           param('window_samples'), param('window_max'))
         self.passive = param('passive') and self.stream != 'view'  # (views hold the tasks)
         for name in ('robots', 'servers'):
             if self.stream == 'pair' and not getattr(self.rankings, 'fixed_' + name):

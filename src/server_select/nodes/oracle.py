@@ -2,7 +2,7 @@
 
 import rospy
 
-from server_select.core.selection.rank import NO_SERVER, Ranking
+from server_select.core.ranking.rank import NO_SERVER, Ranking
 from server_select.core.config.params import ParamError
 from server_select.ros.flags import FlagPublisher
 from server_select.ros.node import param

@@ -7,7 +7,7 @@ import rospy
 
 from server_select.core.config import names
 from server_select.core.fleet.groups import GroupAssigner
-from server_select.core.selection.window import valid_rtt
+from server_select.core.ranking.window import valid_rtt
 from server_select.msg import GroupAssignments, LatencySamples, ServerGroup
 from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet, param

@@ -85,7 +85,7 @@ def _robot(node, diag):
         return health_status.robot_status(
             None if target in (NO_SERVER, None) else 'the robot itself' if target == LOCAL
             else target,
-            balancer.why if balancer is not None else 'the manager\'s flag', sent(),
+            balancer.reason if balancer is not None else 'the manager\'s flag', sent(),
             failed(), dict((s, node.health.state(s)) for s in node.robot.servers
                            if not node.health.usable(s)),
             seal.enabled())

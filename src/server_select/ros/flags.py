@@ -48,7 +48,7 @@ class FlagPublisher(object):
 
     def offer(self, robot, ranking, only_on_change, choose=None, why=None):
         """Publish ``robot``'s flag for ``ranking`` (a
-        :class:`~server_select.core.selection.rank.Ranking`) unless ``only_on_change`` and nothing
+        :class:`~server_select.core.ranking.rank.Ranking`) unless ``only_on_change`` and nothing
         changed; True if published. ``choose(previous)`` picks the server given the one
         published before (None at first), ``why()`` then says why; default: the ranking's
         best, for the ranking's reason. :meth:`selected` then tells the server chosen."""

@@ -5,13 +5,13 @@ per pair, robots' probe batches, their answered tasks, their own rankings; each 
 import rospy
 
 from server_select.core.config import names
-from server_select.core.selection.rank import from_view
-from server_select.core.selection.window import RTT_RANGE, valid_rtt
+from server_select.core.ranking.rank import from_view
+from server_select.core.ranking.window import RTT_RANGE, valid_rtt
 from server_select.ros.graph import publisher_of
 
 
 class SampleIntake(object):
-    """What the manager hears, into ``rankings`` (FleetRankings or ViewRankings); refused
+    """What the manager hears, into ``rankings`` (SampleRankings or ViewRankings); refused
     input gets a throttled warning naming its publisher. ``senders``: the gate of robots'
     messages; ``group``: a group's manager ignores the other groups' robots;
     ``update(robot)``: the robot's ranking may have changed."""

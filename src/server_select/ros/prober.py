@@ -9,7 +9,7 @@ import threading
 import rospy
 
 from server_select.core.config import names
-from server_select.core.selection.probing import ProbeRound
+from server_select.core.robot.probe_plan import ProbeRound
 from server_select.ros.node import fleet
 from server_select.ros.probe_client import TimedServiceProxy
 from server_select.ros.probe_loop import ProbeLoop

@@ -7,7 +7,7 @@ import rospy
 
 from server_select.core.config.params import ParamError, parse_fixed_server
 from server_select.core.robot.world import Events, Transport
-from server_select.core.selection.effect import ineffective, not_for_setting, refusal
+from server_select.core.robot.refusals import ineffective, not_for_setting, refusal
 from server_select.ros import params_in_force, seal
 from server_select.ros.load import load_of
 from server_select.ros.node import param
@@ -27,7 +27,7 @@ def not_in_force():
 
 def fixed_server(servers, mode):
     """The server of ``fixed`` mode from the parameters (a parameter set that is not for
-    setting with the others is refused: :mod:`~server_select.core.selection.effect`)."""
+    setting with the others is refused: :mod:`~server_select.core.robot.refusals`)."""
     refused = refusal(ineffective(param, params_in_force.set_here))
     if refused:
         raise ParamError(refused)

@@ -25,7 +25,7 @@ import time
 from server_select.bench.capacity_cases import SCENARIOS as CAPACITY_SCENARIOS
 from server_select.bench.capacity_cases import TIMEOUT, WARMUP, scenario as capacity_scenario
 from server_select.bench.capacity_report import static_assignment
-from server_select.core.selection.balancers import PEERS
+from server_select.core.peers.balancers import PEERS
 from server_select.sim import cells, generate, report
 from server_select.sim.figures import figures
 from server_select.sim.model import Model

@@ -2,7 +2,7 @@
 variant is told the truly nearest server of the scenario, as ``nodes/oracle.py`` tells it
 on the testbed."""
 
-from server_select.core.selection.rank import NO_SERVER
+from server_select.core.ranking.rank import NO_SERVER
 
 PERIOD = 0.05        # the oracle node's update rate: 20 Hz
 

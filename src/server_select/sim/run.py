@@ -16,7 +16,7 @@ middleware's delay per message where it is not the model's (a bag's run on one h
 
 import collections
 
-from server_select.core.selection.least_latency import MECHANISMS
+from server_select.core.rule.least_latency import MECHANISMS
 from server_select.core.settings import PARAMS, default
 from server_select.sim.events import EventLoop, Streams
 from server_select.sim.network import Network

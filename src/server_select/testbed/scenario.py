@@ -28,7 +28,7 @@ import collections
 import yaml
 
 from server_select.core.config.params import nearest
-from server_select.core.selection.rank import NO_SERVER
+from server_select.core.ranking.rank import NO_SERVER
 from server_select.testbed.fields import (DEFAULT_CPU_PERIOD_MS, ScenarioError,  # noqa: F401
                                           hang_times, number as _number, resources,
                                           work_times)

@@ -21,7 +21,7 @@ import threading
 
 import yaml
 
-from server_select.core.selection.balancers import PEERS
+from server_select.core.peers.balancers import PEERS
 from server_select.core.util.procs import stat_fields
 from server_select.testbed.runner import RECORDED, HostRun, RunOptions, host_ids
 from server_select.testbed.linkemu import EmulatorError
@@ -46,7 +46,7 @@ PREVIOUS_FLEET = {'policy': 'hysteresis', 'hysteresis': 0.0003, 'margin_z': 3.0,
 
 
 def peer_params(name):
-    """The parameters of the league's peer ``name`` (core/selection/balancers.py): the fleet profile
+    """The parameters of the league's peer ``name`` (core/peers/balancers.py): the fleet profile
     with that rule choosing per task, every server probed alike (Prequal's pool wants
     answers from all; adaptive probing follows the fleet's own ranking), replication
     without hedges (it already sends each task twice)."""

@@ -8,6 +8,12 @@ the ids that stand for no server in messages (the unit tests pin them equal to
 NO_SERVER = -1      # TaskReport.NO_SERVER, SelectionFlag.NO_SERVER: no server
 LOCAL = -2          # TaskReport.LOCAL: the robot did the work itself
 
+# ~policy names of the rules a robot applies per task itself: the fleet profile's, and the
+# league's peers (core/peers/balancers.py holds them)
+FLEET_RULE = 'least_latency'
+PEERS = ('p2c_peak_ewma', 'least_request', 'prequal', 'round_robin', 'replicate')
+PER_TASK_RULES = (FLEET_RULE,) + PEERS
+
 SELECTION_TOPIC = 'server_select_flag'
 SORT_TASK_TOPIC = 'data'
 SORT_RESULT_TOPIC = 'processed_data'

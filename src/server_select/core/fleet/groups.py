@@ -13,7 +13,7 @@ import threading
 import yaml
 
 from server_select.core.config.params import ParamError, parse_id, parse_id_list
-from server_select.core.selection.window import LatencyWindow
+from server_select.core.ranking.window import LatencyWindow
 
 
 def parse_groups(name, value):

@@ -70,7 +70,7 @@ class TaskFlow(Timing):
         ``ended(server, rtt)`` once, when its answer came (``rtt``: since it was sent), it
         failed (an error, or its deadline passed: ``rtt`` is how long that took), or it
         stopped counting (``rtt`` None: a busy answer, another attempt won, the task
-        ended); a :class:`~server_select.core.selection.balancers.Balancer`.
+        ended); a :class:`~server_select.core.rule.balancer.Balancer`.
     :param copies: each task goes to this many candidates at once (replication; the
         copies are not paid from ``budget``).
     """

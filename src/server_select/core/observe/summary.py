@@ -2,7 +2,7 @@
 
 import collections
 
-from server_select.core.selection.rank import NO_SERVER
+from server_select.core.ranking.rank import NO_SERVER
 from server_select.core.settings import default
 from server_select.core.util.stats import summarize
 from server_select.core.util.tables import markdown_table

@@ -2,7 +2,7 @@
 still out, and when one is late.
 
 A server whose previous probe is still out is not probed again; once that probe is late
-for this server (:class:`~server_select.core.selection.answer_time.AnswerTimes`: twice its
+for this server (:class:`~server_select.core.robot.answer_time.AnswerTimes`: twice its
 longest recent answer) it gets a failed sample each round instead (:data:`STILL_OUT`): a
 link down is known by the next probe, a busy server on a small CPU share is given the time
 its answers take. Probes are numbered one series for the robot, rounds another.
@@ -10,7 +10,7 @@ its answers take. Probes are numbered one series for the robot, rounds another.
 
 import itertools
 
-from server_select.core.selection.answer_time import AnswerTimes
+from server_select.core.robot.answer_time import AnswerTimes
 
 ROUND_FLOOR = 0.001     # two probe rounds at least this far apart (s)
 
@@ -26,7 +26,7 @@ class Probe(object):
 
 
 class ProbeRounds(object):
-    """The rounds of ``plan`` (a :class:`~server_select.core.selection.probing.ProbePlan`).
+    """The rounds of ``plan`` (a :class:`~server_select.core.robot.probe_plan.ProbePlan`).
     Not thread-safe: the robot holds its lock around every call."""
 
     def __init__(self, plan):

@@ -24,10 +24,10 @@ from server_select.core.load.robot_load import RobotLoad
 from server_select.core.robot.probes import ProbeRounds
 from server_select.core.robot.stream import Stream
 from server_select.core.robot.world import Events, Transport
-from server_select.core.selection import probing
-from server_select.core.selection.answer_time import STILL_OUT
-from server_select.core.selection.passive import TaskBaseline
-from server_select.core.selection.robot_parts import robot_selection
+from server_select.core.robot import probe_plan as probing
+from server_select.core.robot.answer_time import STILL_OUT
+from server_select.core.ranking.passive import TaskBaseline
+from server_select.core.robot.selection_params import robot_selection
 
 
 class Robot(object):

@@ -11,7 +11,7 @@ routing, the task sizes...): they need a restart, and :func:`why_not_live` says 
 import collections
 
 from server_select.core.flow.task_flow import HEDGE_QUANTILE
-from server_select.core.selection.effect import not_for_setting
+from server_select.core.robot.refusals import not_for_setting
 
 # name -> its type (what dynamic_reconfigure describes); the parameter's parser checks values
 LIVE = collections.OrderedDict([

@@ -1,7 +1,7 @@
 """Selection policies: which ranked server a robot gets, given the one it has (no rospy).
 
 The same :class:`Policy` runs in the manager (per robot) and in a robot deciding alone.
-It takes a :class:`~server_select.core.selection.rank.Ranking` (servers best first by the
+It takes a :class:`~server_select.core.ranking.rank.Ranking` (servers best first by the
 window's statistic) and the current choice, and returns the server to select:
 
 - ``mean``: the best-ranked server (the paper's rule with the ``mean`` statistic); a
@@ -16,20 +16,20 @@ window's statistic) and the current choice, and returns the server to select:
 A server that leaves the ranking (no good sample in the window) is always left at once.
 
 Rules a robot applies per task itself are policies too (:data:`PER_TASK`): the fleet
-profile's ``least_latency`` (:mod:`server_select.core.selection.least_latency`) and the
-league's peers (:data:`~server_select.core.selection.balancers.PEERS`: ``p2c_peak_ewma``,
+profile's ``least_latency`` (:mod:`server_select.core.rule.least_latency`) and the
+league's peers (:data:`~server_select.core.peers.balancers.PEERS`: ``p2c_peak_ewma``,
 ``least_request``, ``prequal``, ``round_robin``, ``replicate``). The robot's ranking then
 names where its tasks go, and its manager's flag says so (:meth:`Policy.choose`).
 """
 
 import math
 
-from server_select.core.selection.balancers import PEERS
-from server_select.core.selection.rank import NO_SERVER
+from server_select.core.config.names import PER_TASK_RULES
+from server_select.core.ranking.rank import NO_SERVER
 
-POLICIES = ('mean', 'hysteresis', 'least_latency') + PEERS
+POLICIES = ('mean', 'hysteresis') + PER_TASK_RULES
 # policies a robot applies per task itself (a balancer): the fleet's rule and the peers
-PER_TASK = ('least_latency',) + PEERS
+PER_TASK = PER_TASK_RULES
 
 
 class Policy(object):

@@ -2,23 +2,23 @@
 
 ``select`` follows the manager's ranking while its flags are fresh, and ranks the servers
 itself from its own probe samples, with the manager's policy, when they are stale or name
-no server; with a per-task rule (:mod:`~server_select.core.selection.balancers`) it asks
+no server; with a per-task rule (:mod:`~server_select.core.peers.balancers`) it asks
 that rule when it sends a task and the flags are for the record only; ``fixed`` always
 names one server (the paper's baseline); ``local`` keeps the work in the robot. In
-``select`` mode servers the robot's :class:`~server_select.core.selection.health.ServerHealth`
+``select`` mode servers the robot's :class:`~server_select.core.robot.health.ServerHealth`
 has ejected are skipped (while one is usable: :meth:`ServerHealth.order`).
 """
 
 import threading
 import time
 
-from server_select.core.selection import balancers
-from server_select.core.selection.policy import Chooser, Policy
-from server_select.core.selection.rank import NO_SERVER, rank_servers
-from server_select.core.selection.fleet_rankings import FleetRankings
+from server_select.core.peers import balancers
+from server_select.core.ranking.policy import Chooser, Policy
+from server_select.core.ranking.rank import NO_SERVER, rank_servers
+from server_select.core.manager.sample_rankings import SampleRankings
 from server_select.core.config.names import LOCAL
 from server_select.core.config.params import MODES  # noqa: F401 (re-exported)
-from server_select.core.selection.window import LatencyWindow, check_sample
+from server_select.core.ranking.window import LatencyWindow, check_sample
 
 
 class Selection(object):
@@ -36,9 +36,9 @@ class Selection(object):
         policy = policy or Policy()
         self.manager_timeout = manager_timeout
         # the robot's samples, kept as the manager keeps every robot's (its own view)
-        self.rankings = FleetRankings(window, [robot_id], (), statistic or policy.statistic(),
-                                      fail_fast, policy.robust,
-                                      task_memory if passive else 0.0, keep, horizon)
+        self.rankings = SampleRankings(window, [robot_id], (), statistic or policy.statistic(),
+                                       fail_fast, policy.robust,
+                                       task_memory if passive else 0.0, keep, horizon)
         self.window = self.rankings.window
         # probes only (what a task sample is compared with): a window of its own only
         self.passive = passive     # when task samples share the main one
@@ -99,7 +99,7 @@ class Selection(object):
         """One of the robot's own samples: a probe, or (``probe`` False) an answered task
         with ``~passive`` (ValueError for an impossible round trip); ``wait``: the part of a
         load-aware probe's ``rtt`` that is the server's wait. True when the robot's own
-        ranking may have changed (:meth:`FleetRankings.add`; a rule's own view: always)."""
+        ranking may have changed (:meth:`SampleRankings.add`; a rule's own view: always)."""
         now = self._clock()
         if self.balancer is not None and self.balancer.own_view:
             check_sample(ok, rtt)
@@ -121,9 +121,9 @@ class Selection(object):
             ranking = self.balancer.view(self._usable())
             return ranking._replace(excluded=sorted(set(self._servers()) - set(ranking.ranking)))
         ranking = self.rankings.rank(self.robot_id, self._clock())
-        last = self.balancer.last if self.balancer is not None else None
+        last = self.balancer.chosen if self.balancer is not None else None
         if last is not None and last in ranking.ranking:
-            ranking = ranking._replace(selected=last, reason=self.balancer.why)
+            ranking = ranking._replace(selected=last, reason=self.balancer.reason)
         return ranking
 
     def contenders(self):
@@ -226,7 +226,7 @@ class Selection(object):
         if self.mode != 'select':
             return self.target()
         if self.balancer is not None:
-            last = self.balancer.last
+            last = self.balancer.chosen
             if last is None or self.health is None or self.health.usable(last):
                 return NO_SERVER if last is None else last
             usable = self._usable()     # (only then: heading() is asked at every probe)

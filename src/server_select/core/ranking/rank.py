@@ -22,7 +22,7 @@ def latency(stats):
 def rank_servers(pair_stats, fail_fast=0):
     """Rank servers by latency statistic, lowest first.
 
-    ``pair_stats`` maps server id to :class:`server_select.core.selection.window.PairStats`. Servers
+    ``pair_stats`` maps server id to :class:`server_select.core.ranking.window.PairStats`. Servers
     with no successful sample in the window are excluded, and with ``fail_fast`` > 0 those
     whose ``fail_fast`` newest samples failed (a server that stopped answering is left
     then, not when its last good sample leaves the window). The candidates are put in

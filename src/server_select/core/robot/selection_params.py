@@ -3,9 +3,9 @@ and the simulator build alike."""
 
 import time
 
-from server_select.core.selection.candidates import Selection
-from server_select.core.selection.health import ServerHealth
-from server_select.core.selection.policy import from_params
+from server_select.core.robot.selection import Selection
+from server_select.core.robot.health import ServerHealth
+from server_select.core.ranking.policy import from_params
 
 
 def robot_selection(robot_id, servers, mode, fixed, get, clock=time.monotonic, rng=None,

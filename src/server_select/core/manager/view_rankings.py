@@ -1,7 +1,7 @@
 """The manager's rankings when robots rank for themselves (``~sample_stream view``; no rospy).
 
 Each robot keeps its own samples exactly as the manager would (the same window, task
-memory and ``~fail_fast``: :class:`~server_select.core.selection.fleet_rankings.FleetRankings`
+memory and ``~fail_fast``: :class:`~server_select.core.manager.sample_rankings.SampleRankings`
 for one
 robot) and sends its ranking when the servers it ranks, those left out, or the policy's
 pick change, and every ``1/~view_rate`` s. The manager then costs O(servers) per *change*
@@ -16,8 +16,8 @@ the manager's window had.
 
 import heapq
 
-from server_select.core.selection.rank import NO_SERVER, Ranking, only
-from server_select.core.selection.fleet_rankings import Members
+from server_select.core.ranking.rank import NO_SERVER, Ranking, only
+from server_select.core.manager.sample_rankings import Members
 
 EMPTY = Ranking(selected=NO_SERVER, ranking=[], means=[], counts=[], excluded=[], errors=[],
                 waits=[])
@@ -25,7 +25,7 @@ EMPTY = Ranking(selected=NO_SERVER, ranking=[], means=[], counts=[], excluded=[]
 
 class ViewRankings(Members):
     """Robots' own rankings in, the same interface as
-    :class:`~server_select.core.selection.fleet_rankings.FleetRankings` out. Thread-safe."""
+    :class:`~server_select.core.manager.sample_rankings.SampleRankings` out. Thread-safe."""
 
     def __init__(self, stale, robots=(), servers=()):
         Members.__init__(self, robots, servers)

@@ -19,8 +19,8 @@ import collections
 import math
 import statistics
 
-from server_select.core.selection.balancer import Balancer, Decision, Order
-from server_select.core.selection.rank import by_estimate
+from server_select.core.rule.balancer import Balancer, Decision, Order
+from server_select.core.ranking.rank import by_estimate
 from server_select.core.util.stats import mean_error, median_error
 
 Z = 3.0                  # standard errors a challenger must win by
@@ -48,13 +48,13 @@ class LeastLatency(Balancer):
         if set(off) - set(MECHANISMS):
             raise ValueError('unknown mechanisms %s (expected %s)'
                              % (sorted(set(off) - set(MECHANISMS)), ', '.join(MECHANISMS)))
-        self.window, self.on = float(window), set(MECHANISMS) - set(off)
+        self.window, self.mechanisms = float(window), set(MECHANISMS) - set(off)
         self.answers = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
         self.sends = collections.defaultdict(collections.deque)   # kind -> when sent
         self.least_work = {}                   # kind -> the least work any server reported
 
     def _probed(self, answer):
-        others = max(0, answer.rif - self.out[answer.server])
+        others = max(0, answer.rif - self.attempts_out[answer.server])
         answers = self.answers[answer.server]
         answers.append((answer, others))
         while answer.at - answers[0][0].at > self.window:   # out of every later window
@@ -98,14 +98,14 @@ class LeastLatency(Balancer):
         work = newest.service.get(kind, self.least_work.get(kind, 0.0))
         # the newest report (a step in the work shows at once) and its error, the server's
         # (a median of its last second's tasks, which a shared CPU makes vary)
-        work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.on else 0.0
+        work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.mechanisms else 0.0
         workers = float(newest.workers)
         mine = rate * work / workers
         rtts = [a.rtt for a, _ in answers]
         queued = [others * work / workers for _, others in answers]
         tries = math.fsum([max(1.0, a.utilization + mine) for a, _ in answers]) / len(answers) \
-            if 'tries' in self.on else 1.0
-        if 'robust' in self.on:     # a late answer or two (a retransmission, a hang ending)
+            if 'tries' in self.mechanisms else 1.0
+        if 'robust' in self.mechanisms:     # a late answer or two (a retransmission, a hang ending)
             rtt, rtt_error = median_error(rtts)   # must not hold the mean up for a window
         else:
             rtt, rtt_error = mean_error(rtts)
@@ -129,27 +129,27 @@ class LeastLatency(Balancer):
             {decision.server: decision.reason})
 
     def _decide(self, servers, kind, now):
-        here = self.last if self.last in servers else None
-        gone = self.last is not None and here is None
+        here = self.chosen if self.chosen in servers else None
+        gone = self.chosen is not None and here is None
         rate = self.rate(kind, now)
         estimates = self._pooled(dict((s, self.estimate(s, kind, now, rate)) for s in servers))
         known = dict((s, e) for s, e in estimates.items() if e is not None)
         if not known:
-            pick = here if here is not None else servers[int(self.draw * len(servers))]
+            pick = here if here is not None else servers[int(self.next_draw * len(servers))]
             return Decision(pick, 'no answer yet: at random' if here is None else
                             'no answer yet: kept', estimates)
         best = min(known, key=lambda s: known[s].latency)
         near = sorted(s for s in known if within(known[s], known[best])) \
-            if 'keep' in self.on else [best]
-        if here in known and (here == best or 'keep' in self.on and here in near):
+            if 'keep' in self.mechanisms else [best]
+        if here in known and (here == best or 'keep' in self.mechanisms and here in near):
             return Decision(here, 'kept: within the noise of server %s' % best
                             if here != best else 'kept: the fastest', estimates)
         if here in known:    # a move's margin is positive
             near = [s for s in near if s == best or known[s].latency < known[here].latency]
-        there = near[int(self.draw * len(near))]
+        there = near[int(self.next_draw * len(near))]
         why = 'server %s faster than %s by %.3g ms' % (
             there, here, 1e3 * (known[here].latency - known[there].latency)) \
-            if here in known else 'server %s not usable' % self.last if gone else \
+            if here in known else 'server %s not usable' % self.chosen if gone else \
             'server %s not heard from in %g s' % (here, self.window) if here else 'the fastest'
         return Decision(there, why + (' (%d within the noise: one at random)' % len(near)
                                       if len(near) > 1 else ''), estimates)
@@ -185,7 +185,7 @@ class LeastLatency(Balancer):
             estimates = self._estimates(servers, self._clock())
         known = dict((s, e) for s, e in estimates.items() if e is not None)
         best = min(known.values(), key=lambda e: e.latency) if known else None
-        return set(s for s in servers if s == self.last or s not in known or
+        return set(s for s in servers if s == self.chosen or s not in known or
                    within(known[s], best))
 
     def view(self, servers):
@@ -194,7 +194,7 @@ class LeastLatency(Balancer):
         where the next task will go and why."""
         with self._lock:
             now = self._clock()
-            if servers and self.last not in servers:    # (its estimates are the view's)
+            if servers and self.chosen not in servers:    # (its estimates are the view's)
                 decision = self._decide(list(servers), self._main_kind(now), now)
                 return by_estimate(decision.estimates, decision.server, decision.reason)
-            return by_estimate(self._estimates(servers, now), self.last, self.why)
+            return by_estimate(self._estimates(servers, now), self.chosen, self.reason)

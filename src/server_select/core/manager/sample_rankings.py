@@ -8,20 +8,20 @@ no probe of it, good or failed, for a whole window).
 
 A sample can change a robot's flag only if it concerns the selected server, a server
 that enters or leaves the ranking, or a server whose mean falls below the selected one's;
-:meth:`FleetRankings.add` says so in O(1), and only then need the robot be ranked again.
+:meth:`SampleRankings.add` says so in O(1), and only then need the robot be ranked again.
 A server also leaves a ranking without any sample, when its newest good sample leaves the
-window: :meth:`FleetRankings.departures` names the robots this happened to (one scheduled
+window: :meth:`SampleRankings.departures` names the robots this happened to (one scheduled
 check per pair and window, O(log pairs) each; with a window that keeps a rarely sampled
 pair's newest samples, its ``horizon``: sooner only when newer samples push the good one
-out, which :meth:`FleetRankings.add` reports).
+out, which :meth:`SampleRankings.add` reports).
 """
 
 import heapq
 import threading
 
-from server_select.core.selection.passive import TaskCost
-from server_select.core.selection.rank import NO_SERVER, latency, rank_servers
-from server_select.core.selection.window import LatencyWindow
+from server_select.core.ranking.passive import TaskCost
+from server_select.core.ranking.rank import NO_SERVER, latency, rank_servers
+from server_select.core.ranking.window import LatencyWindow
 
 
 class Members(object):
@@ -68,15 +68,15 @@ class Members(object):
         return None
 
 
-class FleetRankings(Members):
-    """Samples in, :class:`~server_select.core.selection.rank.Ranking` per robot out.
+class SampleRankings(Members):
+    """Samples in, :class:`~server_select.core.ranking.rank.Ranking` per robot out.
     Thread-safe."""
 
     def __init__(self, window, robots=(), servers=(), statistic='mean', fail_fast=0,
                  robust=False, task_memory=0.0, keep=0, horizon=None):
         Members.__init__(self, robots, servers)
         self.window = LatencyWindow(window, statistic, robust, keep, horizon)
-        # task samples' cost above the probes, remembered (core/selection/passive.py; 0: off)
+        # task samples' cost above the probes, remembered (core/ranking/passive.py; 0: off)
         self.cost = TaskCost(task_memory) if task_memory > 0 else None
         self.fail_fast = fail_fast
         self._servers = self._heard               # robot -> set of servers heard for it

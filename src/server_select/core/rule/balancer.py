@@ -48,12 +48,12 @@ class Balancer(object):
         self.rng = rng or random.Random()
         self._clock = clock
         self._lock = threading.Lock()
-        self.out = collections.Counter()     # server -> this robot's attempts out there
+        self.attempts_out = collections.Counter()     # server -> this robot's attempts out there
         self.probes = {}                     # server -> its newest ProbeAnswer
-        self.last = None                     # where the last task went
-        self.why = ''                        # why tasks go there (the last decision's)
+        self.chosen = None                     # where the last task went
+        self.reason = ''                        # why tasks go there (the last decision's)
         self.on_move = None                  # on_move(server, why): the rule moved, why
-        self.draw = self._draws()
+        self.next_draw = self._draws()
 
     def _draws(self):
         """The random numbers a decision may use (two: a pair of servers)."""
@@ -81,18 +81,18 @@ class Balancer(object):
         moved = None
         with self._lock:
             now = self._clock()
-            self.out[server] += 1
+            self.attempts_out[server] += 1
             self._started(server, kind, now)
             if first and order is not None:
                 self._chosen(server, kind, now, order)
             if first:       # a decision's draw is spent (a re-send or a hedge takes the next
-                self.draw = self._draws()    # in the order, and draws nothing)
+                self.next_draw = self._draws()    # in the order, and draws nothing)
             said = getattr(order, 'reasons', {}).get(server) if first else None
-            if first and server != self.last:
+            if first and server != self.chosen:
                 moved = said                          # (a peer's: unexplained)
-                self.last, self.why = server, said or ''
+                self.chosen, self.reason = server, said or ''
             elif said:      # kept: why, as the last decision said ("kept: the fastest")
-                self.why = said
+                self.reason = said
         if moved is not None and self.on_move is not None:
             self.on_move(server, moved)
 
@@ -107,8 +107,8 @@ class Balancer(object):
         """An attempt at ``server`` ended: ``rtt`` its round trip (answered, or failed
         after that long), None when it just stopped counting (another attempt won)."""
         with self._lock:
-            if self.out[server] > 0:
-                self.out[server] -= 1
+            if self.attempts_out[server] > 0:
+                self.attempts_out[server] -= 1
             if rtt is not None:
                 self._ended(server, rtt, self._clock())
 
@@ -143,8 +143,8 @@ class Balancer(object):
 
     def _two(self, servers):
         """Two distinct servers drawn at random (one when there is one), by ``draw``."""
-        first = int(self.draw[0] * len(servers))
+        first = int(self.next_draw[0] * len(servers))
         if len(servers) == 1:
             return [servers[first]]
-        second = int(self.draw[1] * (len(servers) - 1))
+        second = int(self.next_draw[1] * (len(servers) - 1))
         return [servers[first], servers[second + (second >= first)]]

@@ -1,15 +1,15 @@
 """Adaptive probing: probe rates, a far server that comes near (contenders by the rule),
-and the window with uneven sampling (core/selection/probing.py, core/selection/window.py)."""
+and the window with uneven sampling (core/robot/probe_plan.py, core/ranking/window.py)."""
 
 import collections
 import random
 
 import pytest
 
-from server_select.core.selection.least_latency import LeastLatency
-from server_select.core.selection.probing import ProbePlan, from_params
-from server_select.core.selection.fleet_rankings import FleetRankings
-from server_select.core.selection.window import EMPTY, LatencyWindow, PairStats
+from server_select.core.rule.least_latency import LeastLatency
+from server_select.core.robot.probe_plan import ProbePlan, from_params
+from server_select.core.manager.sample_rankings import SampleRankings
+from server_select.core.ranking.window import EMPTY, LatencyWindow, PairStats
 
 from support.clock import Clock
 
@@ -171,7 +171,7 @@ def test_a_far_server_that_comes_near_is_noticed_within_two_background_periods()
                 samples_after += 1
         if now >= 20.0 and noticed is None and 3 in plan.contenders:
             noticed = now - 20.0
-        if now > 2.0 and not rule.last:
+        if now > 2.0 and not rule.chosen:
             rule.started(rule.order(list(truth))[0])
         if 19.0 <= now < 20.0:
             assert plan.contenders == [1], (now, plan.contenders)   # 3 in the background
@@ -224,7 +224,7 @@ def test_without_keep_the_window_is_the_papers_time_window():
 
 
 def test_the_manager_ranks_a_rarely_probed_server_until_its_horizon():
-    r = FleetRankings(1.5, keep=3, horizon=8.0)
+    r = SampleRankings(1.5, keep=3, horizon=8.0)
     r.add(1, 1, 0.0, True, 0.005)
     r.add(1, 2, 0.0, True, 0.040)
     for i in range(1, 60):
@@ -235,7 +235,7 @@ def test_the_manager_ranks_a_rarely_probed_server_until_its_horizon():
 
 
 def test_a_probe_round_completes_with_its_last_server_and_keeps_every_sample():
-    from server_select.core.selection.probing import ProbeRound
+    from server_select.core.robot.probe_plan import ProbeRound
     batch = ProbeRound(7, 1.5, [1, 2, 3])
     assert not batch.record(2, True, 0.002, None)
     assert not batch.record(1, False, 0.5, 0.1)       # a failed probe: no round trip

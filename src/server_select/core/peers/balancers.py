@@ -41,11 +41,10 @@ selection applies to them.
 import collections
 import math
 
-from server_select.core.selection.balancer import Balancer
-from server_select.core.selection.least_latency import LeastLatency
+from server_select.core.config.names import PEERS  # noqa: F401 (re-exported)
+from server_select.core.rule.balancer import Balancer
+from server_select.core.rule.least_latency import LeastLatency
 from server_select.core.util.stats import percentile
-
-PEERS = ('p2c_peak_ewma', 'least_request', 'prequal', 'round_robin', 'replicate')
 
 
 class PeakEwma(object):
@@ -108,7 +107,7 @@ class P2CPeakEwma(Balancer):
         """Its estimate x (attempts out + 1); one not met yet at the initial estimate."""
         ewma = self.ewma.get(server)
         estimate = ewma.get(now) if ewma is not None else self.initial
-        return estimate * (self.out[server] + 1)
+        return estimate * (self.attempts_out[server] + 1)
 
     def _order(self, servers, kind, now):
         costs = dict((s, self.cost(s, now)) for s in servers)
@@ -119,7 +118,7 @@ class LeastRequest(Balancer):
     name = 'least_request'
 
     def _order(self, servers, kind, now):
-        return _pair_first(self._two(servers), servers, lambda s: self.out[s])
+        return _pair_first(self._two(servers), servers, lambda s: self.attempts_out[s])
 
 
 class RoundRobin(Balancer):
@@ -210,7 +209,7 @@ class Prequal(Balancer):
     def _order(self, servers, kind, now):
         _, ranked, rank = self._ranked(servers, kind, now)
         if rank is None:
-            first = servers[int(self.draw[0] * len(servers))]
+            first = servers[int(self.next_draw[0] * len(servers))]
             return [first] + [s for s in servers if s != first]
         order = []
         for e in ranked:

@@ -24,7 +24,7 @@ import math
 import statistics
 import threading
 
-from server_select.core.selection.window import valid_rtt
+from server_select.core.ranking.window import valid_rtt
 
 
 class TaskBaseline(object):

@@ -1,6 +1,6 @@
-"""Parameters with no effect where they are set are named (core/selection/effect.py)."""
+"""Parameters with no effect where they are set are named (core/robot/refusals.py)."""
 
-from server_select.core.selection.effect import FLEET_KNOBS, ineffective, refusal
+from server_select.core.robot.refusals import FLEET_KNOBS, ineffective, refusal
 from server_select.core.settings import default
 
 

@@ -9,7 +9,7 @@ league measured (docs/selection.md) and is not for setting. A node refuses eithe
 start, with a line naming the parameter and why (:func:`ineffective`).
 """
 
-from server_select.core.selection.policy import PER_TASK
+from server_select.core.ranking.policy import PER_TASK
 
 # parameter -> why it does nothing for a robot that chooses per task
 RANKING_ONLY = {
