@@ -5,7 +5,9 @@ the server would never hear that robot's tasks again. The robot sees that a serv
 answers its probes does not hear its task topic, and makes the publisher anew; the master
 then has the server connect again. Printed: the seconds until the server hears the robot
 again, and the robot's task counts. Asserted: it does, with one line saying so, and every
-task is reported once."""
+task is reported once. In the fleet profile the manager's connections to the robot are
+then reset the same way: the robot, whose rankings the manager (up) no longer hears,
+publishes them anew, and the manager connects again."""
 
 import subprocess
 import time
@@ -70,6 +72,7 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
         again = wait_until(lambda: node in hearers(topic), 4 * DEAF_GRACE, period=0.2)
         t_again = time.monotonic() - t_cut
         said = wait_until(lambda: rec.log_lines('/robot%d' % ROBOT, 'connecting anew'), 5.0)
+        rankings = _cut_rankings(fleet, rec) if profile == 'fleet' else None
         outcomes = rec.outcomes((ROBOT,), TASK_TIMEOUT)[ROBOT]
     show('%s profile: server %d\'s connections to robot %d destroyed:' % (
         profile, server, ROBOT), [{
@@ -83,3 +86,25 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
     # of the server's subscriber came first (before DEAF_GRACE, once in CI: after 4.2 s)
     assert said or t_again < DEAF_GRACE, t_again
     assert (outcomes['never answered'], outcomes['duplicates']) == (0, 0), outcomes
+    if rankings is not None:
+        show('the manager\'s connections to robot %d destroyed:' % ROBOT, [rankings])
+        assert rankings['connections reset'] >= 1 and rankings['robot saw it drop']
+        assert rankings['manager hears the robot again after s'] != 'never', rankings
+        assert rankings['line'] != 'none' or rankings['again'] < DEAF_GRACE, rankings
+
+
+def _cut_rankings(fleet, rec):
+    """The manager's connections to robot ROBOT reset: whether, and how soon, it hears the
+    robot's rankings again (a manager that does not is never told where its tasks go)."""
+    topic, node = '/' + names.RANKINGS_TOPIC, '/manager'
+    assert wait_until(lambda: node in hearers(topic), 10.0), hearers(topic)
+    destroyed = destroy_connections(fleet.pid(node))
+    t_cut = time.monotonic()
+    dropped = wait_until(lambda: node not in hearers(topic), 10.0, period=0.1)
+    again = wait_until(lambda: node in hearers(topic), 4 * DEAF_GRACE, period=0.2)
+    t_again = time.monotonic() - t_cut
+    wait_until(lambda: rec.log_lines('/robot%d' % ROBOT, 'publishing them anew'), 5.0)
+    return {'connections reset': destroyed, 'robot saw it drop': dropped,
+            'manager hears the robot again after s': '%.1f' % t_again if again else 'never',
+            'again': t_again,
+            'line': (rec.log_lines('/robot%d' % ROBOT, 'publishing them anew') or ['none'])[0]}

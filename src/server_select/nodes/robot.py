@@ -85,7 +85,8 @@ class RobotNode(object):
         self.selection, self.health = self.robot.selection, self.robot.health
         self.policy, self.load = self.robot.policy, self.robot.load
         self.streams = list(self.wire.streams.values())
-        self.view = RankingSender(self.robot_id, self.selection, self.policy, param('view_rate')) \
+        self.view = RankingSender(self.robot_id, self.selection, self.policy, param('view_rate'),
+                                  manager=lambda: self.manager_node) \
             if param('sample_stream') == 'view' and mode == 'select' else None
         if self.view is not None:       # one check of its ranking per batch of probe answers
             self.view.coalesce, self.prober.after_answers = True, self.view.flush
