@@ -182,3 +182,19 @@ def test_layers_import_only_those_below_them():
             if used in LAYERS and LAYERS.index(used) > LAYERS.index(layer):
                 upward.add((layer, used))
     assert sorted(upward) == []
+
+
+def test_no_node_keeps_data_under_the_name_the_runner_starts_it_by():
+    """``ros.runner`` calls a node's ``start()`` once it is built: a node that stored a
+    number as ``self.start`` died at start (the search monitor did)."""
+    offenders = []
+    for path in modules('nodes'):
+        with open(path) as stream:
+            tree = ast.parse(stream.read(), path)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Assign) and any(
+                    isinstance(t, ast.Attribute) and t.attr == 'start' and
+                    isinstance(t.value, ast.Name) and t.value.id == 'self'
+                    for t in node.targets):
+                offenders.append('%s:%d' % (module_name(path), node.lineno))
+    assert offenders == []

@@ -42,7 +42,7 @@ class SearchMonitorNode(object):
         self.found = {}
         self.reports = []
         self.false_alarms = []
-        self.start = rospy.get_time()
+        self.began = rospy.get_time()
         self.gate = SenderGate('search monitor', 'a node of the fleet')   # key: sealed only
         self.sub = rospy.Subscriber(fleet(names.FOUND_TARGETS_TOPIC), FoundTarget, self.on_found,
                                     queue_size=100)
@@ -53,7 +53,7 @@ class SearchMonitorNode(object):
         if not self.gate.admits(msg, 'a found target'):
             return
         name = self.world.target_at(msg.x, msg.y, self.radius)
-        t = rospy.get_time() - self.start
+        t = rospy.get_time() - self.began
         with self._lock:
             self.reports.append((t, msg.robot_id, name, msg.x, msg.y))
             if name is None:
