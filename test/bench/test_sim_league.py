@@ -40,3 +40,16 @@ def test_the_calibration_compares_every_cell_of_a_part():
     out = run('server_select.sim.calibration', '--part', 'capacity', '--seeds', '1',
               '--processes', '1')
     assert out.count('| herd') == 8 and 'cells within 10 %' in out
+
+
+def test_a_calibration_cell_is_close_within_10_percent_or_inside_the_testbeds_range():
+    from server_select.sim.calibration import close
+    assert close(1.09, 1.0, 0.9, 1.05) and close(1.3, 1.0, 0.8, 1.4)
+    assert not close(1.2, 1.0, 0.9, 1.1) and not close(0.5, 0.0, 0.0, 0.4)
+    assert close(0.0, 0.0, 0.0, 2.0)      # switches: none, and the testbed's 0-2
+
+
+def test_the_calibration_simulates_the_loopback_demo():
+    out = run('server_select.sim.calibration', '--part', 'loopback', '--seeds', '1',
+              '--processes', '1')
+    assert '| loopback switches | fleet |' in out, out
