@@ -82,7 +82,10 @@ class ProbeSeal(object):
             node = self.node(server, True)         # the server may have been restarted
             forged = seal.answer_refusal(response, proxy.resolved_name, proxy.uri, request,
                                          node or '?')
-        if forged is not None:
+        if forged is not None and 'check NTP' in forged:    # the clocks, not an impostor
+            warn(self._forged, 'robot %d: ignored a probe answer of %s from node %s: %s'
+                 % (self.robot_id, proxy.resolved_name, node, forged))
+        elif forged is not None:
             warn(self._forged, 'robot %d: ignored a probe answer of %s from node %s at %s (%s, '
                  'by the fleet key): not server %d'
                  % (self.robot_id, proxy.resolved_name, node, proxy.uri, forged, server))

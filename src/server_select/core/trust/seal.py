@@ -48,6 +48,7 @@ from server_select.core.trust.keys import (  # noqa: F401 (the key files, for th
 
 SIGNATURE_BYTES = 64      # an Ed25519 signature
 START_SKEW = 2.0          # s: a message signed this much before its receiver started counts
+CLOCK_STEP = 1.0          # s: a clock read this far behind the last sequence number stepped
 
 # which role may sign which message type; any other sealed type is a task kind's result
 # (kinds are plug-ins): servers'
@@ -84,7 +85,13 @@ def signed_digest(sender, seq, payload, where=b''):
 
 class Sealer(object):
     """The sending side: sequence numbers and signatures for one node (thread-safe), with
-    ``keys`` (:class:`Keys` holding the private key of the node's role)."""
+    ``keys`` (:class:`Keys` holding the private key of the node's role).
+
+    A sequence number is this host's clock in ns, strictly increasing while the clock
+    runs on; when the clock is stepped back by more than :data:`CLOCK_STEP` s (a Pi
+    without a real-time clock that booted ahead, corrected by NTP), the numbers follow it
+    back at once rather than counting on from the skewed time, which every receiver
+    refused as from the future until the clock caught up."""
 
     def __init__(self, keys, sender, clock=time.time_ns):
         if keys.private is None:
@@ -94,9 +101,11 @@ class Sealer(object):
         self._last = 0
 
     def next_seq(self):
-        """The publisher's clock in ns, strictly increasing."""
+        """The publisher's clock in ns, strictly increasing but across a step back."""
         with self._lock:
-            self._last = max(self._last + 1, self._clock())
+            now = self._clock()
+            stepped_back = now < self._last - int(CLOCK_STEP * 1e9)
+            self._last = now if stepped_back else max(self._last + 1, now)
             return self._last
 
     def mac(self, seq, payload, where=b''):
@@ -119,14 +128,17 @@ class Verifier(object):
     next ones while keys are rotated). ``max_age``: s a message may be older (or newer) than
     this host's clock. Sequence numbers seen in the last ``max_age`` s are remembered per
     publisher; what was signed more than :data:`START_SKEW` s before this verifier was made
-    (its node started) is refused.
+    (its node started, by this host's clock as it reads now: a step of the clock moves the
+    start with it) is refused.
     """
 
-    def __init__(self, keyrings, max_age=30.0, clock=time.time_ns):
+    def __init__(self, keyrings, max_age=30.0, clock=time.time_ns,
+                 monotonic=time.monotonic_ns):
         if not keyrings:
             raise ValueError('a verifier needs a key')
         self.keyrings, self.max_age_ns, self._clock = list(keyrings), int(max_age * 1e9), clock
-        self.started_ns = clock()
+        self._monotonic = monotonic
+        self._started_mono = monotonic()
         self._lock = threading.Lock()
         self._seen = {}           # publisher -> {seq: True}, oldest first
 
@@ -152,12 +164,20 @@ class Verifier(object):
             return 'signed with the %s key: only the %s role may publish it' % (signer, role)
         return self._stale(sender, seq)
 
+    @property
+    def started_ns(self):
+        """When this verifier was made, by this host's clock now."""
+        return self._clock() - (self._monotonic() - self._started_mono)
+
     def _stale(self, sender, seq):
         now = self._clock()
-        if abs(now - seq) > self.max_age_ns:
-            return 'signed %.1f s %s this host\'s clock (at most %g s: replayed, or clocks ' \
-                'apart)' % (abs(now - seq) / 1e9, 'before' if seq < now else 'after',
-                            self.max_age_ns / 1e9)
+        if seq - now > self.max_age_ns:
+            return 'this host\'s clock is %.1f s behind %s\'s: check NTP (messages count ' \
+                'within %g s)' % ((seq - now) / 1e9, sender[:64], self.max_age_ns / 1e9)
+        if now - seq > self.max_age_ns:
+            return 'signed %.1f s before this host\'s clock (at most %g s): replayed, or ' \
+                '%s\'s clock is behind this host\'s: check NTP' % (
+                    (now - seq) / 1e9, self.max_age_ns / 1e9, sender[:64])
         if seq < self.started_ns - int(START_SKEW * 1e9):
             return 'signed %.1f s before this node started (replayed; the fleet\'s clocks ' \
                 'must agree within %g s)' % ((self.started_ns - seq) / 1e9, START_SKEW)
