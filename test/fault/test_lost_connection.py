@@ -108,3 +108,37 @@ def _cut_rankings(fleet, rec):
             'manager hears the robot again after s': '%.1f' % t_again if again else 'never',
             'again': t_again,
             'line': (rec.log_lines('/robot%d' % ROBOT, 'publishing them anew') or ['none'])[0]}
+
+
+def test_a_report_listener_that_lost_its_connection_hears_the_robot_again(ros):
+    """The report listener (this test node) drops its connection to robot ROBOT's task
+    reports while the robot waits to start, and, as rospy's subscriber does with a
+    connection lost as it was made, never makes it again: the robot, whose first task
+    waits until every listener hears its reports, makes the publisher anew and the master
+    has the listener connect again. Printed: the seconds until it hears the robot again,
+    and the robot's line."""
+    rec = ros['rec']
+    rec.clear()
+    topic, me = '/' + names.TASK_REPORT_TOPIC, rospy.get_name()
+    with Fleet(ros['log'], profile='fleet', start_delay=12):
+        assert wait_until(lambda: me in hearers(topic), 20.0), hearers(topic)
+        robot_uri = rosgraph.Master(me).lookupNode('/robot%d' % ROBOT)
+        reports = rec.subs[0].impl
+        closed = [c for c in list(reports.connections) if c.endpoint_id == robot_uri]
+        for connection in closed:
+            connection.close()              # closed here: rospy does not connect again
+        t_cut = time.monotonic()
+        dropped = wait_until(lambda: me not in hearers(topic), 10.0, period=0.1)
+        again = wait_until(lambda: me in hearers(topic), 4 * DEAF_GRACE, period=0.2)
+        t_again = time.monotonic() - t_cut
+        said = wait_until(lambda: rec.log_lines('/robot%d' % ROBOT, 'publishing them anew'),
+                          5.0)
+        started = wait_until(lambda: rec.of(rec.reports, ROBOT), 30.0)
+    show('this node\'s connection to robot %d\'s task reports closed:' % ROBOT, [{
+        'connections closed': len(closed), 'robot saw it drop': dropped,
+        'heard again after s': '%.1f' % t_again if again else 'never',
+        'line': (rec.log_lines('/robot%d' % ROBOT, 'publishing them anew') or ['none'])[0],
+        'reports heard': len(rec.of(rec.reports, ROBOT))}])
+    assert len(closed) == 1 and dropped
+    assert again and said, 'this node never heard robot %d\'s task reports again' % ROBOT
+    assert started, 'robot %d never started its tasks' % ROBOT

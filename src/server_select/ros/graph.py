@@ -86,6 +86,14 @@ def stalled(pub):
             if tcp.stalled(getattr(c, 'socket', None))]
 
 
+def subscribers(topic, caller_id):
+    """The nodes the master lists as subscribers of ``topic`` (none when it is away)."""
+    try:
+        return set(dict(rosgraph.Master(caller_id).getSystemState()[1]).get(topic, ()))
+    except (rosgraph.MasterError, OSError):
+        return set()
+
+
 def unheard(nodes, first, others, caller_id):
     """The nodes of ``nodes`` that do not hear yet what they listen to: the publisher
     ``first`` (each must), and those of the publishers ``others`` whose topics the master

@@ -14,10 +14,11 @@ from server_select.core.util.stats import format_ms, summarize
 from server_select.core.flow.outcome import STOPPED, cut_off
 from server_select.core.flow.task_flow import ENDED, OUTRUN, RETRIED
 from server_select.msg import TaskReport
-from server_select.ros.graph import publisher_of, unheard
+from server_select.core.util.lasting import Lasting
+from server_select.ros.graph import hearing, publisher_of, subscribers, unheard
 from server_select.ros.senders import SenderGate
 from server_select.ros.node import fleet, flush
-from server_select.ros.routing import BroadcastRoute
+from server_select.ros.routing import DEAF_GRACE, BroadcastRoute, renew
 from server_select.ros.seal import SealedPublisher
 
 
@@ -28,7 +29,10 @@ class TaskStream(object):
 
     Before the first task the stream waits until every node of ``listeners`` (a recorder
     that must see every task) hears its task reports, and its tasks where it subscribes to
-    them, and until its task and result topics reach a server. A result counts only if the
+    them, and until its task and result topics reach a server; a listener that subscribes
+    to the reports (as the master says) and has not been connected for DEAF_GRACE s gets
+    the report publisher made anew (rospy's subscriber connects once: a connection lost as
+    it was made left a robot waiting for good). A result counts only if the
     node ``expected_publisher(server, refresh)`` names published it (a
     :class:`~server_select.ros.senders.SenderGate`).
 
@@ -48,13 +52,13 @@ class TaskStream(object):
         self.route = None if local else route(robot_id, self.kind, self.on_result)
         self.node_of = expected_publisher
         self.report_pub = None
+        self._deaf = Lasting(DEAF_GRACE)
         self.pacer = Pacer(self._act, core.next_time, name='%s tasks' % self.kind.kind,
                            on_error=self._on_error)
 
     def start(self):
         """Its topics; then (:meth:`pace`) its thread, once the robot has started."""
-        self.report_pub = SealedPublisher(fleet(names.TASK_REPORT_TOPIC), TaskReport,
-                                          queue_size=100)
+        self.report_pub = self._report_publisher()
         if self.route is not None:
             self.route.start()
 
@@ -85,10 +89,33 @@ class TaskStream(object):
 
     def deaf(self):
         """The nodes of ``listeners`` that do not hear our task reports yet, or our tasks
-        where they subscribe to them."""
-        return unheard(self.listeners, self.report_pub, self.route.publishers()
-                       if self.route is not None else [], rospy.get_name()) \
-            if self.listeners else []
+        where they subscribe to them (asked before the first task only)."""
+        if not self.listeners:
+            return []
+        deaf = unheard(self.listeners, self.report_pub, self.route.publishers()
+                       if self.route is not None else [], rospy.get_name())
+        self._repair_reports(deaf)
+        return deaf
+
+    @staticmethod
+    def _report_publisher():
+        return SealedPublisher(fleet(names.TASK_REPORT_TOPIC), TaskReport, queue_size=100)
+
+    def _repair_reports(self, deaf):
+        """The report publisher made anew when a listener that subscribes to it has not
+        been connected for DEAF_GRACE s (the master asked once a grace period at most)."""
+        missing = [n for n in deaf if n not in hearing(self.report_pub)]
+        if not self._deaf.held('reports', bool(missing)):
+            return
+        listed = subscribers(self.report_pub.resolved_name, rospy.get_name())
+        missing = [n for n in missing if n in listed]
+        pubs = {None: self.report_pub}
+        remake = lambda: pubs.__setitem__(None, self._report_publisher())  # noqa: E731
+        if missing and renew(pubs, None, remake, missing):
+            self.report_pub = pubs[None]
+            rospy.logwarn_throttle(60.0, 'robot %d: %s subscribe to our task reports and have '
+                                   'not heard them for %g s: publishing them anew'
+                                   % (self.robot_id, ', '.join(missing), DEAF_GRACE))
 
     def wired_to(self, server):
         """Whether our task topic reaches ``server`` (and our result topic hears one)."""
