@@ -64,3 +64,12 @@ def test_a_server_that_stops_answering_for_good_leaves_and_a_late_one_joins(tmp_
     assert hosts['server1'].stop is None
     # a run on one host: its middleware from its own round trips
     assert data['suite']['hop_ms'] < 1e3 * Model.load().hop
+
+
+def test_a_bag_is_simulated_with_its_own_profile_first():
+    """A fleet profile's manager records its server list, a paper one's does not: simulate
+    --from-bag puts that profile's variant first unless --variants says otherwise."""
+    from server_select.sim.cli import own_profile
+    from server_select.testbed.bag_analysis import Run, Servers
+    assert own_profile(Run({}, [], [], [], [Servers(1.0, [1, 2])])) == 'fleet'
+    assert own_profile(Run({}, [], [], [], [])) == 'paper'

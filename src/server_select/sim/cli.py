@@ -21,13 +21,17 @@ from server_select.testbed.scenario import ScenarioError
 from server_select.testbed.suite_scenario import short_name
 
 
+VARIANTS = ('fleet', 'prequal', 'p2c_peak_ewma')
+
+
 def parse(argv):
     parser = argparse.ArgumentParser(prog='simulate', description=__doc__.split('\n\n')[0])
     parser.add_argument('scenario', nargs='?', help='a scenario file (the testbed\'s '
                         'format), a suite scenario\'s name, or gen:<seed>')
     parser.add_argument('--from-bag', metavar='BAG', help='the links of a recorded run')
-    parser.add_argument('--variants', default='fleet,prequal,p2c_peak_ewma',
-                        help='suite variants (the oracle is always run: %(default)s)')
+    parser.add_argument('--variants', help='suite variants (the oracle is always run; '
+                        'default: %s, and with --from-bag the bag\'s own profile first)'
+                        % ','.join(VARIANTS))
     parser.add_argument('--seeds', type=int, default=30)
     parser.add_argument('--first-seed', type=int, default=1)
     parser.add_argument('--together', action='store_true', help='the variants side by side '
@@ -51,7 +55,13 @@ def _from_bag(path, out):
     with open(name, 'w') as stream:
         stream.write('# the run of %s\n' % path)
         yaml.safe_dump(data, stream, sort_keys=False)
-    return name, from_bag.recorded(run, data['suite']['measure_from'])
+    return name, from_bag.recorded(run, data['suite']['measure_from']), own_profile(run)
+
+
+def own_profile(run):
+    """The profile a recorded run's robots had: the fleet's managers publish their server
+    list (``fleet_servers``), the paper's do not."""
+    return 'fleet' if run.servers else 'paper'
 
 
 def _beside(own, variants, seeds):
@@ -73,17 +83,19 @@ def _beside(own, variants, seeds):
 def main(argv=None):
     args = parse(sys.argv[1:] if argv is None else argv)
     os.makedirs(args.out, exist_ok=True)
-    name = args.scenario
+    name, profile = args.scenario, None
     try:
         if args.from_bag:
-            name, own = _from_bag(args.from_bag, args.out)
+            name, own, profile = _from_bag(args.from_bag, args.out)
         # a bad file or an empty measured part: its one line, before any run
         for warning in measured_window(league.network_scenario(name))[1]:
             print('simulate: warning: %s' % warning, file=sys.stderr)
     except (ScenarioError, ValueError, OSError) as error:
         print('simulate: %s' % error, file=sys.stderr)
         return 2
-    variants = [ORACLE] + [v for v in args.variants.split(',') if v and v != ORACLE]
+    asked = args.variants.split(',') if args.variants else \
+        [profile] * (profile is not None) + list(VARIANTS)
+    variants = [ORACLE] + [v for v in dict.fromkeys(asked) if v and v != ORACLE]
     options = league.parse(['--seeds', str(args.seeds), '--first-seed', str(args.first_seed),
                             '--scenarios', name, '--variants', ','.join(variants),
                             '--cases', '', '--processes', str(args.processes),
