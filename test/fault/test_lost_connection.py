@@ -41,6 +41,28 @@ def hearers(topic):
     return set(c[1] for c in connections if c[4] == topic and c[2] == 'o')
 
 
+def heard_again(node, topic, cut, connected=10.0):
+    """Once ``node`` hears robot ROBOT's ``topic``, ``cut()`` its connections (returns how
+    many); then ``(how many, whether the robot saw them drop, seconds until ``node`` heard
+    it again, None: not within 4 x DEAF_GRACE)``."""
+    assert wait_until(lambda: node in hearers(topic), connected), hearers(topic)
+    count = cut()
+    t_cut = time.monotonic()
+    dropped = wait_until(lambda: node not in hearers(topic), 10.0, period=0.1)
+    again = wait_until(lambda: node in hearers(topic), 4 * DEAF_GRACE, period=0.2)
+    return count, dropped, time.monotonic() - t_cut if again else None
+
+
+def _close_reports(rec):
+    """This node's connections to robot ROBOT's task reports closed here (rospy does not
+    make such a connection again); how many."""
+    robot_uri = rosgraph.Master(rospy.get_name()).lookupNode('/robot%d' % ROBOT)
+    closed = [c for c in list(rec.subs[0].impl.connections) if c.endpoint_id == robot_uri]
+    for connection in closed:
+        connection.close()
+    return len(closed)
+
+
 def destroy_connections(from_pid):
     """Reset every TCP connection of process ``from_pid`` to robot ROBOT's TCPROS port;
     how many there were."""
@@ -65,12 +87,9 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
         server = current_server(rec, ROBOT)
         node = '/server%d' % server
         topic = '/' + (names.server_topic(server, 'data') if profile == 'fleet' else 'data')
-        assert wait_until(lambda: node in hearers(topic), 10.0), hearers(topic)
-        destroyed = destroy_connections(fleet.pid(node))
-        t_cut = time.monotonic()
-        dropped = wait_until(lambda: node not in hearers(topic), 10.0, period=0.1)
-        again = wait_until(lambda: node in hearers(topic), 4 * DEAF_GRACE, period=0.2)
-        t_again = time.monotonic() - t_cut
+        destroyed, dropped, t_again = heard_again(
+            node, topic, lambda: destroy_connections(fleet.pid(node)))
+        again = t_again is not None
         said = wait_until(lambda: rec.log_lines('/robot%d' % ROBOT, 'connecting anew'), 5.0)
         rankings = _cut_rankings(fleet, rec) if profile == 'fleet' else None
         outcomes = rec.outcomes((ROBOT,), TASK_TIMEOUT)[ROBOT]
@@ -97,16 +116,12 @@ def _cut_rankings(fleet, rec):
     """The manager's connections to robot ROBOT reset: whether, and how soon, it hears the
     robot's rankings again (a manager that does not is never told where its tasks go)."""
     topic, node = '/' + names.RANKINGS_TOPIC, '/manager'
-    assert wait_until(lambda: node in hearers(topic), 10.0), hearers(topic)
-    destroyed = destroy_connections(fleet.pid(node))
-    t_cut = time.monotonic()
-    dropped = wait_until(lambda: node not in hearers(topic), 10.0, period=0.1)
-    again = wait_until(lambda: node in hearers(topic), 4 * DEAF_GRACE, period=0.2)
-    t_again = time.monotonic() - t_cut
+    destroyed, dropped, t_again = heard_again(
+        node, topic, lambda: destroy_connections(fleet.pid(node)))
     wait_until(lambda: rec.log_lines('/robot%d' % ROBOT, 'publishing them anew'), 5.0)
     return {'connections reset': destroyed, 'robot saw it drop': dropped,
-            'manager hears the robot again after s': '%.1f' % t_again if again else 'never',
-            'again': t_again,
+            'manager hears the robot again after s': 'never' if t_again is None
+            else '%.1f' % t_again, 'again': t_again if t_again is not None else 1e9,
             'line': (rec.log_lines('/robot%d' % ROBOT, 'publishing them anew') or ['none'])[0]}
 
 
@@ -121,24 +136,16 @@ def test_a_report_listener_that_lost_its_connection_hears_the_robot_again(ros):
     rec.clear()
     topic, me = '/' + names.TASK_REPORT_TOPIC, rospy.get_name()
     with Fleet(ros['log'], profile='fleet', start_delay=12):
-        assert wait_until(lambda: me in hearers(topic), 20.0), hearers(topic)
-        robot_uri = rosgraph.Master(me).lookupNode('/robot%d' % ROBOT)
-        reports = rec.subs[0].impl
-        closed = [c for c in list(reports.connections) if c.endpoint_id == robot_uri]
-        for connection in closed:
-            connection.close()              # closed here: rospy does not connect again
-        t_cut = time.monotonic()
-        dropped = wait_until(lambda: me not in hearers(topic), 10.0, period=0.1)
-        again = wait_until(lambda: me in hearers(topic), 4 * DEAF_GRACE, period=0.2)
-        t_again = time.monotonic() - t_cut
+        closed, dropped, t_again = heard_again(me, topic, lambda: _close_reports(rec), 20.0)
+        again = t_again is not None
         said = wait_until(lambda: rec.log_lines('/robot%d' % ROBOT, 'publishing them anew'),
                           5.0)
         started = wait_until(lambda: rec.of(rec.reports, ROBOT), 30.0)
     show('this node\'s connection to robot %d\'s task reports closed:' % ROBOT, [{
-        'connections closed': len(closed), 'robot saw it drop': dropped,
+        'connections closed': closed, 'robot saw it drop': dropped,
         'heard again after s': '%.1f' % t_again if again else 'never',
         'line': (rec.log_lines('/robot%d' % ROBOT, 'publishing them anew') or ['none'])[0],
         'reports heard': len(rec.of(rec.reports, ROBOT))}])
-    assert len(closed) == 1 and dropped
+    assert closed == 1 and dropped
     assert again and said, 'this node never heard robot %d\'s task reports again' % ROBOT
     assert started, 'robot %d never started its tasks' % ROBOT

@@ -10,11 +10,10 @@ import types
 
 import pytest
 
+from server_select.bench import decision_path
 from server_select.core.load.work_queue import Load
-from server_select.core.robot.robot import Robot
 from server_select.core.peers import balancers
 from server_select.core.robot.health import ServerHealth
-from server_select.core.settings import default
 from test_least_latency import Clock
 
 SERVERS = [1, 2, 3, 4]
@@ -124,31 +123,9 @@ def test_asking_the_health_table_changes_nothing():
 
 
 def fleet_robot():
-    clock = Clock()
-    get = lambda name: {'mode': 'select', 'start_delay': 0.0}.get(  # noqa: E731
-        name, default(name, 'fleet'))
-
-    class Sort(object):
-        kind, newest_wins, run_local, input = 'sort', False, None, 'a test'
-
-        def make(self, task_id, stamp):
-            return types.SimpleNamespace(task_id=task_id), None
-
-        def check(self, result, context):
-            return None
-
-        def ready(self):
-            return True
-    robot = Robot(1, SERVERS, 'select', get, [(Sort(), 2.0)], clock=clock,
-                  random=lambda purpose: random.Random(purpose))
-    robot.start()
-    for step in range(20):
-        clock.now += 0.25
-        robot.probe_round()
-        for server in SERVERS:
-            for seq in range(1, 200):
-                robot.probe_answered(server, seq, 0.001 * server, load())
-        robot.streams[0].act()
+    """A fleet robot of 4 servers answering its probes, its sort tasks sent and answered
+    (the one the decision-path benchmark traces)."""
+    robot, clock, _ = decision_path.fleet_robot()
     return robot, clock
 
 
