@@ -135,12 +135,18 @@ def test_a_report_listener_that_lost_its_connection_hears_the_robot_again(ros):
     rec = ros['rec']
     rec.clear()
     topic, me = '/' + names.TASK_REPORT_TOPIC, rospy.get_name()
-    with Fleet(ros['log'], profile='fleet', start_delay=12):
+    with Fleet(ros['log'], profile='fleet', start_delay=25):
+        # every robot's publisher known first: a master's update of the topic's publishers
+        # has rospy connect to each again, which would mend the cut by itself
+        master = rosgraph.Master(me)
+        robots = set(master.lookupNode('/robot%d' % r) for r in (1, 2))
+        assert wait_until(lambda: robots <= set(
+            c.endpoint_id for c in list(rec.subs[0].impl.connections)), 20.0)
         closed, dropped, t_again = heard_again(me, topic, lambda: _close_reports(rec), 20.0)
         again = t_again is not None
         said = wait_until(lambda: rec.log_lines('/robot%d' % ROBOT, 'publishing them anew'),
                           5.0)
-        started = wait_until(lambda: rec.of(rec.reports, ROBOT), 30.0)
+        started = wait_until(lambda: rec.of(rec.reports, ROBOT), 40.0)
     show('this node\'s connection to robot %d\'s task reports closed:' % ROBOT, [{
         'connections closed': closed, 'robot saw it drop': dropped,
         'heard again after s': '%.1f' % t_again if again else 'never',
