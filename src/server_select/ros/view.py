@@ -35,7 +35,6 @@ class RankingSender(object):
         self.manager = manager
         self._deaf = Lasting(DEAF_GRACE)
         self._alive = Liveness(period=DEAF_GRACE)
-        self.renewed = 0
         self._lock = threading.Lock()
         self._key = None
         self._dirty = False
@@ -69,7 +68,7 @@ class RankingSender(object):
         with self._lock:
             pubs = {None: self.pub}
             if renew(pubs, None, lambda: pubs.__setitem__(None, self._publisher()), [node]):
-                self.pub, self.renewed = pubs[None], self.renewed + 1
+                self.pub = pubs[None]
         rospy.logwarn_throttle(60.0, 'robot %d: %s has not heard our rankings for %g s: '
                                'publishing them anew so that it connects again'
                                % (self.robot_id, node, DEAF_GRACE))
