@@ -86,12 +86,17 @@ def stalled(pub):
             if tcp.stalled(getattr(c, 'socket', None))]
 
 
+def _subscriptions(caller_id):
+    """``{topic: [subscriber nodes]}`` as the master lists them (None: it is away)."""
+    try:
+        return dict(rosgraph.Master(caller_id).getSystemState()[1])
+    except (rosgraph.MasterError, OSError):
+        return None
+
+
 def subscribers(topic, caller_id):
     """The nodes the master lists as subscribers of ``topic`` (none when it is away)."""
-    try:
-        return set(dict(rosgraph.Master(caller_id).getSystemState()[1]).get(topic, ()))
-    except (rosgraph.MasterError, OSError):
-        return set()
+    return set((_subscriptions(caller_id) or {}).get(topic, ()))
 
 
 def unheard(nodes, first, others, caller_id):
@@ -101,11 +106,10 @@ def unheard(nodes, first, others, caller_id):
     missing = [n for n in nodes if n not in hearing(first)]
     if missing or not others:
         return missing
-    try:
-        subscribers = dict(rosgraph.Master(caller_id).getSystemState()[1])
-    except (rosgraph.MasterError, OSError):
+    listed = _subscriptions(caller_id)
+    if listed is None:
         return list(nodes)      # the master is away: nothing is known to be heard
-    return [n for n in nodes if any(n in subscribers.get(p.resolved_name, ())
+    return [n for n in nodes if any(n in listed.get(p.resolved_name, ())
                                     and n not in hearing(p) for p in others)]
 
 

@@ -180,6 +180,14 @@ def renew(pubs, key, make, deaf=()):
     return nodes
 
 
+def made_anew(pub, make, deaf):
+    """:func:`renew` for one publisher ``pub`` (``make()`` makes it again) whose ``deaf``
+    subscribers do not hear it: ``(the publisher now, the nodes it was made anew for)``."""
+    pubs = {None: pub}
+    nodes = renew(pubs, None, lambda: pubs.__setitem__(None, make()), deaf)
+    return pubs[None], nodes
+
+
 def kind_name(kind):
     return getattr(kind, 'kind', kind.task_topic)
 

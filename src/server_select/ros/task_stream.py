@@ -18,7 +18,7 @@ from server_select.core.util.lasting import Lasting
 from server_select.ros.graph import hearing, publisher_of, subscribers, unheard
 from server_select.ros.senders import SenderGate
 from server_select.ros.node import fleet, flush
-from server_select.ros.routing import DEAF_GRACE, BroadcastRoute, renew
+from server_select.ros.routing import DEAF_GRACE, BroadcastRoute, made_anew
 from server_select.ros.seal import SealedPublisher
 
 
@@ -109,10 +109,8 @@ class TaskStream(object):
             return
         listed = subscribers(self.report_pub.resolved_name, rospy.get_name())
         missing = [n for n in missing if n in listed]
-        pubs = {None: self.report_pub}
-        remake = lambda: pubs.__setitem__(None, self._report_publisher())  # noqa: E731
-        if missing and renew(pubs, None, remake, missing):
-            self.report_pub = pubs[None]
+        if missing:
+            self.report_pub, _ = made_anew(self.report_pub, self._report_publisher, missing)
             rospy.logwarn_throttle(60.0, 'robot %d: %s subscribe to our task reports and have '
                                    'not heard them for %g s: publishing them anew'
                                    % (self.robot_id, ', '.join(missing), DEAF_GRACE))

@@ -10,7 +10,7 @@ from server_select.core.util.lasting import Lasting
 from server_select.msg import RobotRanking
 from server_select.ros.graph import Liveness, hearing
 from server_select.ros.node import fleet
-from server_select.ros.routing import DEAF_GRACE, renew
+from server_select.ros.routing import DEAF_GRACE, made_anew
 from server_select.ros.seal import SealedPublisher
 
 
@@ -66,9 +66,7 @@ class RankingSender(object):
         if not self._deaf.held(node, deaf) or not self._alive(node):
             return
         with self._lock:
-            pubs = {None: self.pub}
-            if renew(pubs, None, lambda: pubs.__setitem__(None, self._publisher()), [node]):
-                self.pub = pubs[None]
+            self.pub, _ = made_anew(self.pub, self._publisher, [node])
         rospy.logwarn_throttle(60.0, 'robot %d: %s has not heard our rankings for %g s: '
                                'publishing them anew so that it connects again'
                                % (self.robot_id, node, DEAF_GRACE))
