@@ -1,5 +1,6 @@
 """A server fed inputs made to exhaust it, each from this process: a sort task of 1e7
-values (40 MB), 4096 x 4096 frames (50 MB each), PNGs of 0.9 MB that inflate to 30000 x
+values (40 MB), sort tasks of 100,000 values (the most one may hold) at 68 a second, 4096 x
+4096 frames (50 MB each), PNGs of 0.9 MB that inflate to 30000 x
 30000 pixels, a connection header claiming 4 GB followed by 40 MB of junk, probes naming
 500,000 made-up task kinds.
 
@@ -142,6 +143,34 @@ def test_oversized_sort_tasks_are_refused_unread(server):
     assert wait_until(lambda: server.lines('refused a message of 40000'), 5.0)
     line = server.lines('refused a message of 40000')[0]
     assert rospy.get_name() in line and 'limit of 404096' in line, line
+
+
+def test_a_flood_of_the_largest_sort_tasks_holds_no_memory(server):
+    """Sort tasks of 100,000 values (the most a sort task may hold), 68 a second for 5 s:
+    what the server cannot do in time is answered busy, it stays under 150 MiB all the
+    while, and once it has worked off its queue its probes are as fast as before. (Before:
+    rospy read each task connection 16 MiB at a time, and the server grew from 39 to
+    200-390 MiB.)"""
+    pid, values = server.proc.pid, np.arange(100000, 0, -1, dtype=np.int32)
+    before = statistics.median(server.probe_times())
+    sizes, sent, end = [rss(pid)], 0, time.monotonic() + 5.0
+    while time.monotonic() < end:
+        sent += 1
+        server.sort.publish(numpy_msg(SortTask)(robot_id=66, task_id=1000 + sent,
+                                                server_id=SERVER, data=values, budget=2.0))
+        sizes.append(rss(pid))
+        time.sleep(1.0 / 68)
+    drained = wait_until(lambda: max(sizes.append(rss(pid)) or 0, statistics.median(
+        server.probe_times(10))) < before + PROBE_SLACK, 30.0, period=0.5)
+    figures = {'sent': '%d sort tasks of 100,000 values in 5 s' % sent,
+               'RSS MiB before, most, after': (sizes[0] >> 20, max(sizes) >> 20,
+                                               rss(pid) >> 20),
+               'answered busy': len([r for r in server.results if not r.ok]),
+               'probes as fast as before once drained': drained}
+    show('server %d flooded:' % SERVER, [figures])
+    assert max(sizes) < MAX_RSS, figures
+    assert drained, figures
+    assert server.answers_a_task(7), 'no good task answered after it'
 
 
 def test_oversized_frames_are_refused_unread(server):

@@ -129,8 +129,11 @@ class ServerEndpoint(object):
         topics = [(fleet(kind.task_topic), False)]
         if self.direct is not None:
             topics.append((fleet(names.server_topic(self.server_id, kind.task_topic)), True))
+        # rospy's own read size (64 KiB): with reads of 16 MiB, as image subscribers are
+        # often given, a flood of large tasks grew a server's memory several-fold, for no
+        # throughput gained
         self.subs = [rospy.Subscriber(topic, kind.task_type, self.on_task, callback_args=direct,
-                                      queue_size=queue, tcp_nodelay=True, buff_size=1 << 24)
+                                      queue_size=queue, tcp_nodelay=True)
                      for topic, direct in topics]
         for sub in self.subs:
             bounded_read.limit(sub.resolved_name, kind.max_bytes())
