@@ -10,7 +10,8 @@ import xmlrpc.server
 import pytest
 import rospy
 
-from server_select.ros.probe_client import ProbeTimeout, lookup_service
+from server_select.ros.probe_client import ProbeTimeout, TimedServiceProxy, lookup_service
+from server_select.srv import LatencyProbe, LatencyProbeRequest
 
 
 @pytest.fixture
@@ -52,3 +53,30 @@ def test_the_lookup_returns_what_the_master_lists_and_refuses_what_it_does_not(m
     finally:
         server.shutdown()
         server.server_close()
+
+
+def test_a_pinned_probe_the_master_lists_no_provider_for_is_at_its_pinned_address(
+        master_uri):
+    """A keyed robot probes the address a server's sealed announcement names, and checks
+    the answer's seal against it. After another node registered the probe service and
+    left, the master lists no provider: the proxy still connects to, and names, the
+    pinned address. (Before: it connected there but kept no address, and every answer
+    of the server was refused as "wrong signature ... at None".)"""
+    def lookup(caller_id, name):
+        return -1, 'no provider', ''
+    master = xmlrpc.server.SimpleXMLRPCServer(('127.0.0.1', 0), logRequests=False)
+    master.register_function(lookup, 'lookupService')
+    threading.Thread(target=master.serve_forever, daemon=True).start()
+    with socket.socket() as server:
+        server.bind(('127.0.0.1', 0))
+        server.listen(4)        # connections are taken (by the kernel); nothing answers
+        pinned = 'rosrpc://127.0.0.1:%d' % server.getsockname()[1]
+        try:
+            master_uri(master.server_address[1])
+            proxy = TimedServiceProxy('/latency_S1', LatencyProbe, pinned=lambda: pinned)
+            with pytest.raises(rospy.ServiceException):   # nothing answers the handshake
+                proxy.call_within(LatencyProbeRequest(robot_id=1, seq=1), 0.5)
+            assert proxy.uri == pinned
+        finally:
+            master.shutdown()
+            master.server_close()

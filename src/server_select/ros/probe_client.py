@@ -203,10 +203,10 @@ class TimedServiceProxy(rospy.ServiceProxy):
         pinned = self.pinned() if self.pinned is not None else None
         try:
             uri = self.uri = lookup_service(self.resolved_name, timeout)
-        except rospy.ServiceException:
+        except rospy.ServiceException:     # no provider listed (one took it and left)
             if pinned is None:
                 raise
-            uri = pinned
+            uri = self.uri = pinned    # the address an answer's seal is checked against
         if pinned is not None and uri != pinned:
             if self.on_moved is not None:
                 self.on_moved(uri, pinned)
