@@ -14,17 +14,25 @@ server 3 and failed task reports of robot 2, 20 a second. ``flood`` (a robot's k
 9, admitted by a sealed probe of each server every second, sends 100,000-value sort tasks
 to servers 1-3 in turn, 68 a second, ignoring every answer. ``spoof``: sort tasks of robot 1
 to servers 1-3, 20 a second each, over connections whose header claims ``callerid
-/robot1`` (rospy lets a publisher override its header's fields).
+/robot1`` (rospy lets a publisher override its header's fields). ``callerids``: 1,300
+connections to servers 1-3 in turn, each with a header claiming a new callerid of 900 KB:
+every other one names the server's probe service and sends a probe of 100 KB (its limit is
+64 KiB), the others a service the server does not have; each until refused.
+``announcement``: an unsigned ServerAnnouncement of 150 MB, once a second.
 
 Prints what it sent as one line of JSON.
 """
 
 import json
 import random
+import socket
+import struct
 import sys
 import time
+import xmlrpc.client
 
 import numpy as np
+import rosgraph
 import rospy
 from rospy.numpy_msg import numpy_msg
 
@@ -176,8 +184,66 @@ def flood(seconds, sealer):
     return {'sorts of 100,000 values': sent}
 
 
+def _tcpros_header(fields):
+    body = b''.join(struct.pack('<I', len(field)) + field for field in
+                    (('%s=' % key).encode() + value for key, value in fields))
+    return struct.pack('<I', len(body)) + body
+
+
+def callerids(_seconds, _sealer, count=1300, callerid_bytes=900 * 1024):
+    master = rosgraph.Master(rospy.get_name())
+    addresses = []
+    for server in SERVERS:
+        # the server's TCPROS port, from the node itself: the master's listing of its probe
+        # service may be gone (earlier attackers took it and left)
+        node = xmlrpc.client.ServerProxy(master.lookupNode('/server%d' % server))
+        _, _, (_, host, port) = node.requestTopic(
+            rospy.get_name(), rospy.resolve_name(names.ANNOUNCE_TOPIC), [['TCPROS']])
+        addresses.append((server, (host, port)))
+    padding = b'x' * callerid_bytes
+    probe = struct.pack('<I', 100 << 10) + b'\0' * (100 << 10)
+    sent, refused = 0, {b'more than its limit': 0, b'is not a provider': 0}
+    for index in range(count):
+        server, address = addresses[index % len(addresses)]
+        service = rospy.resolve_name(names.probe_service(server)) if index % 2 else '/not_here'
+        header = _tcpros_header([
+            ('callerid', b'/made_up_%d_' % index + padding), ('service', service.encode()),
+            ('md5sum', LatencyProbe._md5sum.encode()), ('persistent', b'1')])
+        try:
+            with socket.create_connection(address, 5.0) as sock:
+                sock.sendall(header)
+                sock.sendall(probe)
+                sock.settimeout(5.0)
+                answer = b''
+                while not any(why in answer for why in refused):
+                    chunk = sock.recv(65536)
+                    if not chunk:
+                        break
+                    answer += chunk
+            sent += 1
+            for why in refused:
+                refused[why] += why in answer
+        except OSError:                        # reset, or no answer in 5 s
+            pass
+    return {'connections with a 900 KB callerid': sent,
+            'refused: probe over its limit': refused[b'more than its limit'],
+            'refused: no such service': refused[b'is not a provider']}
+
+
+def announcement(seconds, _sealer, size=150 << 20):
+    pub = rospy.Publisher(names.ANNOUNCE_TOPIC, ServerAnnouncement, queue_size=1)
+    time.sleep(1.0)
+    big = ServerAnnouncement(server_id=4, lease=LEASE_PERIODS * 2.0, probe_uri='x' * size)
+    sent, end = 0, time.monotonic() + seconds
+    while time.monotonic() < end:
+        pub.publish(big)
+        sent += 1
+        time.sleep(1.0)
+    return {'unsigned announcements of 150 MB': sent}
+
+
 MODES = dict((f.__name__, f) for f in (tasks, rates, results, announce, namespace, flood,
-                                       spoof))
+                                       spoof, callerids, announcement))
 ROLES = {'announce': 'server', 'namespace': 'robot', 'flood': 'robot'}
 
 

@@ -4,6 +4,7 @@ left running without the robots, the FATAL line naming the parameter in its outp
 import subprocess
 import time
 
+from server_select.core.trust.keys import make_key
 from server_select.core.util.procs import stop_group, wait_until
 
 from support.fleet import NODES, Fleet
@@ -65,3 +66,24 @@ def test_the_launch_command_refuses_a_misspelled_argument_before_starting(ros, t
     assert 'launch argument duraton:= is declared by no launch file of this launch; did ' \
         'you mean duration:=?' in text, text
     assert not any(Fleet.pid(n) for n in NODES)
+
+
+def test_a_fleet_key_cut_short_ends_the_launch_with_the_key_named(ros, tmp_path):
+    """A fleet key of 40 hex characters (cut when copied): the first node to read it ends
+    the launch with one FATAL line naming the file and its length. (Before: the nodes
+    started, and every peer then logged "wrong signature".)"""
+    key = str(tmp_path / 'fleet.key')
+    make_key(key)
+    with open(key) as stream:
+        cut = stream.read().strip()[:40]
+    with open(key, 'w') as stream:
+        stream.write(cut + '\n')
+    code, text = launched(['demo.launch', 'profile:=fleet', 'fleet_key:=%s' % key,
+                           'output:=screen'], tmp_path, 'short_key')
+    fatal = [line for line in text.splitlines() if 'has 20 bytes (40 hex characters), not 32'
+             in line and key in line]
+    print('launch demo.launch with a fleet key of 40 hex characters: exit status %d, %d '
+          'lines naming it, e.g. %s' % (code, len(fatal), fatal[:1]))
+    assert code == 2 and fatal, text[-3000:]
+    assert not [line for line in text.splitlines() if 'wrong signature' in line]
+    assert wait_until(lambda: not any(Fleet.pid(n) for n in NODES), 10.0)

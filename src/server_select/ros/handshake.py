@@ -8,7 +8,10 @@ new connection to a thread of its own, which has :data:`DEADLINE` s to read the 
 (bounded by :mod:`~server_select.ros.bounded_read`); one that does not finish in time is
 closed, with a throttled line naming the peer. At most :data:`MOST_AT_ONCE` handshakes
 are under way at once; a connection beyond them is closed at once (it may try again).
-After the header the connection is rospy's, as before.
+A header rospy refuses (no such topic or service here, a wrong type) is answered with
+rospy's error and closed with a throttled line, the peer's words cut: rospy's own line
+echoed the whole header, unthrottled (a 900 KB callerid made each line 900 KB). After the
+header the connection is rospy's, as before.
 """
 
 import io
@@ -28,7 +31,6 @@ MOST_AT_ONCE = 64        # handshakes under way at once
 
 _SLOTS = threading.BoundedSemaphore(MOST_AT_ONCE)
 _THROTTLE = Throttle(5.0)
-_READ = threading.local()       # the header this thread read, for rospy's callback
 _ORIGINAL = {}
 
 
@@ -37,10 +39,8 @@ def install():
     if _ORIGINAL:
         return
     bounded_read.install()       # the header read below is the bounded one
-    _ORIGINAL['callback'] = tcpros_base.TCPROSServer._tcp_server_callback
     _ORIGINAL['read_header'] = tcpros_base.read_ros_handshake_header
     tcpros_base.TCPROSServer._tcp_server_callback = _accepted
-    tcpros_base.read_ros_handshake_header = _header_read
 
 
 def _accepted(server, sock, client_addr):
@@ -72,20 +72,30 @@ def _handshake(server, sock, client_addr):
                 rospy.logwarn('Inbound TCP/IP connection failed: %s', error)
             return
         sock.settimeout(None)
-        _READ.header = header     # what rospy's callback reads first, here already read
-        _ORIGINAL['callback'](server, sock, client_addr)
+        _connect(server, sock, client_addr, header)
     finally:
-        _READ.header = None
         _SLOTS.release()
 
 
-def _header_read(sock, buffer, buff_size):
-    """rospy's header read: the header this thread's handshake read, else a read."""
-    header = getattr(_READ, 'header', None)
-    if header is not None:
-        _READ.header = None
-        return header
-    return _ORIGINAL['read_header'](sock, buffer, buff_size)
+def _connect(server, sock, client_addr, header):
+    """rospy's callback after the header: the connection to its topic or service, or
+    refused with rospy's error (a throttled line, the peer's words cut)."""
+    try:
+        if 'topic' in header:
+            error = server.topic_connection_handler(sock, client_addr, header)
+        elif 'service' in header:
+            error = server.service_connection_handler(sock, client_addr, header)
+        else:
+            error = 'no topic or service name detected'
+        if error:
+            stopping = rospy.core.is_shutdown_requested()
+            tcpros_base.write_ros_handshake_header(
+                sock, {'error': 'node shutting down' if stopping else error})
+            _close(sock, client_addr, None if stopping else '%s\'s header: %s' % (
+                peer(header.get('callerid', 'a node without a callerid')), error))
+    except Exception as error:       # rospy's handlers raise what the peer's header caused
+        _close(sock, client_addr, None if rospy.core.is_shutdown_requested() else
+               'its connection failed: %s' % error)
 
 
 def _close(sock, client_addr=None, why=None):
