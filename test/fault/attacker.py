@@ -12,7 +12,9 @@ leaves. ``namespace`` (a
 robot's key; run in ``/robot2``, as ``/robot2/attacker``): rankings of robot 2 naming
 server 3 and failed task reports of robot 2, 20 a second. ``flood`` (a robot's key): robot
 9, admitted by a sealed probe of each server every second, sends 100,000-value sort tasks
-to servers 1-3 in turn, 68 a second, ignoring every answer. ``spoof``: sort tasks of robot 1
+to servers 1-3 in turn, 68 a second, ignoring every answer. ``lapsed`` (a robot's key):
+robot 9 bound at server 8 by one sealed probe, silent until its lease has ended, then sort
+tasks there, 20 a second. ``spoof``: sort tasks of robot 1
 to servers 1-3, 20 a second each, over connections whose header claims ``callerid
 /robot1`` (rospy lets a publisher override its header's fields). ``callerids``: 1,300
 connections to servers 1-3 in turn, each with a header claiming a new callerid of 900 KB:
@@ -39,6 +41,7 @@ from rospy.numpy_msg import numpy_msg
 from server_select.core.config import names
 from server_select.core.fleet.leases import LEASE_PERIODS
 from server_select.core.trust.seal import Sealer, load_keys
+from server_select.ros.robot_admission import ROBOT_LEASE
 from server_select.msg import RobotRanking, ServerAnnouncement, SortResult, SortTask, TaskReport
 from server_select.ros.seal import sealed
 from server_select.srv import LatencyProbe, LatencyProbeRequest, LatencyProbeResponse
@@ -184,6 +187,24 @@ def flood(seconds, sealer):
     return {'sorts of 100,000 values': sent}
 
 
+def lapsed(seconds, sealer, server=8):
+    proxy = rospy.ServiceProxy(names.probe_service(server), LatencyProbe)
+    request = LatencyProbeRequest(robot_id=FLOODER, seq=1, stamp=rospy.Time.now(),
+                                  nonce=random.Random().getrandbits(64),
+                                  node_uri=rospy.core.get_node_uri())
+    proxy(sealed(request, sealer, rospy.resolve_name(names.probe_service(server))))
+    pub = rospy.Publisher(names.server_topic(server, names.SORT_TASK_TOPIC),
+                          numpy_msg(SortTask), queue_size=100)
+    time.sleep(ROBOT_LEASE + 1.0)        # no sealed probe since: the lease has ended
+    sent, end = 0, time.monotonic() + seconds
+    while time.monotonic() < end:
+        sent += 1
+        pub.publish(numpy_msg(SortTask)(robot_id=FLOODER, task_id=sent, server_id=server,
+                                        data=np.arange(1000, 0, -1, dtype=np.int32)))
+        time.sleep(0.05)
+    return {'tasks after the lease ended': sent}
+
+
 def _tcpros_header(fields):
     body = b''.join(struct.pack('<I', len(field)) + field for field in
                     (('%s=' % key).encode() + value for key, value in fields))
@@ -243,8 +264,8 @@ def announcement(seconds, _sealer, size=150 << 20):
 
 
 MODES = dict((f.__name__, f) for f in (tasks, rates, results, announce, namespace, flood,
-                                       spoof, callerids, announcement))
-ROLES = {'announce': 'server', 'namespace': 'robot', 'flood': 'robot'}
+                                       spoof, callerids, announcement, lapsed))
+ROLES = {'announce': 'server', 'namespace': 'robot', 'flood': 'robot', 'lapsed': 'robot'}
 
 
 def main():

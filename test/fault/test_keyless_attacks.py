@@ -291,3 +291,38 @@ def test_a_robot_whose_clock_is_stepped_by_ntp_is_answered_again_within_10_s(
     finally:
         for proc in procs.values():
             stop_group(proc)
+
+
+def test_a_robot_whose_lease_ended_has_its_tasks_dropped(ros, keyed_fleet, tmp_path):
+    """Robot 9, with a robot's key, is bound at server 8 by one sealed probe, is silent
+    past its lease (10 s), then sends sort tasks there: each dropped, a line says why.
+    Server 8 serves a fleet namespace of its own, where no other robot probes it: another
+    robot's sealed probe ends every lease that is over. (Before: a lease was checked for
+    its end only there, so a robot that stopped probing a server no one else probed kept
+    its binding, and had its tasks taken, for as long as it liked.)"""
+    log = str(tmp_path / 'server8.log')
+    key = str(tmp_path / 'robot.key')
+    make_role_key(keyed_fleet, 'robot', key)
+    with open(log, 'w') as stream:
+        server = subprocess.Popen(
+            ['rosrun', 'server_select', 'server', '_server_id:=8', '__name:=server8',
+             '_fleet_ns:=/lone', '_profile:=fleet', '_fleet_key:=%s' % keyed_fleet,
+             '_require_key:=true'], stdout=stream, stderr=subprocess.STDOUT,
+            start_new_session=True, env=dict(os.environ, PYTHONUNBUFFERED='1'))
+    try:
+        rospy.wait_for_service('/lone/latency_S8', 30.0)
+        attacker = subprocess.run(
+            [sys.executable, os.path.join(HERE, 'attacker.py'), 'lapsed', '2', key,
+             '__ns:=/lone', '__name:=robot9'], stdout=subprocess.PIPE,
+            universal_newlines=True, timeout=60)
+        sent = json.loads(attacker.stdout.strip().splitlines()[-1])
+
+        def dropped():
+            with open(log) as stream:
+                return [line.strip() for line in stream if 'dropped a task of robot 9' in line]
+        assert wait_until(dropped, 5.0), open(log).read()[-2000:]
+        show('robot 9 silent past its lease at server 8:', [{
+            'sent': sent, 'lines': len(dropped()), 'e.g.': dropped()[0][:200]}])
+        assert 'no signed probe of robot 9' in dropped()[0], dropped()
+    finally:
+        stop_group(server)
