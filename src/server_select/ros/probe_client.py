@@ -203,7 +203,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
         pinned = self.pinned() if self.pinned is not None else None
         try:
             uri = self.uri = lookup_service(self.resolved_name, timeout)
-        except rospy.ServiceException:     # no provider listed (one took it and left)
+        except rospy.ServiceException:     # not listed (taken by another node and left)
             if pinned is None:
                 raise
             uri = self.uri = pinned    # the address an answer's seal is checked against
