@@ -35,6 +35,7 @@ import xmlrpc.client
 
 import numpy as np
 import rosgraph
+from rosgraph.network import encode_ros_handshake_header
 import rospy
 from rospy.numpy_msg import numpy_msg
 
@@ -205,12 +206,6 @@ def lapsed(seconds, sealer, server=8):
     return {'tasks after the lease ended': sent}
 
 
-def _tcpros_header(fields):
-    body = b''.join(struct.pack('<I', len(field)) + field for field in
-                    (('%s=' % key).encode() + value for key, value in fields))
-    return struct.pack('<I', len(body)) + body
-
-
 def callerids(_seconds, _sealer, count=1300, callerid_bytes=900 * 1024):
     master = rosgraph.Master(rospy.get_name())
     addresses = []
@@ -221,15 +216,15 @@ def callerids(_seconds, _sealer, count=1300, callerid_bytes=900 * 1024):
         _, _, (_, host, port) = node.requestTopic(
             rospy.get_name(), rospy.resolve_name(names.ANNOUNCE_TOPIC), [['TCPROS']])
         addresses.append((server, (host, port)))
-    padding = b'x' * callerid_bytes
+    padding = 'x' * callerid_bytes
     probe = struct.pack('<I', 100 << 10) + b'\0' * (100 << 10)
     sent, refused = 0, {b'more than its limit': 0, b'is not a provider': 0}
     for index in range(count):
         server, address = addresses[index % len(addresses)]
         service = rospy.resolve_name(names.probe_service(server)) if index % 2 else '/not_here'
-        header = _tcpros_header([
-            ('callerid', b'/made_up_%d_' % index + padding), ('service', service.encode()),
-            ('md5sum', LatencyProbe._md5sum.encode()), ('persistent', b'1')])
+        header = encode_ros_handshake_header({
+            'callerid': '/made_up_%d_%s' % (index, padding), 'service': service,
+            'md5sum': LatencyProbe._md5sum, 'persistent': '1'})
         try:
             with socket.create_connection(address, 5.0) as sock:
                 sock.sendall(header)
