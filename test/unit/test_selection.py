@@ -202,3 +202,31 @@ def test_asking_whether_a_per_task_rule_is_ready_or_where_it_heads_decides_nothi
     for _ in range(3):
         assert s.ready({2}) and s.heading() == first and s.candidates('sort')[0] == first
     assert len(rule.sends['sort']) == 1
+
+
+def test_whether_the_ranking_changed_is_worked_out_only_for_a_watcher():
+    """A store nobody watches (a simulated robot) records its samples all the same: the
+    view is the watched one's, and only the watched store says when it may have changed."""
+    quiet, _ = select()
+    watched, _ = select()
+    heard = []
+    watched.on_change = lambda: heard.append(1)
+    for server, rtt in ((1, 0.009), (2, 0.004), (3, 0.007), (2, 0.005), (1, 0.001)):
+        assert quiet.on_sample(server, True, rtt) is None
+        assert watched.on_sample(server, True, rtt) in (True, False)
+    assert quiet.view() == watched.view() and quiet.view().ranking == [2, 1, 3]
+    assert len(heard) == 5        # (no server selected yet: every sample may change it)
+
+
+def test_a_rule_with_a_view_of_its_own_keeps_no_paper_store():
+    """The fleet's rule ranks by its own estimates: no manager's store is built or fed for
+    it, and its view, samples and servers leaving work without one."""
+    s, clock = select(policy=Policy('least_latency'))
+    assert s.rankings is None and s.window is None
+    for server in (1, 2, 3):
+        assert s.on_sample(server, True, 0.001 * server) is True
+    s.remove_server(3)
+    s.viewed(1)
+    assert 3 not in s.view().ranking and s.candidates()
+    p, _ = select(policy=Policy('prequal'))
+    assert p.rankings is not None       # a peer's view is the manager's ranking of it

@@ -74,11 +74,15 @@ class Streams(object):
 
     def __init__(self, seed):
         self.seed = seed
-        self._streams = {}
+        self._streams = {}      # 'a/b' -> its stream
+        self._named = {}        # ('a', 'b') -> the same
 
     def rng(self, *name):
-        key = '/'.join(str(part) for part in name)
-        stream = self._streams.get(key)
+        stream = self._named.get(name)      # (asked per message: no string built then)
         if stream is None:
-            stream = self._streams[key] = random.Random('%s/%s' % (self.seed, key))
+            key = '/'.join(str(part) for part in name)
+            stream = self._streams.get(key)
+            if stream is None:
+                stream = self._streams[key] = random.Random('%s/%s' % (self.seed, key))
+            self._named[name] = stream
         return stream

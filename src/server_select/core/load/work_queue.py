@@ -86,6 +86,8 @@ class WorkQueue(object):
     def _backlog(self, now, excluding=None):
         """Seconds until a worker is free for one more task (call with the lock held),
         leaving out the tasks of owner ``excluding`` (None: counting every task)."""
+        if len(self._queue) + len(self._running) < self.workers:
+            return 0.0           # a worker is free, whoever's tasks are left out
         queued = [job for job in self._queue.jobs()
                   if excluding is None or job.owner != excluding]
         running = [job for job in self._running if excluding is None or job.owner != excluding]

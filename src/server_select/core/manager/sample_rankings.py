@@ -85,18 +85,18 @@ class SampleRankings(Members):
         self._last_good = {}                      # (robot, server) -> its newest good sample
         self._due = []      # heap: (when that sample leaves the window, robot, server)
 
-    def add(self, robot, server, now, ok, rtt, probe=True, wait=None):
+    def add(self, robot, server, now, ok, rtt, probe=True, wait=None, detect=True):
         """Record a sample, a probe's or (``probe`` False) an answered task's (ValueError
         for an impossible round trip; ``wait``: the part of ``rtt`` that is the server's
         wait, from a load-aware robot); True when ``robot``'s flag may change because of
-        it."""
+        it (``detect`` False: None, not worked out, for a store nobody watches)."""
         if wait is not None:
             self._aware.add(robot)
         if self.cost is not None:
             rtt = self.cost.enter((robot, server), now, ok, rtt, probe)
             if ok and not probe and robot in self._aware:   # a task's queueing and work
                 wait = self.cost.above_probes((robot, server), rtt)
-        had_mean, stats = self.window.add(robot, server, now, ok, rtt, wait)
+        had_mean, stats = self.window.add(robot, server, now, ok, rtt, wait, detect)
         with self._lock:
             newest = self._last_good.get((robot, server)) if ok else None
             if ok and newest is None:       # (again) in the window: due when this leaves
@@ -110,6 +110,8 @@ class SampleRankings(Members):
             if new:
                 heard.add(server)
             selected = self._selected.get(robot, NO_SERVER)
+        if not detect:
+            return None
         if new or server == selected or had_mean != (stats.mean is not None) or \
                 (self.fail_fast and not ok):
             return True

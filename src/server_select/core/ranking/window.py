@@ -175,14 +175,14 @@ class LatencyWindow(object):
         self._lock = threading.Lock()
         self._pairs = {}
 
-    def add(self, robot_id, server_id, now, ok, rtt, wait=None):
+    def add(self, robot_id, server_id, now, ok, rtt, wait=None, stats=True):
         """Record one sample; failed samples carry no latency. ``wait``: the part of
         ``rtt`` that is the server's wait (a load-aware sample's; None: not said). A
         successful sample whose ``rtt`` is not :data:`RTT_RANGE` raises ValueError (and is
         not recorded).
         Returns whether the pair had a value before, and its :class:`PairStats` after
         (with plain standard errors, which cost nothing: :meth:`stats` gives the robust
-        ones)."""
+        ones; ``stats`` False: None, for a caller that only records)."""
         check_sample(ok, rtt)
         with self._lock:
             pair = self._pairs.get((robot_id, server_id))
@@ -193,7 +193,7 @@ class LatencyWindow(object):
             pair.append(Sample(now, bool(ok), float(rtt) if ok else float('nan'),
                                min(float(wait), float(rtt)) if ok and wait is not None
                                else None))
-            return had_value, pair.stats(self.statistic)
+            return had_value, pair.stats(self.statistic) if stats else None
 
     def stats(self, robot_id, server_id, now, errors=True):
         """The pair's :class:`PairStats` over the window now (``errors`` False: plain

@@ -1,12 +1,11 @@
 """Which servers a robot's next task may go to, best first (no rospy).
 
-``select`` follows the manager's ranking while its flags are fresh, and ranks the servers
-itself from its own probe samples, with the manager's policy, when they are stale or name
-no server; with a per-task rule (:mod:`~server_select.core.peers.balancers`) it asks
-that rule when it sends a task and the flags are for the record only; ``fixed`` always
-names one server (the paper's baseline); ``local`` keeps the work in the robot. In
-``select`` mode servers the robot's :class:`~server_select.core.robot.health.ServerHealth`
-has ejected are skipped (while one is usable: :meth:`ServerHealth.order`).
+``select`` follows the manager's ranking while its flags are fresh, else ranks the servers
+by its own probe samples with the manager's policy; with a per-task rule
+(:mod:`~server_select.core.peers.balancers`) it asks that rule at each send, the flags for
+the record only; ``fixed`` names one server (the paper's baseline); ``local`` works in the
+robot. Servers its :class:`~server_select.core.robot.health.ServerHealth` ejected are
+skipped while one is usable (:meth:`ServerHealth.order`).
 """
 
 import threading
@@ -17,7 +16,7 @@ from server_select.core.ranking.policy import Chooser, Policy
 from server_select.core.ranking.rank import NO_SERVER, rank_servers
 from server_select.core.manager.sample_rankings import SampleRankings
 from server_select.core.config.names import LOCAL
-from server_select.core.config.params import MODES  # noqa: F401 (re-exported)
+from server_select.core.config.params import MODES
 from server_select.core.ranking.window import LatencyWindow, check_sample
 
 
@@ -35,26 +34,27 @@ class Selection(object):
         self.health = health
         policy = policy or Policy()
         self.manager_timeout = manager_timeout
-        # the robot's samples, kept as the manager keeps every robot's (its own view)
-        self.rankings = SampleRankings(window, [robot_id], (), statistic or policy.statistic(),
-                                       fail_fast, policy.robust,
-                                       task_memory if passive else 0.0, keep, horizon)
-        self.window = self.rankings.window
-        # probes only (what a task sample is compared with): a window of its own only
-        self.passive = passive     # when task samples share the main one
-        self.probes = LatencyWindow(window, keep=keep, horizon=horizon) if passive \
-            else self.window
-        self._chooser = Chooser(policy)
         # a rule asked per task, drawing from ``rng`` (None: the ranking decides);
         # ``rule_args``: its own (the league's ablations)
         rule_args = dict(rule_args or {}, **({'window': window}
                                              if policy.kind == 'least_latency' else {}))
         self.balancer = balancers.make(policy.kind, clock=clock, rng=rng, **rule_args) \
             if policy.per_task else None
+        # its samples as the manager keeps every robot's (its view; None: its rule's own)
+        ranked = self.balancer is None or not self.balancer.own_view
+        self.rankings = SampleRankings(window, [robot_id], (), statistic or policy.statistic(),
+                                       fail_fast, policy.robust, task_memory if passive else
+                                       0.0, keep, horizon) if ranked else None
+        self.window = self.rankings.window if ranked else None
+        # probes only (what a task sample is compared with): a window of its own only
+        self.passive = passive     # when task samples share the main one
+        self.probes = LatencyWindow(window, keep=keep, horizon=horizon) if passive \
+            else self.window
+        self._chooser = Chooser(policy)
         self.on_change = None      # on_change(): a sample may have changed view()
         self._clock = clock
         self._lock = threading.Lock()
-        self._flag = None          # (receive time, selected, ranking) of the last good flag
+        self._flag = None          # (receive time, selected, ranking) of the last good one
         self._handed_over = None   # the flag whose selection the own decisions started from
         self._task_servers = None  # where tasks may go (grouped: the group's), None: any
 
@@ -75,8 +75,7 @@ class Selection(object):
     def add_server(self, server):
         """A server joined the fleet: a candidate from now on (once it has answered)."""
         with self._lock:
-            if server not in self.servers:
-                self.servers.append(server)
+            self.servers += [server] if server not in self.servers else []
         if self.health is not None:
             self.health.add(server)
 
@@ -89,23 +88,25 @@ class Selection(object):
     def remove_server(self, server):
         """A server left the fleet: never a candidate again, whatever a flag says."""
         with self._lock:
-            if server in self.servers:
-                self.servers.remove(server)
+            self.servers = [s for s in self.servers if s != server]
         if self.health is not None:
             self.health.remove(server)
-        self.rankings.forget_server(server)
+        if self.rankings is not None:
+            self.rankings.forget_server(server)
 
     def on_sample(self, server, ok, rtt, probe=True, wait=None):
         """One of the robot's own samples: a probe, or (``probe`` False) an answered task
         with ``~passive`` (ValueError for an impossible round trip); ``wait``: the part of a
-        load-aware probe's ``rtt`` that is the server's wait. True when the robot's own
-        ranking may have changed (:meth:`SampleRankings.add`; a rule's own view: always)."""
+        load-aware probe's ``rtt`` that is the server's wait. True when the robot's ranking
+        may have changed (:meth:`SampleRankings.add`; a rule's own view: always; None:
+        nobody watches it, :attr:`on_change` None)."""
         now = self._clock()
-        if self.balancer is not None and self.balancer.own_view:
+        if self.rankings is None:        # a rule with a view of its own
             check_sample(ok, rtt)
             changed = True
         else:
-            changed = self.rankings.add(self.robot_id, server, now, ok, rtt, probe, wait)
+            changed = self.rankings.add(self.robot_id, server, now, ok, rtt, probe, wait,
+                                        detect=self.on_change is not None)
         if probe and self.passive:
             self.probes.add(self.robot_id, server, now, ok, rtt)
         if changed and self.on_change is not None:
@@ -117,7 +118,7 @@ class Selection(object):
         a rule that keeps them, else as the manager ranks a robot from its samples (what
         ``~sample_stream view`` sends it); choosing per task, ``selected`` is where its
         tasks go now (when ranked), and the servers it ejected are among those left out."""
-        if self.balancer is not None and self.balancer.own_view:
+        if self.rankings is None:
             ranking = self.balancer.view(self._usable())
             return ranking._replace(excluded=sorted(set(self._servers()) - set(ranking.ranking)))
         ranking = self.rankings.rank(self.robot_id, self._clock())
@@ -140,7 +141,8 @@ class Selection(object):
     def viewed(self, pick):
         """The robot's view was sent picking ``pick``: from now on the samples of ``pick``,
         and those that beat it, are the ones that may change the view."""
-        self.rankings.selected(self.robot_id, pick)
+        if self.rankings is not None:
+            self.rankings.selected(self.robot_id, pick)
 
     def flag_selects(self):
         """The server the last flag selected, fresh or not (None: no flag yet)."""
@@ -148,7 +150,8 @@ class Selection(object):
             return self._flag[1] if self._flag is not None else None
 
     def probe_latency(self, server):
-        """The mean of the robot's probes of ``server`` in the window (None: none)."""
+        """The mean of the robot's probes of ``server`` in the window (None: none; asked
+        with ``passive`` only)."""
         return self.probes.stats(self.robot_id, server, self._clock()).mean
 
     def manager_ranking(self):
@@ -179,8 +182,7 @@ class Selection(object):
             [s for s in ranking.ranking if s != selected]
 
     def flagged(self):
-        """Whether a flag has ever been taken."""
-        return self._flag is not None
+        return self._flag is not None      # whether a flag was ever taken
 
     def deciding_locally(self):
         """Whether a robot that follows the manager has no fresh flag (one that chooses
@@ -215,8 +217,7 @@ class Selection(object):
 
     def target(self):
         """The first candidate, or NO_SERVER (a decision: :meth:`heading` makes none)."""
-        candidates = self.candidates()
-        return candidates[0] if candidates else NO_SERVER
+        return (self.candidates() or [NO_SERVER])[0]
 
     def heading(self):
         """Where the next task would go by the last decision, without making one (a
@@ -235,9 +236,8 @@ class Selection(object):
         if ranking is None:
             with self._lock:
                 ranking = [s for s in [self._chooser.current] if s not in (None, NO_SERVER)]
-        if self.health is not None:
-            ranking = self.health.order(ranking)
-        return ranking[0] if ranking else NO_SERVER
+        ranking = self.health.order(ranking) if self.health is not None else ranking
+        return (ranking or [NO_SERVER])[0]
 
     def ready(self, answered):
         """Whether tasks may start: ``answered`` is the set of servers that have answered a
