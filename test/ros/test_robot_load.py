@@ -10,6 +10,8 @@ from support.clock import Clock
 
 
 def test_a_probe_announces_the_robots_send_rate_only_to_where_its_tasks_go():
+    """The rate announced is the robot's one count of its sends (its rule's: attempts in
+    the last 5 s), told of each attempt as the robot's streams tell it."""
     clock = Clock(0.0)
     heading = {'server': 2}
     load = RobotLoad({'image': 0.5, 'sort': 4.0}, lambda: heading['server'], clock=clock)
@@ -18,16 +20,17 @@ def test_a_probe_announces_the_robots_send_rate_only_to_where_its_tasks_go():
     assert load.announcement(1) == (['image', 'sort'], [0.0, 0.0])
     for t in (0.0, 4.0, 8.0):          # frames go out every 4 s (slower than asked)
         clock.now = t
+        load.sends.started(2, 'image')
         load.sent(2, 'image')
     clock.now = 9.0
     kinds, rates = load.announcement(2)
-    assert rates == [pytest.approx(0.25), 4.0]       # no sort task sent yet: as asked
+    assert rates == [pytest.approx(2 / 5.0), 4.0]    # no sort task sent yet: as asked
     heading['server'] = 1                            # the flag moved the robot
     assert load.announcement(2)[1] == [0.0, 0.0]
-    assert load.announcement(1)[1] == [pytest.approx(0.25), 4.0]
-    clock.now = 17.0        # 10 s on, only the last frame is left: one in 10 s
-    assert load.announcement(1)[1] == [pytest.approx(0.1), 4.0]
-    clock.now = 18.5        # none left: none announced
+    assert load.announcement(1)[1] == [pytest.approx(2 / 5.0), 4.0]
+    clock.now = 12.5        # only the last frame is left in the 5 s
+    assert load.announcement(1)[1] == [pytest.approx(1 / 5.0), 4.0]
+    clock.now = 13.5        # none left: none announced
     assert load.announcement(1)[1] == [0.0, 4.0]
 
 

@@ -194,14 +194,14 @@ def test_asking_whether_a_per_task_rule_is_ready_or_where_it_heads_decides_nothi
     rule = s.balancer
     assert not s.ready(set())                         # no server has answered a probe
     assert s.ready({2}) and s.heading() == NO_SERVER
-    assert rule.chosen is None and not rule.sends
+    assert rule.chosen is None and not rule.sends.kinds()
     first = s.candidates('sort')[0]                   # a send asks with its kind
     assert rule.chosen is None and s.heading() == NO_SERVER    # asking is not sending
     rule.started(first, 'sort')
     assert rule.chosen == first and s.heading() == first
     for _ in range(3):
         assert s.ready({2}) and s.heading() == first and s.candidates('sort')[0] == first
-    assert len(rule.sends['sort']) == 1
+    assert rule.sends.count('sort', clock.now) == 1
 
 
 def test_whether_the_ranking_changed_is_worked_out_only_for_a_watcher():

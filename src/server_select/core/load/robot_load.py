@@ -5,28 +5,30 @@ rospy: the node and the simulator hand it :class:`Load` reports and their clock)
 import threading
 import time
 
-from server_select.core.load.demand import Arrivals
+from server_select.core.load.demand import SendRate
 from server_select.core.load.board import LoadBoard
 
 
 class RobotLoad(object):
     """What the robot's tasks would wait for at each server: ``mix`` is ``{kind: tasks
     per second}`` of the robot's streams. ``target()`` names the server the robot's next
-    task goes to: a probe of it announces the rate the robot sends tasks at (measured from
-    its sends, :class:`~server_select.core.load.demand.Arrivals`; a kind's rate in ``mix``
-    until its first task is sent), a probe of any other announces none, so that servers
-    count the robot where its tasks go now. A report older than ``max_age`` s (the robot's
-    window: one age for every use of an answer) counts as none. Thread-safe."""
+    task goes to: a probe of it announces the rate the robot sends tasks at (``sends``,
+    the robot's :class:`~server_select.core.load.demand.SendRate`, the count its rule
+    reads; a kind's rate in ``mix`` until its first task is sent), a probe of any other
+    announces none, so that servers count the robot where its tasks go now. A report older
+    than ``max_age`` s (the robot's window: one age for every use of an answer) counts as
+    none. Thread-safe."""
 
-    def __init__(self, mix, target=None, balancer=None, clock=time.monotonic, max_age=2.0):
+    def __init__(self, mix, target=None, balancer=None, clock=time.monotonic, max_age=2.0,
+                 sends=None):
         self.board = LoadBoard(mix, max_age=max_age, clock=clock)
         self.balancer = balancer     # a peer's rule hears every answer's load too
         self.mix = dict(mix)
         self.kinds = sorted(mix)
         self.target = target
-        self._sends = Arrivals()
+        self.sends = sends or SendRate(clock)
         self._clock = clock
-        self._lock = threading.Lock()      # sends from task threads, probes from others
+        self._lock = threading.Lock()      # the mix, tuned while probes read it
 
     def on_answer(self, server, load, rtt=None):
         """A probe answer of ``server`` reporting ``load`` (a
@@ -39,17 +41,15 @@ class RobotLoad(object):
 
     def sent(self, server, kind):
         self.board.sent(server, kind)
-        with self._lock:
-            self._sends.add(None, kind, self._clock())
 
     def announcement(self, server):
         """``(kinds, tasks per second of each)`` for a probe of ``server``."""
         if self.target is None or self.target() != server:
             return self.kinds, [0.0] * len(self.kinds)
+        now, sent = self._clock(), set(self.sends.kinds())
         with self._lock:
-            rates = self._sends.rates(self._clock())
-            return self.kinds, [rates.get((None, kind), 0.0 if self._sends.seen(None, kind)
-                                          else self.mix[kind]) for kind in self.kinds]
+            return self.kinds, [self.sends.count(kind, now) / self.sends.horizon
+                                if kind in sent else self.mix[kind] for kind in self.kinds]
 
     def set_rate(self, kind, rate):
         """The robot's ``kind`` stream sends ``rate`` tasks a second from now (tuned)."""

@@ -20,6 +20,7 @@ import threading
 import time
 
 from server_select.core.flow.budget import RetryBudget
+from server_select.core.load.demand import SendRate
 from server_select.core.load.robot_load import RobotLoad
 from server_select.core.robot.probes import ProbeRounds
 from server_select.core.robot.stream import Stream
@@ -51,15 +52,16 @@ class Robot(object):
         self.clock, self.stamp = clock, stamp or clock
         self.transport, self.events = transport or Transport(), events or Events()
         self._random = random or _fresh_random
+        self.sends = SendRate(clock)     # told of every attempt; the rule and probes read it
         self.selection, self.health, self.policy = robot_selection(
             robot_id, servers, mode, fixed, get, clock=clock, rng=self._random('rule'),
-            rule_args=rule_args)
+            rule_args=dict(rule_args or {}, sends=self.sends))
         self.balancer = self.selection.balancer
         if self.balancer is not None:
             self.balancer.on_move = lambda server, why: self.events.moved(server, why)
         self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds),
                               self.selection.heading, self.balancer, clock,
-                              max_age=get('window')) \
+                              max_age=get('window'), sends=self.sends) \
             if get('load_aware') and mode == 'select' else None
         self.baseline = TaskBaseline() if self.selection.passive else None
         self.plan = probing.from_params(get)

@@ -17,8 +17,8 @@ from server_select.core.flow.task_flow import HEDGE_QUANTILE, TaskFlow
 
 
 class _Attempts(object):
-    """Every attempt told to the robot's rule (its moves, its own state) and to its health
-    table (where tasks went)."""
+    """Every attempt told to the robot's count of its sends, to its rule (its moves, its
+    own state) and to its health table (where tasks went)."""
 
     def __init__(self, *observers):
         self.observers = [o for o in observers if o is not None]
@@ -52,7 +52,7 @@ class Stream(object):
             ids=ids, clock=robot.clock, hedge=HEDGE_QUANTILE if get('hedge') else None,
             budget=robot.budget, max_in_flight=get('max_in_flight'),
             newest_wins=kind.newest_wins, on_busy=functools.partial(robot.on_busy, kind.kind),
-            attempts=_Attempts(balancer, robot.health),
+            attempts=_Attempts(robot.sends, balancer, robot.health),
             copies=balancer.copies if balancer is not None else 1,
             on_answer=functools.partial(robot.on_task_answer, kind.kind)
             if robot.baseline is not None else None)

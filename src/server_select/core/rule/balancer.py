@@ -9,6 +9,8 @@ import random
 import threading
 import time
 
+from server_select.core.load.demand import SendRate
+
 
 ProbeAnswer = collections.namedtuple('ProbeAnswer',
                                      'server rtt rif service workers at utilization '
@@ -38,15 +40,19 @@ its estimate}`` (None: no answer in the window). The fleet's rule's ``choose`` r
 class Balancer(object):
     """The state every peer keeps: this robot's attempts out per server, the newest probe
     answer of each, and a random source (``rng``), drawn from once per task (``draw``:
-    the next decision's numbers, so that asking draws nothing). Thread-safe."""
+    the next decision's numbers, so that asking draws nothing); ``sends``: the robot's
+    :class:`~server_select.core.load.demand.SendRate`, which the robot feeds (None: the
+    rule counts its own attempts, as a rule made alone). Thread-safe."""
 
     name = None
     copies = 1
     own_view = False     # whether it ranks the servers by estimates of its own (view())
 
-    def __init__(self, rng=None, clock=time.monotonic):
+    def __init__(self, rng=None, clock=time.monotonic, sends=None):
         self.rng = rng or random.Random()
         self._clock = clock
+        self.sends = sends or SendRate(clock)
+        self._counts_sends = sends is None
         self._lock = threading.Lock()
         self.attempts_out = collections.Counter()     # server -> this robot's attempts out there
         self.probes = {}                     # server -> its newest ProbeAnswer
@@ -79,6 +85,8 @@ class Balancer(object):
         the reason the order gave (asking :meth:`order` is not sending: a robot may ask
         where a task would go)."""
         moved = None
+        if self._counts_sends:
+            self.sends.started(server, kind)
         with self._lock:
             now = self._clock()
             self.attempts_out[server] += 1

@@ -25,7 +25,6 @@ from server_select.core.util.stats import mean_error, median_error
 
 Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
-RATE_HORIZON = 5.0       # s of the robot's own tasks its rate is counted over
 # what each can be switched off for (the league's ablation: docs/selection.md)
 MECHANISMS = ('keep', 'robust', 'tries', 'work_error')
 
@@ -50,7 +49,6 @@ class LeastLatency(Balancer):
                              % (sorted(set(off) - set(MECHANISMS)), ', '.join(MECHANISMS)))
         self.window, self.mechanisms = float(window), set(MECHANISMS) - set(off)
         self.answers = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
-        self.sends = collections.defaultdict(collections.deque)   # kind -> when sent
         self.least_work = {}                   # kind -> the least work any server reported
 
     def _probed(self, answer):
@@ -62,28 +60,17 @@ class LeastLatency(Balancer):
         for kind, work in answer.service.items():
             self.least_work[kind] = min(work, self.least_work.get(kind, work))
 
-    def _started(self, server, kind, now):
-        times = self.sends[kind]
-        times.append(now)
-        while now - times[0] > RATE_HORIZON:
-            times.popleft()
-
     def _draws(self):
         return self.rng.random()     # the next decision's random number
 
-    def _sent(self, kind, now):
-        """How many ``kind`` tasks the robot sent in the last :data:`RATE_HORIZON` s."""
-        return sum(1 for t in self.sends.get(kind, ()) if now - t <= RATE_HORIZON)
-
     def rate(self, kind, now):
         """The robot's ``kind`` tasks a second (the next one included: never 0), counted
-        when sent: asking where one would go is not sending it."""
-        return (self._sent(kind, now) + 1) / RATE_HORIZON
+        when sent (:attr:`sends`): asking where one would go is not sending it."""
+        return (self.sends.count(kind, now) + 1) / self.sends.horizon
 
     def task_rate(self):
-        with self._lock:
-            now = self._clock()
-            return sum(self._sent(kind, now) for kind in self.sends) / RATE_HORIZON
+        now = self._clock()
+        return sum(self.sends.count(kind, now) for kind in self.sends.kinds()) / self.sends.horizon
 
     def estimate(self, server, kind, now, rate=None):
         """The :class:`Estimate` of a ``kind`` task at ``server`` from its answers of the
@@ -168,7 +155,7 @@ class LeastLatency(Balancer):
 
     def _main_kind(self, now):
         """The kind the robot sent most of lately (None: none sent)."""
-        counts = dict((k, self._sent(k, now)) for k in self.sends)
+        counts = dict((k, self.sends.count(k, now)) for k in self.sends.kinds())
         return max(sorted(counts, key=str), key=counts.get) if any(counts.values()) else None
 
     def _estimates(self, servers, now):
