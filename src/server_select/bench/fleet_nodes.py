@@ -14,9 +14,7 @@ S servers). Nothing is asserted.
 """
 
 import os
-import signal
 import struct
-import subprocess
 import sys
 import tempfile
 import threading
@@ -25,9 +23,9 @@ import time
 import rospy
 
 from server_select.bench import cli
-from server_select.bench.harness import Roscore, pid_or_none
+from server_select.bench.harness import Roscore, launched
 from server_select.core.config import names
-from server_select.core.util.procs import measure, stop_group, wait_until
+from server_select.core.util.procs import measure, wait_until
 from server_select.core.util.tables import fmt, markdown_table
 
 LAYOUTS = {'samples': ['sample_stream:=robot', 'flag_stream:=shared'], 'views': []}
@@ -73,37 +71,26 @@ def _robot_of_flag(buff):
 
 def run_one(robots, servers, layout, seconds, task_rate, work):
     """One size and layout under the running roscore: the row of figures."""
-    log = open(os.path.join(work, 'fleet_%s_%dx%d.log' % (layout, robots, servers)), 'w')
-    fleet = subprocess.Popen(
-        ['roslaunch', 'server_select', 'demo.launch', 'output:=log', 'profile:=fleet',
-         'n_robots:=%d' % robots, 'n_servers:=%d' % servers, 'task_rate:=%g' % task_rate]
-        + LAYOUTS[layout], stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    args = ['output:=log', 'profile:=fleet', 'n_robots:=%d' % robots,
+            'n_servers:=%d' % servers, 'task_rate:=%g' % task_rate] + LAYOUTS[layout]
     nodes = dict([('/manager', 'manager')] + [('/robot%d' % r, 'robot')
                                               for r in range(1, robots + 1)] +
                  [('/server%d' % s, 'server') for s in range(1, servers + 1)])
     counter = Counter((names.SELECTION_TOPIC,) + INPUTS[layout])
+    log = os.path.join(work, 'fleet_%s_%dx%d.log' % (layout, robots, servers))
     try:
-        up = wait_until(lambda: len(counter.flagged) >= robots, 60.0 + 2.0 * robots,
-                        period=0.5)
-        pids = dict((pid_or_none(n), role) for n, role in nodes.items())
-        pids.pop(None, None)
-        time.sleep(5.0)                 # a few flags each, then counted
-        counter.take()
-        began = time.monotonic()
-        usage = measure(list(pids), seconds)
-        heard, span = counter.take(), time.monotonic() - began
+        with launched('demo.launch', args, log, nodes=list(nodes),
+                      timeout=60.0 + 2.0 * robots) as by_node:
+            up = wait_until(lambda: len(counter.flagged) >= robots, 60.0 + 2.0 * robots,
+                            period=0.5)
+            pids = dict((pid, nodes[node]) for node, pid in by_node.items())
+            time.sleep(5.0)                 # a few flags each, then counted
+            counter.take()
+            began = time.monotonic()
+            usage = measure(list(pids), seconds)
+            heard, span = counter.take(), time.monotonic() - began
     finally:
         counter.close()
-        stop_group(fleet)
-        log.close()
-        # the next fleet's nodes take these names: none of these may linger (roslaunch
-        # starts each node in a process group of its own; a loaded host may outlast its
-        # shutdown timeout)
-        for node in nodes:
-            pid = pid_or_none(node)
-            if pid is not None:
-                os.kill(pid, signal.SIGKILL)
-        wait_until(lambda: not any(pid_or_none(n) for n in nodes), 30.0, period=0.5)
     row = {'robots': robots, 'servers': servers, 'layout': layout, 'all_flagged': up,
            'seconds': span}
     for role in ('manager', 'robot', 'server'):

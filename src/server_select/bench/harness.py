@@ -106,31 +106,46 @@ def pid_or_none(name, master_uri=None):
         return None
 
 
-def _registered(*names):
-    try:
-        for name in names:
-            node_pid(name)
-        return True
-    except Exception:  # not registered yet, or the master is busy
-        return False
+def pids_of(nodes, master=None):
+    """``{node: pid}`` of ``nodes`` at ``master`` (None: this process's), or None while any
+    of them is not registered or does not answer."""
+    pids = dict((node, pid_or_none(node, master)) for node in nodes)
+    return None if None in pids.values() else pids
 
 
 @contextlib.contextmanager
-def fleet(log, **args):
-    """bench_fleet.launch with ``args``; yields once robot1 and server1 are registered."""
-    cmd = ['roslaunch', 'server_select', 'bench_fleet.launch'] + \
-        ['%s:=%s' % kv for kv in sorted(args.items())]
+def launched(launch, args, log, master=None, nodes=(), timeout=60.0, env=None):
+    """The benchmarks' fleet of real nodes: ``roslaunch`` of ``launch`` (a file in the
+    package, or a path) with ``args`` (``name:=value``) under ``master`` (None: this
+    process's), in a session of its own with ``env`` added to the environment, its output
+    appended to the file ``log``. Yields
+    ``{node: pid}`` once every one of ``nodes`` is registered (RuntimeError naming the log
+    after ``timeout`` s, or if roslaunch ends first); on leaving, stops its process group
+    and kills any of ``nodes`` still registered (roslaunch starts each node in a group of
+    its own, and a loaded host may outlast its shutdown timeout: the next fleet's nodes
+    take these names)."""
+    env = dict(os.environ, **dict(env or {}, **({'ROS_MASTER_URI': master} if master else {})))
+    where = [launch] if os.path.isabs(launch) else ['server_select', launch]
     with open(log, 'a') as stream:
-        proc = subprocess.Popen(cmd, stdout=stream, stderr=subprocess.STDOUT,
-                                start_new_session=True)
+        proc = subprocess.Popen(['roslaunch'] + where + list(args), stdout=stream,
+                                stderr=subprocess.STDOUT, env=env, start_new_session=True)
     try:
-        if not wait_until(lambda: proc.poll() is not None
-                          or _registered('/robot1', '/server1'), 40.0, period=0.3) \
-                or proc.poll() is not None:
-            raise RuntimeError('bench fleet did not come up (see %s)' % log)
-        yield proc
+        up = wait_until(lambda: proc.poll() is not None or pids_of(nodes, master) is not None,
+                        timeout, period=0.3)
+        pids = pids_of(nodes, master)
+        if not up or proc.poll() is not None or pids is None:
+            raise RuntimeError('%s did not bring up %s in %g s (see %s)'
+                               % (launch, ', '.join(nodes), timeout, log))
+        yield pids
     finally:
         stop_group(proc, timeout=20.0)
+        kill_all([p for p in (pid_or_none(n, master) for n in nodes) if p is not None])
+
+
+def fleet(log, **args):
+    """bench_fleet.launch with ``args``; yields once robot1 and server1 are registered."""
+    return launched('bench_fleet.launch', ['%s:=%s' % kv for kv in sorted(args.items())],
+                    log, nodes=('/robot1', '/server1'), timeout=40.0)
 
 
 class ReportListener(object):

@@ -14,7 +14,6 @@ import http.client
 import http.server
 import json
 import os
-import subprocess
 import sys
 import tempfile
 import threading
@@ -24,9 +23,9 @@ import xmlrpc.client
 import rosgraph
 
 from server_select.bench import cli
-from server_select.bench.harness import Roscore
+from server_select.bench.harness import Roscore, launched
 from server_select.core.config import names
-from server_select.core.util.procs import stop_group, wait_until
+from server_select.core.util.procs import wait_until
 from server_select.core.util.tables import markdown_table
 
 
@@ -102,26 +101,22 @@ def measure(profile, robots, servers, warmup, seconds, work):
     """Calls by method and caller during ``seconds`` of the demo fleet in ``profile``."""
     with Roscore(work) as core:
         proxy = CountingProxy(('127.0.0.1', core.port))
-        env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % proxy.port,
-                   ROS_HOME=os.path.join(work, 'ros_home_%s' % profile))
-        log = open(os.path.join(work, 'fleet_%s.log' % profile), 'w')
-        fleet = subprocess.Popen(
-            ['roslaunch', 'server_select', 'demo.launch', 'output:=log', 'profile:=%s' % profile,
-             'n_robots:=%d' % robots, 'n_servers:=%d' % servers],
-            env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
         fleet_nodes = ['/manager'] + ['/server%d' % s for s in range(1, servers + 1)] + \
             ['/robot%d' % r for r in range(1, robots + 1)]
+        args = ['output:=log', 'profile:=%s' % profile, 'n_robots:=%d' % robots,
+                'n_servers:=%d' % servers]
         try:
-            master = rosgraph.Master('/bench_master', master_uri=core.uri)
-            if not wait_until(lambda: started(master, fleet_nodes), 120.0, period=0.5):
-                raise RuntimeError('the fleet did not come up (see %s)' % log.name)
-            time.sleep(warmup)          # then its first look-ups settle
-            proxy.take()
-            time.sleep(seconds)
-            counts = proxy.take()
+            with launched('demo.launch', args, os.path.join(work, 'fleet_%s.log' % profile),
+                          'http://127.0.0.1:%d' % proxy.port, fleet_nodes, 120.0,
+                          env={'ROS_HOME': os.path.join(work, 'ros_home_%s' % profile)}):
+                master = rosgraph.Master('/bench_master', master_uri=core.uri)
+                if not wait_until(lambda: started(master, fleet_nodes), 120.0, period=0.5):
+                    raise RuntimeError('the fleet did not come up (see %s)' % work)
+                time.sleep(warmup)          # then its first look-ups settle
+                proxy.take()
+                time.sleep(seconds)
+                counts = proxy.take()
         finally:
-            stop_group(fleet)
-            log.close()
             proxy.close()
     return {'profile': profile, 'robots': robots, 'servers': servers, 'seconds': seconds,
             'nodes': fleet_nodes,

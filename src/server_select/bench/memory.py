@@ -7,7 +7,6 @@ first sample after warm-up to the last. Nothing is asserted.
 """
 
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -15,21 +14,10 @@ import time
 import psutil
 
 from server_select.bench import cli
-from server_select.bench.harness import Roscore, node_pid
-from server_select.core.util.procs import stop_group, wait_until
+from server_select.bench.harness import Roscore, launched
 from server_select.core.util.tables import markdown_table
 
 NODES = ('/manager', '/server1', '/server2', '/server3', '/robot1', '/robot2')
-
-
-def pids():
-    found = {}
-    for node in NODES:
-        try:
-            found[node] = node_pid(node)
-        except Exception:  # not up yet
-            pass
-    return found
 
 
 def sample(by_node):
@@ -43,22 +31,14 @@ def sample(by_node):
 
 
 def run(minutes, rate, every, log):
-    with tempfile.TemporaryDirectory(prefix='bench_memory') as tmp, Roscore(tmp):
-        with open(log, 'w') as stream:
-            fleet = subprocess.Popen(['roslaunch', 'server_select', 'demo.launch',
-                                      'task_rate:=%g' % rate, 'output:=log'],
-                                     stdout=stream, stderr=subprocess.STDOUT,
-                                     start_new_session=True)
-        try:
-            if not wait_until(lambda: len(pids()) == len(NODES), 60.0, period=0.5):
-                raise RuntimeError('the demo fleet did not come up (see %s)' % log)
-            by_node, start, rows = pids(), time.monotonic(), []
-            while time.monotonic() - start < minutes * 60:
-                time.sleep(min(every, max(0.0, minutes * 60 - (time.monotonic() - start))))
-                rows.append((time.monotonic() - start, sample(by_node)))
-                print('memory: %.0f s' % rows[-1][0], file=sys.stderr, flush=True)
-        finally:
-            stop_group(fleet)
+    with tempfile.TemporaryDirectory(prefix='bench_memory') as tmp, Roscore(tmp), \
+            launched('demo.launch', ['task_rate:=%g' % rate, 'output:=log'], log,
+                     nodes=NODES) as by_node:
+        start, rows = time.monotonic(), []
+        while time.monotonic() - start < minutes * 60:
+            time.sleep(min(every, max(0.0, minutes * 60 - (time.monotonic() - start))))
+            rows.append((time.monotonic() - start, sample(by_node)))
+            print('memory: %.0f s' % rows[-1][0], file=sys.stderr, flush=True)
     return rows
 
 

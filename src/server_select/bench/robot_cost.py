@@ -18,6 +18,7 @@ asserted.
 
 import argparse
 import collections
+import contextlib
 import os
 import subprocess
 import sys
@@ -25,7 +26,7 @@ import tempfile
 import time
 
 from server_select.bench import camera, cli, robot_profile
-from server_select.bench.harness import Roscore, pid_or_none
+from server_select.bench.harness import Roscore, launched, pid_or_none
 from server_select.core.util.procs import measure, stop_group, wait_until
 from server_select.core.util.tables import markdown_table, median_range
 from server_select.testbed.cpu import CpuLimit
@@ -109,61 +110,48 @@ def context_switches(pid):
     return total
 
 
-def start(cell, profile, master, work, tag, procs, logs, extra=None):
-    """The fleet of ``profile`` under ``master`` (and the bench's camera), into ``procs``."""
+def start(cell, profile, master, work, tag, fleets, extra=None):
+    """The fleet of ``profile`` under ``master`` (and the bench's camera), entered into the
+    ExitStack ``fleets``: robot 1's pid."""
     path = os.path.join(work, '%s_%s.launch' % (tag, profile))
     launch_file(path, profile, cell, extra)
-    logs.append(open(path[:-len('.launch')] + '.log', 'w'))
-    env = dict(os.environ, ROS_MASTER_URI=master)
-    procs[profile] = subprocess.Popen(['roslaunch', path], stdout=logs[-1],
-                                      stderr=subprocess.STDOUT, env=env,
-                                      start_new_session=True)
+    log = path[:-len('.launch')] + '.log'
     if cell.workload == 'camera':     # the camera driver: not the robot's work
-        procs[profile + ' camera'] = subprocess.Popen(
-            [sys.executable, '-m', 'server_select.bench.robot_cost', '--camera', CAMERA_TOPIC,
-             '--rate', '5'], stdout=logs[-1], stderr=subprocess.STDOUT, env=env,
-            start_new_session=True)
+        with open(log, 'a') as stream:
+            fleets.callback(stop_group, subprocess.Popen(
+                [sys.executable, '-m', 'server_select.bench.robot_cost', '--camera',
+                 CAMERA_TOPIC, '--rate', '5'], stdout=stream, stderr=subprocess.STDOUT,
+                env=dict(os.environ, ROS_MASTER_URI=master), start_new_session=True),
+                timeout=20.0)
+    return fleets.enter_context(launched(path, [], log, master, ['/robot1'],
+                                         60.0 + cell.servers))['/robot1']
 
 
 def one_cell(cell, options, work, tag):
     """``{profile: {'cpu', 'rss', 'pi_cpu'?, 'profile'?}}`` of one run of ``cell``."""
-    limits, procs, logs = {}, {}, []
-    with Roscore(work) as first, Roscore(work) as second:
+    with Roscore(work) as first, Roscore(work) as second, contextlib.ExitStack() as fleets:
         masters = dict(zip(PROFILES, (first.uri, second.uri)))
-        try:
-            for profile, master in masters.items():
-                start(cell, profile, master, work, tag, procs, logs, options.robot_args)
-            pids = {}
-            for profile, master in masters.items():
-                if not wait_until(lambda: pid_or_none('/robot1', master) is not None,
-                                  60.0 + cell.servers, 0.5):
-                    raise RuntimeError('the %s fleet did not come up (%s)' % (profile, work))
-                pids[profile] = pid_or_none('/robot1', master)
-                if cell.host == 'pi':
-                    limits[profile] = CpuLimit('ssbr%d-%s' % (os.getpid(), profile),
-                                               options.pi_share, PI3['cpu_period'] * 1000,
-                                               PI3['memory']).create()
-                    limits[profile].join(pids[profile])
-            for profile, master in masters.items():
-                if not wait_until(lambda: answered(master), 120.0, 0.5):
-                    raise RuntimeError('no task of the %s robot was answered (%s)'
-                                       % (profile, work))
-            time.sleep(options.warmup)          # windows fill, probing settles
-            switches = dict((p, context_switches(pid)) for p, pid in pids.items())
-            servers = dict((p, pid_or_none('/server1', m)) for p, m in masters.items())
-            usage = measure(list(pids.values()) + [s for s in servers.values() if s],
-                            options.seconds)
-            switches = dict((p, (context_switches(pid) - switches[p]) / options.seconds)
-                            for p, pid in pids.items())
-            sampled = dict((p, robot_profile.sample(pid, options.profile, work, p))
-                           for p, pid in pids.items()) if tag == 'profiled' else {}
-        finally:
-            for proc in procs.values():
-                stop_group(proc, timeout=20.0)
-            for log in logs:
-                log.close()
-            for limit in limits.values():
-                limit.remove()
+        pids = dict((profile, start(cell, profile, master, work, tag, fleets,
+                                    options.robot_args)) for profile, master in masters.items())
+        if cell.host == 'pi':
+            for profile, pid in pids.items():
+                limit = CpuLimit('ssbr%d-%s' % (os.getpid(), profile), options.pi_share,
+                                 PI3['cpu_period'] * 1000, PI3['memory']).create()
+                fleets.callback(limit.remove)
+                limit.join(pid)
+        for profile, master in masters.items():
+            if not wait_until(lambda: answered(master), 120.0, 0.5):
+                raise RuntimeError('no task of the %s robot was answered (%s)'
+                                   % (profile, work))
+        time.sleep(options.warmup)          # windows fill, probing settles
+        switches = dict((p, context_switches(pid)) for p, pid in pids.items())
+        servers = dict((p, pid_or_none('/server1', m)) for p, m in masters.items())
+        usage = measure(list(pids.values()) + [s for s in servers.values() if s],
+                        options.seconds)
+        switches = dict((p, (context_switches(pid) - switches[p]) / options.seconds)
+                        for p, pid in pids.items())
+        sampled = dict((p, robot_profile.sample(pid, options.profile, work, p))
+                       for p, pid in pids.items()) if tag == 'profiled' else {}
     result = {}
     for profile, pid in pids.items():
         used = usage.get(pid, {})

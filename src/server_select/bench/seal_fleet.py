@@ -1,7 +1,7 @@
 """What a fleet key costs the nodes (``make bench-seal``): CPU and memory per role with and
 without a key, side by side.
 
-Each run starts two fleets at once, each under a roscore of its own
+Each run starts two fleets side by side, each under a roscore of its own
 (``demo.launch profile:=fleet``: ``--servers`` servers, one robot sending sort tasks at
 ``--task-rate``, the manager): one with a fleet key on every node, one without. After
 ``--warmup`` s, the CPU (% of one core) and resident memory of each fleet's robot, manager
@@ -10,65 +10,38 @@ time); printed: median (min-max) per role with and without the key, and the keye
 CPU over the unkeyed one's, per run. Nothing is asserted.
 """
 
+import contextlib
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 
 from server_select.bench import cli
-from server_select.bench.harness import Roscore, pid_or_none
+from server_select.bench.harness import Roscore, launched
 from server_select.core.trust.keys import make_key
-from server_select.core.util.procs import measure, stop_group, wait_until
+from server_select.core.util.procs import measure
 from server_select.core.util.tables import markdown_table
 
 ROLES = ('robot', 'manager', 'server')
 
 
-def node_pids(master, nodes):
-    """``{pid: node}`` of the nodes registered at ``master`` (a URI); None if any is not."""
-    pids = dict((pid_or_none(node, master), node) for node in nodes)
-    return None if None in pids else pids
-
-
-def launch(master, args, log):
-    """``demo.launch`` with ``args`` under ``master``, started in a session of its own."""
-    env = dict(os.environ, ROS_MASTER_URI=master)
-    return subprocess.Popen(['roslaunch', 'server_select', 'demo.launch', 'output:=log',
-                             'profile:=fleet'] + args, stdout=log,
-                            stderr=subprocess.STDOUT, env=env, start_new_session=True)
-
-
 def one_run(options, key, work, repeat):
     """``{keyed: {role: [usage of each node]}}`` of one run of the two fleets."""
     nodes = ['/manager', '/robot1'] + ['/server%d' % s for s in range(1, options.servers + 1)]
-    fleet_args = ['n_robots:=1', 'n_servers:=%d' % options.servers,
-                  'task_rate:=%g' % options.task_rate]
-    with Roscore(work) as first, Roscore(work) as second:
+    fleet_args = ['output:=log', 'profile:=fleet', 'n_robots:=1',
+                  'n_servers:=%d' % options.servers, 'task_rate:=%g' % options.task_rate]
+    with Roscore(work) as first, Roscore(work) as second, contextlib.ExitStack() as fleets:
         masters = (first.uri, second.uri) if repeat % 2 else (second.uri, first.uri)
-        procs, logs = [], []
-        try:
-            for keyed, master in zip((True, False), masters):
-                logs.append(open(os.path.join(work, 'run%d_%s.log' % (
-                    repeat, 'key' if keyed else 'nokey')), 'w'))
-                procs.append(launch(master, fleet_args + (['fleet_key:=%s' % key]
-                                                          if keyed else []), logs[-1]))
-            pids = [None, None]
-            for i, master in enumerate(masters):
-                if not wait_until(lambda: node_pids(master, nodes) is not None, 60.0, 0.5):
-                    raise RuntimeError('a fleet did not come up (see %s)' % logs[i].name)
-                pids[i] = node_pids(master, nodes)
-            time.sleep(options.warmup)           # tasks flow, windows fill
-            usage = measure([p for each in pids for p in each], options.seconds)
-        finally:
-            for proc in procs:
-                stop_group(proc, timeout=20.0)
-            for log in logs:
-                log.close()
+        pids = [fleets.enter_context(launched(
+            'demo.launch', fleet_args + (['fleet_key:=%s' % key] if keyed else []),
+            os.path.join(work, 'run%d_%s.log' % (repeat, 'key' if keyed else 'nokey')),
+            master, nodes)) for keyed, master in zip((True, False), masters)]
+        time.sleep(options.warmup)           # tasks flow, windows fill
+        usage = measure([p for each in pids for p in each.values()], options.seconds)
     result = {}
     for keyed, each in zip((True, False), pids):
-        result[keyed] = dict((role, [usage[p] for p, node in each.items()
+        result[keyed] = dict((role, [usage[p] for node, p in each.items()
                                      if p in usage and node.strip('/').rstrip('0123456789')
                                      == role]) for role in ROLES)
     return result

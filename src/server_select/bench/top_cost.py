@@ -13,7 +13,6 @@ import os
 import pty
 import statistics
 import struct
-import subprocess
 import sys
 import tempfile
 import termios
@@ -21,8 +20,8 @@ import threading
 import time
 
 from server_select.bench import cli
-from server_select.bench.harness import Roscore, pid_or_none
-from server_select.core.util.procs import measure, stop_group, wait_until
+from server_select.bench.harness import Roscore, launched
+from server_select.core.util.procs import measure, wait_until
 from server_select.core.util.tables import markdown_table
 
 ROWS, COLUMNS = 60, 140
@@ -62,36 +61,22 @@ def end_top(pid, fd):
 
 def one_run(options, work, repeat):
     """``{'top_cpu', 'top_rss', 'robot_cpu'}`` of one run."""
-    log = open(os.path.join(work, 'run%d.log' % repeat), 'w')
     robots = ['/robot%d' % r for r in range(1, options.robots + 1)]
-    with Roscore(work):
-        fleet = subprocess.Popen(
-            ['roslaunch', 'server_select', 'demo.launch', 'output:=log', 'profile:=fleet',
-             'n_robots:=%d' % options.robots, 'n_servers:=%d' % options.servers],
-            stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-        pid = fd = None
+    args = ['output:=log', 'profile:=fleet', 'n_robots:=%d' % options.robots,
+            'n_servers:=%d' % options.servers]
+    with Roscore(work), launched('demo.launch', args, os.path.join(work, 'run%d.log' % repeat),
+                                 nodes=robots, timeout=120.0) as robot_pids:
+        pid, fd = start_top(range(1, options.servers + 1))
         try:
-            if not wait_until(lambda: _pids(robots) is not None, 120.0, period=1.0):
-                raise RuntimeError('the fleet did not come up (see %s)' % log.name)
-            pid, fd = start_top(range(1, options.servers + 1))
             time.sleep(options.warmup)        # it hears every server and robot
-            robot_pids = _pids(robots)
-            usage = measure([pid] + robot_pids, options.seconds)
+            usage = measure([pid] + list(robot_pids.values()), options.seconds)
             if os.waitpid(pid, os.WNOHANG)[0] != 0:
                 raise RuntimeError('top ended before the measurement did')
         finally:
-            if pid is not None:
-                end_top(pid, fd)
-            stop_group(fleet, timeout=30.0)
-            log.close()
-    robot_cpu = [usage[p]['cpu_percent'] for p in robot_pids if p in usage]
+            end_top(pid, fd)
+    robot_cpu = [usage[p]['cpu_percent'] for p in robot_pids.values() if p in usage]
     return {'top_cpu': usage[pid]['cpu_percent'], 'top_rss': usage[pid]['rss_mb'],
             'robot_cpu': statistics.mean(robot_cpu) if robot_cpu else float('nan')}
-
-
-def _pids(nodes):
-    pids = [pid_or_none(n) for n in nodes]
-    return None if None in pids else pids
 
 
 def main(argv=None):
