@@ -79,8 +79,9 @@ def disagreements(views, rec, found):
                if r.msg.name == '/manager' and r.msg.msg.startswith('manager: robot 1 -> ')]
     for (t_before, _, _), (t, server, why), (t_next, after, _) in zip(
             [(0.0, None, '')] + found, found, found[1:] + [(1e18, None, '')]):
-        if not any(t <= s < min(t_next, t + 1.0) and f.server_id == server
-                   for s, f in views.flags):
+        # (within 1 s even when the robot moved on sooner: a CI run saw a move kept for
+        # 0.34 s and no flag of it before the next move: a flag takes two messages' way)
+        if not any(t <= s < t + 1.0 and f.server_id == server for s, f in views.flags):
             wrong.append(('no flag of the move within 1 s', t, server, why))
         for stamp, flag in views.flags:
             # once the robot's server has left its ranking (ejected), the flag names where
