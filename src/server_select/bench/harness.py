@@ -108,9 +108,14 @@ def pid_or_none(name, master_uri=None):
 
 def pids_of(nodes, master=None):
     """``{node: pid}`` of ``nodes`` at ``master`` (None: this process's), or None while any
-    of them is not registered or does not answer."""
-    pids = dict((node, pid_or_none(node, master)) for node in nodes)
-    return None if None in pids.values() else pids
+    of them is not registered or does not answer (asked in order, up to the first missing:
+    a fleet coming up is polled with a master call or two, not two a node)."""
+    pids = {}
+    for node in nodes:
+        pids[node] = pid_or_none(node, master)
+        if pids[node] is None:
+            return None
+    return pids
 
 
 @contextlib.contextmanager
