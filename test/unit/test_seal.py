@@ -165,6 +165,41 @@ def test_rotation_accepts_the_next_key_and_the_current_one():
     assert verifier.refusal('/manager', seq, mac, b'flag').startswith('wrong signature')
 
 
+def test_a_rotation_in_place_moves_signer_and_verifier_and_keeps_replays_refused():
+    """Stage (accept the next key too), swap (sign with it), retire (only it): no
+    sequence number goes back, and a message seen before the swap stays a replay."""
+    clock = Clock()
+    sealer, verifier = seal.Sealer(KEY, '/manager', clock), seal.Verifier([KEY], clock=clock)
+    seq = sealer.next_seq()
+    before = (seq, sealer.mac(seq, b'flag'))
+    assert verifier.refusal('/manager', *before, payload=b'flag') is None
+    verifier.use([KEY, NEXT])                                       # stage
+    sealer.use(NEXT)                                                # swap
+    clock.now -= 5                       # the clock stepped back within CLOCK_STEP
+    after = sealer.next_seq()
+    assert after > seq
+    assert verifier.refusal('/manager', after, sealer.mac(after, b'flag'), b'flag') is None
+    assert 'replayed' in verifier.refusal('/manager', *before, payload=b'flag')
+    verifier.use([NEXT])                                            # retire
+    old = signed(KEY, '/manager', b'flag', clock)
+    assert verifier.refusal('/manager', *old, payload=b'flag').startswith('wrong signature')
+    with pytest.raises(ValueError):
+        verifier.use([])
+    with pytest.raises(ValueError):          # another role's key: the node's role is fixed
+        sealer.use(seal.Keys.from_fleet(b'n' * 32, 'robot'))
+
+
+def test_a_fingerprint_names_the_fleet_whatever_file_holds_its_keys(tmp_path):
+    fleet = str(tmp_path / 'fleet.key')
+    key_files.make_key(fleet)
+    role = str(tmp_path / 'robot.key')
+    key_files.make_role_key(fleet, 'robot', role)
+    prints = set(key_files.load_keys(path, r).fingerprint()
+                 for path, r in ((fleet, None), (fleet, 'manager'), (role, 'robot'), (role, None)))
+    assert len(prints) == 1 and len(prints.pop()) == 12
+    assert KEY.fingerprint() != NEXT.fingerprint()
+
+
 def test_make_key_writes_a_private_key_that_loads_and_keeps_an_existing_file(tmp_path):
     path = str(tmp_path / 'fleet.key')
     key_files.make_key(path)

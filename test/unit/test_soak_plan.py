@@ -45,7 +45,7 @@ def test_a_link_outage_cuts_every_link_of_its_server_for_its_length():
     assert [h.cpu for h in scenario.of_role('server')] == list(plan.SERVER_SHARES)
 
 
-def test_every_pass_of_every_rotation_lets_restarted_and_waiting_nodes_trust_each_other():
+def test_every_pass_of_every_rotation_lets_told_and_waiting_nodes_trust_each_other():
     ring = plan.KeyRing(['k1', 'k2', 'k3', 'k4'])
     signed = []
     for _ in range(3):

@@ -11,8 +11,8 @@ from server_select.core.config import names
 from server_select.core.util import interrupts
 from server_select.core.config.params import ParamError
 from server_select.core.settings import PARAMS
-from server_select.ros import (bounded_read, diagnostics, handshake, launch_args, launch_run,
-                               params_in_force, seal, xmlrpc_bound)
+from server_select.ros import (bounded_read, diagnostics, handshake, key_reload, launch_args,
+                               launch_run, params_in_force, seal, xmlrpc_bound)
 from server_select.ros.master_watch import MasterWatch
 from server_select.ros.node import _LIVE, end_parent_launch, fleet, param, quiet_logging
 
@@ -66,6 +66,8 @@ def _start(node_class):
     try:
         # a key that cannot be used, or none with ~require_key, ends the node here
         seal.announce(rospy.get_name(), getattr(node_class, 'SEAL_ROLE', None))
+        if seal.enabled():
+            key_reload.serve()       # keys rotated without a restart
         node = node_class()
         watcher = getattr(node_class, 'MASTER_WATCHER', False)
         watch = MasterWatch(param('master_watch' if watcher else 'master_check'),

@@ -1,14 +1,13 @@
 """Signed fleet messages, the ROS side (:mod:`server_select.core.trust.seal` has the rule).
 
 A node with ``~fleet_key`` (a key file) seals what it publishes on the fleet's topics
-(:class:`SealedPublisher`: flags, sample batches, task samples, server lists, group
-assignments, task results, task reports, detections, found targets) and its probe answers
-(:func:`seal_answer`), and admits those only when sealed with that key or
-``~fleet_key_next`` on the topic (or service) they came on (:func:`refusal`, called by
-every :class:`~server_select.ros.senders.SenderGate`; :func:`answer_refusal`). Without
-``~fleet_key`` nothing is signed or checked: every node says which at start
-(:func:`announce`), ``~require_key`` makes a missing key fatal, and a keyless node that
-receives signed messages warns that it should have the key.
+(:class:`SealedPublisher`) and its probe answers (:func:`seal_answer`), and admits those
+only when sealed with that key or ``~fleet_key_next`` on the topic (or service) they came
+on (:func:`refusal`, called by every :class:`~server_select.ros.senders.SenderGate`;
+:func:`answer_refusal`); :func:`reload_keys` reads both files again. Without ``~fleet_key``
+nothing is signed or checked: every node says which at start (:func:`announce`),
+``~require_key`` makes a missing key fatal, and a keyless node that receives signed
+messages warns that it should have the key.
 """
 
 import copy
@@ -27,10 +26,9 @@ _STATE = {}
 
 
 def _configured():
-    """(sealer, verifier) of this node, both None without ``~fleet_key``; read once (then
-    without the lock: every gated message asks). :class:`ParamError` for a key file that
-    cannot be used. The node signs as the role :func:`announce` was given (none: it only
-    checks)."""
+    """(sealer, verifier) of this node, both None without ``~fleet_key``; made once (then
+    read without the lock: every gated message asks), ParamError for a key file that cannot
+    be used. It signs as the role :func:`announce` was given (none: it only checks)."""
     done = _STATE.get('done')
     if done is not None:
         return done
@@ -40,17 +38,44 @@ def _configured():
             if paths['fleet_key_next'] and not paths['fleet_key']:
                 raise ParamError('~fleet_key_next: set ~fleet_key too (the key this node '
                                  'signs with)')
-            role, keys = _STATE.get('role'), []
-            for name, path in sorted(paths.items()):       # fleet_key first: it signs
-                if path:
-                    try:
-                        keys.append(core.load_keys(path, role))
-                    except core.KeyFileError as error:
-                        raise ParamError('~%s: %s' % (name, error))
+            _STATE['paths'] = paths
+            role, keys = _STATE.get('role'), _read_keys()
             sealer = core.Sealer(keys[0], rospy.get_name()) if keys and role else None
             _STATE['done'] = (sealer, core.Verifier(keys, param('fleet_key_max_age'))
                               if keys else None)
         return _STATE['done']
+
+
+def _read_keys():
+    """The keys in this node's key files, the one it signs with first (or ParamError)."""
+    keys = []
+    for name, path in sorted(_STATE['paths'].items()):       # fleet_key first: it signs
+        if path:
+            try:
+                keys.append(core.load_keys(path, _STATE.get('role')))
+            except core.KeyFileError as error:
+                raise ParamError('~%s: %s' % (name, error))
+    return keys
+
+
+def reload_keys():
+    """Read this node's key files again and sign and check with them from now on (a key
+    rotation without a restart; sequence numbers and replays seen stay). ParamError, the
+    keys kept, when a file cannot be used or the node started without a key."""
+    sealer, verifier = _configured()
+    if verifier is None:
+        raise ParamError('~fleet_key: this node started without a key: restart it with one')
+    with _LOCK:
+        keys = _read_keys()
+        if sealer is not None:
+            sealer.use(keys[0])
+        verifier.use(keys)
+
+
+def fingerprints():
+    """(fingerprint of the key this node signs with or None, [of those it admits])."""
+    sealer, verifier = _configured()
+    return sealer and sealer.keys.fingerprint(), [k.fingerprint() for k in verifier.keyrings]
 
 
 def announce(who, role=None):
@@ -78,8 +103,7 @@ _KEYLESS = Throttle(60.0)
 def _keyless_heard(msg, sender):
     """A keyless node received a signed message: say once a minute what it lacks."""
     if getattr(getattr(msg, 'seal', None), 'mac', None):
-        due, _ = _KEYLESS.due()
-        if due:
+        if _KEYLESS.due()[0]:
             rospy.logwarn('%s: received a signed %s from %s but has no ~fleet_key: it counts '
                           'unsigned messages too; give it the fleet\'s key (~fleet_key, or '
                           'fleet_key:= of its launch file)' % (rospy.get_name(), msg._type,
@@ -87,9 +111,8 @@ def _keyless_heard(msg, sender):
 
 
 def enabled():
-    """Whether this node checks (and, with a role, signs) fleet messages (reads the
-    parameters on first use: call it at start-up, where a bad key file ends the node with
-    one clear line)."""
+    """Whether this node checks (and, with a role, signs) fleet messages (call it at start:
+    a bad key file then ends the node with one clear line)."""
     return _configured()[1] is not None
 
 

@@ -3,9 +3,10 @@ signalled and restarted by name, and the master asked from inside the manager's 
 
 Each node runs under a ``roslaunch`` of its own in its host's namespace. A node's pid is
 what the master's ``lookupNode`` and the node's XML-RPC ``getPid`` say (roslaunch starts it
-in a process group of its own). Every launch carries the fleet's keys of the moment (the
-key it signs with, and the one also accepted), so a node restarted after a key rotation
-joins on the new key. ``rosbag record`` does not register again with a restarted roscore,
+in a process group of its own). Every node is given the same two key files (the key it
+signs with, and one it also admits), which hold the keys of the moment: a key rotation
+rewrites them and tells every node to read them again, and a node restarted later reads
+them as they are. ``rosbag record`` does not register again with a restarted roscore,
 so each roscore gets a recorder of its own (``soak_<n>.bag``); the analysis merges them.
 """
 
@@ -18,7 +19,9 @@ import xmlrpc.client
 
 import rosgraph
 
+from server_select.core.trust.keys import copy_key
 from server_select.core.util.procs import stop_group, stop_groups, wait_until
+from server_select.ros import key_reload
 from server_select.ros.graph import node_pid
 from server_select.soak import plan
 
@@ -99,10 +102,26 @@ class SoakFleet(object):
         self.recorders = []
         manager = run.scenario.manager.name
         self.master = MasterLink(run.tb.hosts[manager]['netns'], run.master)
+        folder = os.path.dirname(keys[0])
+        self.key_files = [os.path.join(folder, name) for name in ('sign.key', 'admit.key')]
+        self.install_keys()
+
+    def install_keys(self):
+        """The two key files every node is given, holding the ring's keys of the moment."""
+        for path, source in zip(self.key_files, self.keys.state()):
+            copy_key(source, path)
+
+    def reload_keys(self, timeout=5.0):
+        """Every node told to read its key files again: {service: its answer, or why
+        none}."""
+        def tell():
+            master = rosgraph.Master(CALLER, master_uri=self.master.uri)
+            return key_reload.call_all(key_reload.nodes_serving(master), timeout, master)
+        return self.master.call(tell, timeout=60.0)
 
     def key_args(self):
-        sign, other = self.keys.state()
-        return ['fleet_key:=%s' % sign, 'fleet_key_next:=%s' % other, 'require_key:=true']
+        sign, admit = self.key_files
+        return ['fleet_key:=%s' % sign, 'fleet_key_next:=%s' % admit, 'require_key:=true']
 
     def spec(self, name):
         """(host, launch file, arguments) of node ``name``."""

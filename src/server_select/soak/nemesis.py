@@ -17,14 +17,12 @@ import threading
 import time
 
 from server_select.core.util.procs import stop_groups, wait_until
+from server_select.ros import key_reload
 from server_select.soak import plan
 from server_select.soak.fleet import BURST_RATE
 
 MAIN_NODES = ['manager'] + ['server%d' % s for s in plan.SERVERS] + \
     ['robot%d' % r for r in plan.ROBOTS]
-# a key rotation restarts the fleet in two halves, each half at once
-HALVES = (['manager', 'server1', 'server2', 'robot1', 'robot2', 'robot3'],
-          ['server3', 'server4', 'robot4', 'robot5', 'robot6'])
 
 
 class Nemesis(object):
@@ -86,7 +84,7 @@ class Nemesis(object):
         self.fleet.stop(name)
         self.stops.append((name, time.time(), killed))
         self.fleet.start(name)
-        # the fault lasts until the new copy is registered (as a key rotation's restarts)
+        # the fault lasts until the new copy is registered
         wait_until(lambda: self.fleet.pid(name) not in (None, pid), 60.0, period=0.3)
         return 'pid %s killed' % pid
 
@@ -142,20 +140,20 @@ class Nemesis(object):
         return 'sent %s' % self.fleet.intruder_said()
 
     def key_rotation(self, _fault):
-        """Every node restarted on the next key, in passes (plan.KeyRing), each pass in
-        two halves (each half at once) while the other half serves."""
-        passes = self.fleet.keys.passes()
+        """The fleet's next key, with every node serving: in passes (plan.KeyRing), each
+        pass the key files rewritten and every node told to read them again; the fault
+        lasts until every node has said it did. An error names a node that did not."""
+        passes, told = self.fleet.keys.passes(), []
         for move in passes:
             move()
-            for half in HALVES:
-                stop_groups([self.fleet.procs.pop(name) for name in half])
-                now = time.time()
-                self.stops.extend((name, now, None) for name in half
-                                  if name.startswith('robot'))
-                for name in half:
-                    self.fleet.start(name)
-                wait_until(lambda: all(self.fleet.pid(n) for n in half), 60.0, period=0.5)
-        steps = ' + '.join(move.__name__.replace('_', ' ') for move in passes)
+            self.fleet.install_keys()
+            answers = self.fleet.reload_keys()
+            lines, good = key_reload.report(answers)
+            if not good:
+                raise RuntimeError('key rotation, %s: %s' % (move.__name__, '; '.join(lines)))
+            told.append(len(answers))
+        steps = ' + '.join('%s (%d nodes)' % (move.__name__.replace('_', ' '), n)
+                           for move, n in zip(passes, told))
         return '%s; signing with key %d' % (steps, self.fleet.keys.index + 1)
 
 

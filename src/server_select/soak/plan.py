@@ -19,6 +19,7 @@ ROBOTS = (1, 2, 3, 4, 5, 6)
 CAMERA_ROBOT = 6                          # the robot fed by a camera topic
 BURST_ROBOTS = (101, 102, 103)   # the overload's extra robots, on the first robots' hosts
 RECOVERY = 5.0            # s: the fleet is back this long after a fault ends
+KEY_RECOVERY = 1.0        # s: after a key rotation (no node restarts)
 ROSCORE_RECOVERY = 15.0   # s: after a roscore restart
 WARMUP = (45.0, 25.0)     # s before the first fault (nodes up, windows full): full, short
 TAIL = (20.0, 10.0)       # s after the last fault's allowed recovery: full, short
@@ -33,7 +34,7 @@ KINDS = collections.OrderedDict([
     ('robot_kill', (3.0, 2.0)),       # SIGKILL, restarted after this
     ('overload', (30.0, 12.0)),       # the burst robots double the offered load
     ('intruder', (20.0, 10.0)),       # a keyless node publishes tasks and forged flags
-    ('key_rotation', (0.0, 0.0)),     # every node restarted on the next key (as long as that takes)
+    ('key_rotation', (0.0, 0.0)),     # every node told to read its keys again (as long as it takes)
 ])
 
 
@@ -58,7 +59,7 @@ def target_of(kind, rng, servers=SERVERS):
 def _timing(short):
     """(length of each kind, calm s before each fault, s planned for a key rotation)."""
     lengths = dict((kind, pair[1 if short else 0]) for kind, pair in KINDS.items())
-    return lengths, (4.0 if short else 45.0), (25.0 if short else 60.0)
+    return lengths, (4.0 if short else 45.0), (3.0 if short else 10.0)
 
 
 def _slot(kind, short):
@@ -68,7 +69,7 @@ def _slot(kind, short):
 
 
 def bound_of(kind):
-    return ROSCORE_RECOVERY if kind == 'roscore_kill' else RECOVERY
+    return {'roscore_kill': ROSCORE_RECOVERY, 'key_rotation': KEY_RECOVERY}.get(kind, RECOVERY)
 
 
 def _waves(kinds):
@@ -165,9 +166,10 @@ def scenario(faults, duration, name='soak'):
 
 
 class KeyRing(object):
-    """The fleet's keys through a soak: every node signs with one and also accepts one
-    (``fleet_key``, ``fleet_key_next``). A rotation restarts every node, in passes: each
-    pass's new state must accept what nodes not yet restarted sign, and the reverse."""
+    """The fleet's keys through a soak: every node signs with one and also admits one
+    (``fleet_key``, ``fleet_key_next``). A rotation tells every node to read them again,
+    in passes: each pass's new state must admit what nodes not yet told sign, and the
+    reverse."""
 
     def __init__(self, paths):
         self.paths = list(paths)

@@ -29,8 +29,6 @@ def _restarted(event):
         return ['manager']
     if kind == 'roscore_kill':
         return ['manager'] + ['robot%d' % r for r in ROBOTS]
-    if kind == 'key_rotation':
-        return list(nemesis.MAIN_NODES)
     return []
 
 

@@ -64,6 +64,17 @@ def _hex(text, path, what='fleet key'):
         raise KeyFileError('%s %s is not hex text (make one with make_key)' % (what, path))
 
 
+def copy_key(source, path):
+    """Put the key of file ``source`` at ``path`` in one step, mode 0600 (a node reading
+    ``path`` meanwhile reads the old key or the new one, whole: a rotation's files)."""
+    text = _read_private(source)
+    partial = '%s.%d.part' % (path, os.getpid())
+    fd = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(fd, 'w') as stream:
+        stream.write(text + '\n')
+    os.replace(partial, path)
+
+
 def load_key(path):
     """The fleet key in ``path`` (hex text, as :func:`make_key` writes it). Refused
     (:class:`KeyFileError`) when missing, readable or writable by group or others, not hex, or
@@ -98,6 +109,15 @@ class Keys(object):
 
     def __init__(self, public, role=None, private=None):
         self.public, self.role, self.private = public, role, private
+
+    def fingerprint(self):
+        """12 hex characters naming the fleet these keys belong to (of every role's public
+        key: a fleet key and the role key files made from it say the same), for an
+        operator comparing nodes; it tells nothing of the private keys."""
+        digest = hashlib.sha256()
+        for role in ROLES:
+            digest.update(bytes(self.public[role]))
+        return digest.hexdigest()[:12]
 
     @classmethod
     def from_fleet(cls, fleet_key, role=None):

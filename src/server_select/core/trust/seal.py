@@ -100,6 +100,12 @@ class Sealer(object):
         self._lock = threading.Lock()
         self._last = 0
 
+    def use(self, keys):
+        """Sign with ``keys`` from now on (a key rotation): the sequence numbers go on."""
+        if keys.private is None or keys.role != self.keys.role:
+            raise ValueError('a sealer keeps its role (%s)' % self.keys.role)
+        self.keys = keys
+
     def next_seq(self):
         """The publisher's clock in ns, strictly increasing but across a step back."""
         with self._lock:
@@ -142,15 +148,23 @@ class Verifier(object):
         self._lock = threading.Lock()
         self._seen = {}           # publisher -> {seq: True}, oldest first
 
+    def use(self, keyrings):
+        """Admit signatures made with ``keyrings`` from now on (a key rotation); the
+        sequence numbers seen, and the start, stay (a replay stays one)."""
+        if not keyrings:
+            raise ValueError('a verifier needs a key')
+        self.keyrings = list(keyrings)
+
     def _signer(self, mac_, data, role):
         """Whether ``role`` signed ``data``; else the role that did, or None."""
         mac_ = bytes(mac_)
         if len(mac_) != SIGNATURE_BYTES:
             return None
-        if any(_verifies(k.public[role], mac_, data) for k in self.keyrings):
+        keyrings = self.keyrings           # one set throughout, were it replaced meanwhile
+        if any(_verifies(k.public[role], mac_, data) for k in keyrings):
             return role
         return next((r for r in ROLES if r != role and
-                     any(_verifies(k.public[r], mac_, data) for k in self.keyrings)), None)
+                     any(_verifies(k.public[r], mac_, data) for k in keyrings)), None)
 
     def refusal(self, sender, seq, mac_, payload, where=b'', role='manager'):
         """None when the message counts (and its ``seq`` is now seen), else why not;
