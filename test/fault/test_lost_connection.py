@@ -27,29 +27,32 @@ from test_faults import STABLE, TASK_TIMEOUT, current_server, show, warm_up
 ROBOT = 1
 
 
-def _robot_api():
-    master = rosgraph.Master(rospy.get_name())
-    return xmlrpc.client.ServerProxy(master.lookupNode('/robot%d' % ROBOT))
+def _api(node='/robot%d' % ROBOT):
+    return xmlrpc.client.ServerProxy(rosgraph.Master(rospy.get_name()).lookupNode(node))
 
 
-def hearers(topic):
-    """The nodes robot ROBOT's publisher of ``topic`` is connected to (its bus info)."""
+def hearers(topic, node='/robot%d' % ROBOT, direction='o'):
+    """The nodes ``node`` (robot ROBOT) is connected to on ``topic`` (its bus info):
+    subscribers of its publisher (``o``: their names), or publishers it hears (``i``: their
+    XML-RPC URIs)."""
     try:
-        _, _, connections = _robot_api().getBusInfo(rospy.get_name())
+        _, _, connections = _api(node).getBusInfo(rospy.get_name())
     except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
         return set()
-    return set(c[1] for c in connections if c[4] == topic and c[2] == 'o')
+    return set(c[1] for c in connections if c[4] == topic and c[2] == direction)
 
 
-def heard_again(node, topic, cut, connected=10.0):
+def heard_again(node, topic, cut, connected=10.0, hears=None):
     """Once ``node`` hears robot ROBOT's ``topic``, ``cut()`` its connections (returns how
     many); then ``(how many, whether the robot saw them drop, seconds until ``node`` heard
-    it again, None: not within 4 x DEAF_GRACE)``."""
-    assert wait_until(lambda: node in hearers(topic), connected), hearers(topic)
+    it again, None: not within 4 x DEAF_GRACE)``. ``hears()``: the nodes connected (default:
+    to robot ROBOT's publisher of ``topic``)."""
+    hears = hears or (lambda: hearers(topic))
+    assert wait_until(lambda: node in hears(), connected), hears()
     count = cut()
     t_cut = time.monotonic()
-    dropped = wait_until(lambda: node not in hearers(topic), 10.0, period=0.1)
-    again = wait_until(lambda: node in hearers(topic), 4 * DEAF_GRACE, period=0.2)
+    dropped = wait_until(lambda: node not in hears(), 10.0, period=0.1)
+    again = wait_until(lambda: node in hears(), 4 * DEAF_GRACE, period=0.2)
     return count, dropped, time.monotonic() - t_cut if again else None
 
 
@@ -63,11 +66,10 @@ def _close_reports(rec):
     return len(closed)
 
 
-def destroy_connections(from_pid):
-    """Reset every TCP connection of process ``from_pid`` to robot ROBOT's TCPROS port;
-    how many there were."""
-    _, _, (_, _, port) = _robot_api().requestTopic(rospy.get_name(), '/' + names.TASK_REPORT_TOPIC,
-                                                   [['TCPROS']])
+def destroy_connections(from_pid, to_node='/robot%d' % ROBOT, topic=names.TASK_REPORT_TOPIC):
+    """Reset every TCP connection of process ``from_pid`` to the TCPROS port of ``to_node``
+    (which publishes ``topic``); how many there were."""
+    _, _, (_, _, port) = _api(to_node).requestTopic(rospy.get_name(), '/' + topic, [['TCPROS']])
     lines = subprocess.run(['ss', '-tnpH', 'dport = :%d' % port], capture_output=True,
                            text=True, check=True).stdout.splitlines()
     local = [line.split()[3] for line in lines if 'pid=%d,' % from_pid in line]
@@ -110,6 +112,43 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
         assert rankings['connections reset'] >= 1 and rankings['robot saw it drop']
         assert rankings['manager hears the robot again after s'] != 'never', rankings
         assert rankings['line'] != 'none' or rankings['again'] < DEAF_GRACE, rankings
+
+
+def test_a_robot_whose_result_connection_was_destroyed_hears_its_server_again(ros):
+    """Fleet profile: robot ROBOT's connections to its server's TCPROS port (its results
+    there, its probes) destroyed. rospy's subscriber does not connect again, so the server's
+    results for it would go nowhere while its probes are answered (tasks unanswered for
+    minutes, as after a link outage). The server, hearing probes from a robot whose node
+    has not been connected to its result publisher for DEAF_GRACE s, makes it anew.
+    Printed: the seconds until the robot hears the server's results again, the server's
+    line and the robot's task counts."""
+    rec = ros['rec']
+    rec.clear()
+    with Fleet(ros['log'], profile='fleet', task_rate=STABLE['task_rate']) as fleet:
+        warm_up(rec)
+        server = current_server(rec, ROBOT)
+        node = '/server%d' % server
+        topic = names.robot_topic(ROBOT, names.SORT_RESULT_TOPIC)
+        uri = rosgraph.Master(rospy.get_name()).lookupNode(node)
+        destroyed, dropped, t_again = heard_again(
+            uri, '/' + topic, lambda: destroy_connections(
+                fleet.pid('/robot%d' % ROBOT), node, topic),
+            hears=lambda: hearers('/' + topic, direction='i'))
+        t_back = time.monotonic()
+        answered_there = wait_until(lambda: any(
+            r.msg.ok and r.msg.answered_by == server
+            for r in rec.of(rec.reports, ROBOT, t_back)), 20.0)
+        line = rec.log_lines(node, 'connecting anew')
+        outcomes = rec.outcomes((ROBOT,), TASK_TIMEOUT)[ROBOT]
+    show('robot %d\'s connections to server %d destroyed:' % (ROBOT, server), [{
+        'connections reset': destroyed, 'robot saw it drop': dropped,
+        'robot hears its results again after s': '%.1f' % t_again if t_again else 'never',
+        'a task answered there since': answered_there,
+        'line': (line or ['none'])[0]}, outcomes])
+    assert destroyed >= 1 and dropped
+    assert t_again is not None, 'robot %d never heard server %d\'s results again' % (
+        ROBOT, server)
+    assert (outcomes['never answered'], outcomes['duplicates']) == (0, 0), outcomes
 
 
 def _cut_rankings(fleet, rec):

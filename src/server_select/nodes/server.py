@@ -179,8 +179,12 @@ class ServerNode(object):
             while len(self._known_robots) > KNOWN_ROBOTS:
                 self._known_robots.popitem(last=False)
             self._pool.submit(self._prepare, req.robot_id)
-        elif self.direct and any(h.endpoint.stalled(req.robot_id) for h in self.handlers):
-            self._pool.submit(self._renew, req.robot_id)   # it is back after an outage
+        elif self.direct:       # its result connections: stalled, or ended (an outage)
+            node = (getattr(req, '_connection_header', None) or {}).get('callerid')
+            cut = [(h, node if h.plugin.kind in req.task_kinds else None)
+                   for h in self.handlers]
+            if any(h.endpoint.cut_off(req.robot_id, asked) for h, asked in cut):
+                self._pool.submit(self._renew, req.robot_id, cut)
         if req.task_kinds:      # (kinds it does not serve: nothing to keep)
             rates = zip(req.task_kinds, req.task_rates)
             self.work.announce(req.robot_id, [(k, r) for k, r in rates if k in self._kinds])
@@ -202,13 +206,13 @@ class ServerNode(object):
         for handler in self.handlers:
             handler.endpoint.prepare(robot)
 
-    def _renew(self, robot):
-        for handler in self.handlers:
-            nodes = handler.endpoint.renew(robot)
+    def _renew(self, robot, cut):
+        for handler, node in cut:
+            nodes = handler.endpoint.renew(robot, node)
             if nodes:
-                rospy.logwarn('server %d: %s results to robot %d stalled in TCP '
-                              'retransmission back-off (%s): connecting anew', self.server_id,
-                              handler.plugin.kind, robot, ', '.join(nodes))
+                rospy.logwarn('server %d: %s results to robot %d do not reach %s (stalled in '
+                              'TCP back-off, or the connection ended): connecting anew',
+                              self.server_id, handler.plugin.kind, robot, ', '.join(nodes))
 
     def on_shutdown(self):
         self.announcer.leave()

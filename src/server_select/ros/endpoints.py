@@ -8,10 +8,11 @@ import time
 import rospy
 
 from server_select.core.config import names
+from server_select.core.util.lasting import Lasting
 from server_select.ros import bounded_read
-from server_select.ros.graph import stalled
+from server_select.ros.graph import hearing, stalled
 from server_select.ros.node import fleet
-from server_select.ros.routing import kind_name, renew
+from server_select.ros.routing import DEAF_GRACE, kind_name, renew
 from server_select.ros.seal import SealedPublisher
 
 
@@ -36,6 +37,7 @@ class ResultRoutes(object):
         self.pubs = collections.OrderedDict()      # robot -> publisher, oldest use first
         self.evicted = 0
         self._waiting = collections.deque()         # (until, robot, result)
+        self.deaf = Lasting(DEAF_GRACE)             # robot -> since its node hears none
         self._wake = threading.Condition(self._lock)
         self._sender = None
 
@@ -46,7 +48,8 @@ class ResultRoutes(object):
             self.pubs.move_to_end(robot)
             return pub
         while len(self.pubs) >= self.most:
-            _, old = self.pubs.popitem(last=False)
+            gone, old = self.pubs.popitem(last=False)
+            self.deaf.forget(gone)
             old.unregister()
             self.evicted += 1
         pub = self.pubs[robot] = SealedPublisher(
@@ -58,18 +61,27 @@ class ResultRoutes(object):
         with self._lock:
             return self._pub(robot)
 
-    def stalled(self, robot):
-        """Whether a connection of ``robot``'s result publisher is stalled
-        (:func:`~server_select.ros.graph.stalled`; cheap: asked at each of its probes)."""
+    def cut_off(self, robot, node):
+        """Whether ``robot``'s result publisher must be made anew (cheap: asked at each of
+        its probes): a connection of it is stalled (:func:`~server_select.ros.graph.stalled`),
+        or the robot's ``node`` (None: not asked) has not been connected to it for
+        DEAF_GRACE s. rospy's
+        subscriber connects when the master names a publisher, and not again once that
+        connection ends (reset, or closed just after the master's word): the robot would
+        hear none of this server's results while its probes are answered."""
         with self._lock:
             pub = self.pubs.get(robot)
-        return pub is not None and bool(stalled(pub))
+            deaf = pub is not None and node is not None and \
+                self.deaf.held(robot, node not in hearing(pub))
+        return deaf or (pub is not None and bool(stalled(pub)))
 
-    def renew(self, robot):
-        """Make ``robot``'s result publisher anew if a connection of it is stalled, so
-        that the robot connects again (``DirectRoute.heard`` says why); the stalled nodes."""
+    def renew(self, robot, node):
+        """Make ``robot``'s result publisher anew if a connection of it is stalled or its
+        ``node`` does not hear it, so that the robot connects again; the nodes cut off."""
         with self._lock:
-            return renew(self.pubs, robot, lambda: self._pub(robot))
+            pub = self.pubs.get(robot)
+            deaf = [node] if None not in (pub, node) and node not in hearing(pub) else []
+            return renew(self.pubs, robot, lambda: self._pub(robot), deaf)
 
     def publish(self, robot, result):
         """Send ``result`` to ``robot`` now, or (no subscriber yet) by the sender thread
@@ -143,13 +155,13 @@ class ServerEndpoint(object):
         if self.direct is not None:
             self.direct.prepare(robot)
 
-    def stalled(self, robot):
-        """ResultRoutes.stalled (direct routing; False otherwise)."""
-        return self.direct is not None and self.direct.stalled(robot)
+    def cut_off(self, robot, node):
+        """ResultRoutes.cut_off (direct routing; False otherwise)."""
+        return self.direct is not None and self.direct.cut_off(robot, node)
 
-    def renew(self, robot):
+    def renew(self, robot, node):
         """ResultRoutes.renew (direct routing; [] otherwise)."""
-        return self.direct.renew(robot) if self.direct is not None else []
+        return self.direct.renew(robot, node) if self.direct is not None else []
 
     def held_bytes(self, task):
         """About the memory ``task`` holds while it waits (its kind's estimate)."""
