@@ -43,6 +43,9 @@ VARIANTS = ('paper', 'fleet', 'static', 'fleet_hysteresis') + suite.RULES
 # besides static, any suite variant whose robots select, on hosts of their own
 ACCEPTED = ('static',) + tuple(name for name, v in suite.VARIANTS.items()
                                if v.mode == 'select' and not v.host)
+# s between the servers' lines of the tasks they worked on, whose counts give the work
+# rate: several in the shortest window (12 s), though a line is late on a starved host
+SUMMARY_PERIOD = 2.0
 
 
 def robot_args(kind, rate, folder):
@@ -74,7 +77,7 @@ def run_once(variant, kind, rate, args, work, name):
         for server in range(1, len(shares) + 1):   # a host's /sys hides its cgroup quota
             args_of = ('server%d' % server, 'server.launch', 'server_id:=%d' % server,
                        'routing:=direct', 'workers:=%d' % math.ceil(shares[server - 1]),
-                       'summary_period:=5')
+                       'summary_period:=%g' % SUMMARY_PERIOD)
             if late is not None and server == len(shares):
                 threading.Thread(target=lambda a=args_of: (run.tb.sleep_until(late),
                                                            run.launch(*a)),
