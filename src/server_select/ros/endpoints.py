@@ -65,10 +65,10 @@ class ResultRoutes(object):
         """Whether ``robot``'s result publisher must be made anew (cheap: asked at each of
         its probes): a connection of it is stalled (:func:`~server_select.ros.graph.stalled`),
         or the robot's ``node`` (None: not asked) has not been connected to it for
-        DEAF_GRACE s. rospy's
-        subscriber connects when the master names a publisher, and not again once that
-        connection ends (reset, or closed just after the master's word): the robot would
-        hear none of this server's results while its probes are answered."""
+        DEAF_GRACE s. rospy's subscriber connects when the master names a publisher, and
+        not again once that connection ends (reset, or closed just after the master's
+        word): the robot would hear none of this server's results while its probes are
+        answered."""
         with self._lock:
             pub = self.pubs.get(robot)
             deaf = pub is not None and node is not None and \

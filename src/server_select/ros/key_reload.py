@@ -46,7 +46,7 @@ def _reload(_request):
             seal.reload_keys()
         except ParamError as error:
             if _FAILED.due()[0]:
-                rospy.logwarn('%s: reload_keys: keys kept (%s signs with, admits %s): %s',
+                rospy.logwarn('%s: reload_keys: keys kept (signs with %s, admits %s): %s',
                               rospy.get_name(), *_said(before), error)
             return ReloadKeysResponse(False, 'keys kept: %s' % error, before[0] or '',
                                       before[1])
