@@ -233,9 +233,8 @@ check: deps
 
 # Lint first. Then three streams at once (test/alongside.sh; each mostly waits for nodes,
 # messages and windows: alone, a stream kept this host's 2 cores about half busy), after
-# the tests of CPU limits (QUIET_TESTS: they need no other work beside them). At a low
-# priority (nice 10; at 19 a robot of its rostests got 1 % of a core on a slower host and
-# failed its frames): the package in a fresh catkin workspace (`catkin_make run_tests` runs
+# the tests of CPU limits (QUIET_TESTS: they need no other work beside them). At the
+# lowest priority: the package in a fresh catkin workspace (`catkin_make run_tests` runs
 # every launch-level rostest once, then the demo and a bag), then one tiny run of every
 # benchmark (beside the catkin stage, a fourth stream, they overloaded the 2 cores: timing
 # tests failed in 3 runs of 4). At normal priority, each in a scheduling group of its own: the fault
@@ -244,7 +243,7 @@ check: deps
 # testbed tests (root and TUN; reported as skipped elsewhere). The streams held back print
 # when the foreground is done; the slowest tests are listed.
 test: build
-	@$(ROSENV) cd $(TOP) && $(LINT) && bash test/alongside.sh --nice 10 \
+	@$(ROSENV) cd $(TOP) && $(LINT) && bash test/alongside.sh \
 	  'bash test/catkin_workspace.sh; c=$$?; $(PY) -m pytest -q -rs --durations=5 test/bench \
 	    --ignore=$(BENCH_LAST) && exit $$c' \
 	  bash -c '$(PY) -m pytest -q -rs $(QUIET_TESTS); quiet=$$?; bash test/alongside.sh --nice 0 \
