@@ -17,7 +17,6 @@ once, copy the new key over the ``~fleet_key_next`` files and run ``reload_keys`
 import argparse
 import concurrent.futures
 import sys
-import threading
 
 import rosgraph
 import rospy
@@ -28,7 +27,6 @@ from server_select.ros import seal
 
 SERVICE = 'reload_keys'
 _FAILED = Throttle(60.0)     # a failed reload's log line: one a minute (the caller is told)
-_LOCK = threading.Lock()
 
 
 def serve():
@@ -40,17 +38,14 @@ def serve():
 
 def _reload(_request):
     from server_select.srv import ReloadKeysResponse
-    with _LOCK:     # one at a time: a caller gets the state its own call left
-        before = seal.fingerprints()
-        try:
-            seal.reload_keys()
-        except ParamError as error:
-            if _FAILED.due()[0]:
-                rospy.logwarn('%s: reload_keys: keys kept (signs with %s, admits %s): %s',
-                              rospy.get_name(), *_said(before), error)
-            return ReloadKeysResponse(False, 'keys kept: %s' % error, before[0] or '',
-                                      before[1])
-        after = seal.fingerprints()
+    try:
+        before, after = seal.reload_keys()
+    except ParamError as error:
+        kept = seal.fingerprints()
+        if _FAILED.due()[0]:
+            rospy.logwarn('%s: reload_keys: keys kept (signs with %s, admits %s): %s',
+                          rospy.get_name(), *_said(kept), error)
+        return ReloadKeysResponse(False, 'keys kept: %s' % error, kept[0] or '', kept[1])
     if after != before:          # a call that changes nothing says nothing
         rospy.loginfo('%s: keys read again: signs with %s, admits %s (before: %s, %s)',
                       rospy.get_name(), *(_said(after) + _said(before)))
@@ -106,9 +101,9 @@ def report(answers):
         lines.append('%-40s %-9s signs with %-12s admits %s%s' % (
             name, answer.message if answer.ok else 'FAILED', answer.signs or '-',
             ' '.join(answer.accepts), '' if answer.ok else '\n    ' + answer.message))
-        signs.add(answer.signs or None)
+        if answer.signs:                 # (a node that only checks signs with none)
+            signs.add(answer.signs)
         admits.add(tuple(sorted(answer.accepts)))
-    signs.discard(None)                  # nodes that only check
     ok = bool(answers) and all(not isinstance(a, str) and a.ok for a in answers.values())
     agree = len(signs) <= 1 and len(admits) <= 1
     if answers and not agree:

@@ -1,13 +1,12 @@
 """Signed fleet messages, the ROS side (:mod:`server_select.core.trust.seal` has the rule).
 
-A node with ``~fleet_key`` (a key file) seals what it publishes on the fleet's topics
-(:class:`SealedPublisher`) and its probe answers (:func:`seal_answer`), and admits those
-only when sealed with that key or ``~fleet_key_next`` on the topic (or service) they came
-on (:func:`refusal`, called by every :class:`~server_select.ros.senders.SenderGate`;
-:func:`answer_refusal`); :func:`reload_keys` reads both files again. Without ``~fleet_key``
-nothing is signed or checked: every node says which at start (:func:`announce`),
-``~require_key`` makes a missing key fatal, and a keyless node that receives signed
-messages warns that it should have the key.
+A node with ``~fleet_key`` (a key file) seals what it publishes (:class:`SealedPublisher`)
+and its probe answers (:func:`seal_answer`), and admits those only when sealed with that
+key or ``~fleet_key_next`` on their topic or service (:func:`refusal`, called by every
+:class:`~server_select.ros.senders.SenderGate`; :func:`answer_refusal`); :func:`reload_keys`
+reads both files again. Without ``~fleet_key`` nothing is signed or checked: every node says
+which at start (:func:`announce`), ``~require_key`` makes a missing key fatal, and a keyless
+node that receives signed messages warns that it should have the key.
 """
 
 import copy
@@ -59,17 +58,18 @@ def _read_keys():
 
 
 def reload_keys():
-    """Read this node's key files again and sign and check with them from now on (a key
-    rotation without a restart; sequence numbers and replays seen stay). ParamError, the
+    """Sign and check with this node's key files read again (a rotation without a restart;
+    seqs and replays seen stay): :func:`fingerprints` before and after. ParamError, the
     keys kept, when a file cannot be used or the node started without a key."""
     sealer, verifier = _configured()
     if verifier is None:
         raise ParamError('~fleet_key: this node started without a key: restart it with one')
-    with _LOCK:
-        keys = _read_keys()
+    with _LOCK:         # one at a time: each caller gets the change its own call made
+        before, keys = fingerprints(), _read_keys()
         if sealer is not None:
             sealer.use(keys[0])
         verifier.use(keys)
+        return before, fingerprints()
 
 
 def fingerprints():
