@@ -9,8 +9,11 @@ task is reported once. In the fleet profile the manager's connections to the rob
 then reset the same way: the robot, whose rankings the manager (up) no longer hears,
 publishes them anew, and the manager connects again; and so are the robot's connections to
 its server's results: the server, whose result publisher the probing robot no longer
-hears, makes it anew."""
+hears, makes it anew. Each renewal leaves no descriptor behind: the robot's and the
+server's epoll descriptors (rospy makes one per topic) are as many after the cuts as
+before."""
 
+import os
 import subprocess
 import time
 import xmlrpc.client
@@ -68,6 +71,16 @@ def _close_reports(rec):
     return len(closed)
 
 
+def epolls(pid):
+    """How many epoll descriptors process ``pid`` holds (rospy makes one per topic)."""
+    def target(fd):
+        try:
+            return os.readlink('/proc/%d/fd/%s' % (pid, fd))
+        except OSError:
+            return ''
+    return sum('eventpoll' in target(fd) for fd in os.listdir('/proc/%d/fd' % pid))
+
+
 def destroy_connections(from_pid, to_node='/robot%d' % ROBOT, topic=names.TASK_REPORT_TOPIC):
     """Reset every TCP connection of process ``from_pid`` to the TCPROS port of ``to_node``
     (which publishes ``topic``); how many there were."""
@@ -91,6 +104,8 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
         server = current_server(rec, ROBOT)
         node = '/server%d' % server
         topic = '/' + (names.server_topic(server, 'data') if profile == 'fleet' else 'data')
+        pids = [fleet.pid(n) for n in ('/robot%d' % ROBOT, node)]
+        epolls_before = [epolls(pid) for pid in pids]
         destroyed, dropped, t_again = heard_again(
             node, topic, lambda: destroy_connections(fleet.pid(node)))
         again = t_again is not None
@@ -98,18 +113,23 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
         rankings = _cut_rankings(fleet, rec) if profile == 'fleet' else None
         results = _cut_results(fleet, rec) if profile == 'fleet' else None
         outcomes = rec.outcomes((ROBOT,), TASK_TIMEOUT)[ROBOT]
+        epolls_after = [epolls(pid) for pid in pids]
     show('%s profile: server %d\'s connections to robot %d destroyed:' % (
         profile, server, ROBOT), [{
             'connections reset': destroyed, 'robot saw it drop': dropped,
             'server hears the robot again after s': '%.1f' % t_again if again else 'never',
-            'line': (rec.log_lines('/robot%d' % ROBOT, 'connecting anew') or ['none'])[0]},
-            outcomes])
+            'line': (rec.log_lines('/robot%d' % ROBOT, 'connecting anew') or ['none'])[0],
+            'epoll descriptors of robot, server before': epolls_before,
+            'after': epolls_after}, outcomes])
     assert destroyed >= 1 and dropped
     assert again, 'server %d never heard robot %d\'s tasks again' % (server, ROBOT)
     # the robot's line when it made the connection anew; none when rospy's own reconnection
     # of the server's subscriber came first (before DEAF_GRACE, once in CI: after 4.2 s)
     assert said or t_again < DEAF_GRACE, t_again
     assert (outcomes['never answered'], outcomes['duplicates']) == (0, 0), outcomes
+    # before the renewals closed the old topic's poller, one more for each: robot 15 -> 17
+    kept = all(a <= b for a, b in zip(epolls_after, epolls_before))
+    assert kept, (epolls_before, epolls_after)
     if rankings is not None:
         show('the manager\'s connections to robot %d destroyed:' % ROBOT, [rankings])
         assert rankings['connections reset'] >= 1 and rankings['robot saw it drop']

@@ -11,7 +11,7 @@ from server_select.core.config import names
 from server_select.core.util.lasting import Lasting
 from server_select.ros import bounded_read
 from server_select.ros.graph import hearing, stalled
-from server_select.ros.node import fleet
+from server_select.ros.node import fleet, unregister
 from server_select.ros.routing import DEAF_GRACE, kind_name, renew
 from server_select.ros.seal import SealedPublisher
 
@@ -50,7 +50,7 @@ class ResultRoutes(object):
         while len(self.pubs) >= self.most:
             gone, old = self.pubs.popitem(last=False)
             self.deaf.forget(gone)
-            old.unregister()
+            unregister(old)
             self.evicted += 1
         pub = self.pubs[robot] = SealedPublisher(
             fleet(names.robot_topic(robot, self.topic)), self.msg_type, queue_size=100)

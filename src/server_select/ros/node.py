@@ -128,3 +128,18 @@ def flush(publisher, timeout=1.0):
     return wait_until(lambda: not any(getattr(c, '_queue', None)
                                       for c in list(publisher.impl.connections)),
                       timeout, period=0.01)
+
+
+def unregister(endpoint):
+    """``endpoint.unregister()`` (a rospy Publisher or Subscriber), then, when that closed
+    its topic (no other handle in this node shares it), the topic's poller as well. rospy
+    leaves that epoll descriptor to the garbage collector, and a closed topic sits in a
+    reference cycle that only a full collection frees: a node that lives for hours and
+    makes topics anew (a stalled connection renewed, a robot come and gone) held one more
+    descriptor for each, about ten an hour a robot under link outages."""
+    impl = endpoint.impl
+    endpoint.unregister()
+    if impl is not None and impl.closed:
+        poller = getattr(getattr(impl, 'connection_poll', None), 'poller', None)
+        if hasattr(poller, 'close'):
+            poller.close()

@@ -4,7 +4,7 @@ import rospy
 
 from server_select.core.config import names
 from server_select.msg import LatencySample, LatencySamples
-from server_select.ros.node import fleet
+from server_select.ros.node import fleet, unregister
 from server_select.ros.seal import SealedPublisher
 
 
@@ -31,7 +31,7 @@ class ProbeSamples(object):
     def remove(self, server):
         pub = self._pubs.pop(server, None)
         if pub is not None:
-            pub.unregister()
+            unregister(pub)
 
     def sample(self, server, seq, stamp, rtt, error):
         """One sample (``rtt`` None: failed, for ``error``)."""

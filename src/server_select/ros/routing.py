@@ -16,7 +16,7 @@ from server_select.core.config import names
 from server_select.core.util import tcp
 from server_select.core.util.lasting import Lasting
 from server_select.ros.graph import hearing, stalled
-from server_select.ros.node import fleet
+from server_select.ros.node import fleet, unregister
 
 # s a server that answers probes (so it subscribes to our task topic) may go without hearing
 # our task publisher before the publisher is made anew. rospy connects a subscriber once,
@@ -89,7 +89,7 @@ class BroadcastRoute(object):
             pubs, self.pubs = list(self.pubs.values()), {}
         for endpoint in pubs + [self.sub]:
             if endpoint is not None:
-                endpoint.unregister()
+                unregister(endpoint)
 
 
 class DirectRoute(object):
@@ -149,14 +149,14 @@ class DirectRoute(object):
         with self._lock:
             pub = self.pubs.pop(server, None)
         if pub is not None:
-            pub.unregister()
+            unregister(pub)
 
     def shutdown(self):
         with self._lock:
             pubs, self.pubs = list(self.pubs.values()), {}
         for endpoint in pubs + [self.sub]:
             if endpoint is not None:
-                endpoint.unregister()
+                unregister(endpoint)
 
 
 ROUTES = {'broadcast': BroadcastRoute, 'direct': DirectRoute}
@@ -175,7 +175,7 @@ def renew(pubs, key, make, deaf=()):
         for connection in list(pub.impl.connections):
             tcp.reset_on_close(getattr(connection, 'socket', None))
         del pubs[key]
-        pub.unregister()
+        unregister(pub)
         make()
     return nodes
 
