@@ -14,7 +14,8 @@ def test_a_probe_announces_the_robots_send_rate_only_to_where_its_tasks_go():
     the last 5 s), told of each attempt as the robot's streams tell it."""
     clock = Clock(0.0)
     heading = {'server': 2}
-    load = RobotLoad({'image': 0.5, 'sort': 4.0}, lambda: heading['server'], clock=clock)
+    load = RobotLoad({'image': 0.5, 'sort': 4.0}, lambda kind: heading['server'],
+                     clock=clock)
     # nothing sent yet: the streams' rates, to the server its first task goes to
     assert load.announcement(2) == (['image', 'sort'], [0.5, 4.0])
     assert load.announcement(1) == (['image', 'sort'], [0.0, 0.0])
@@ -34,8 +35,17 @@ def test_a_probe_announces_the_robots_send_rate_only_to_where_its_tasks_go():
     assert load.announcement(1)[1] == [0.0, 4.0]
 
 
+def test_each_kind_is_announced_to_where_that_kind_goes():
+    """Frames to server 1, sort tasks to server 2: each server counts the robot's tasks
+    that go there, and only those."""
+    load = RobotLoad({'image': 0.5, 'sort': 4.0}, {'image': 1, 'sort': 2}.get, clock=Clock(0.0))
+    assert load.announcement(1) == (['image', 'sort'], [0.5, 0.0])
+    assert load.announcement(2) == (['image', 'sort'], [0.0, 4.0])
+    assert load.announcement(3) == (['image', 'sort'], [0.0, 0.0])
+
+
 def test_the_wait_comes_from_the_answers_utilization():
-    load = RobotLoad({'image': 1.0}, lambda: 1)
+    load = RobotLoad({'image': 1.0}, lambda kind: 1)
     answer = LatencyProbeResponse(server_id=1, workers=1, backlog=3.0, utilization=0.5,
                                   kinds=['image'], service_time=[0.6])
     assert load.on_answer(1, load_of(answer)) == pytest.approx(0.6 + 0.5 * 0.6 / 2 / 0.5)
@@ -43,7 +53,7 @@ def test_the_wait_comes_from_the_answers_utilization():
 
 
 def test_a_frame_is_fresh_until_the_next_one_is_due_and_for_twice_its_best_answer():
-    load = RobotLoad({'image': 1.0}, lambda: 1)
+    load = RobotLoad({'image': 1.0}, lambda kind: 1)
     answer = LatencyProbeResponse(server_id=1, workers=1, backlog=3.0, utilization=0.5,
                                   kinds=['image'], service_time=[0.6])
     fresh = load.fresh_for('image', 2.0, lambda: 1.0 / 0.5)        # a frame every 2 s

@@ -106,9 +106,9 @@ class Recorder(Events):
         self._note('sample', server, seq, None if rtt is None else round(rtt, 6), error)
         self.inner.sample(server, seq, rtt, error, wait, round_number)
 
-    def moved(self, server, why):
-        self._note('moved', server, why)
-        self.inner.moved(server, why)
+    def moved(self, server, why, kind):
+        self._note('moved', server, why, kind)
+        self.inner.moved(server, why, kind)
 
     def ejected(self, server, ejection, why):
         self._note('ejected', server, ejection.seconds, why)

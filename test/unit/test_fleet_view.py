@@ -54,7 +54,7 @@ def test_a_switch_shows_with_the_reason_the_robot_logged():
     view.task(1, 2, 2, True, 0.0)
     view.task(1, 3, 3, True, 5.0)
     assert ' '.join(row(view.lines(6.0), 'ROBOT', 1)[6:]) == '1 s ago, 2 -> 3'
-    view.log('robot 1: tasks go to server 1 now (server 1 faster than 3 by 4.2 ms)', 7.0)
+    view.log('robot 1: sort tasks go to server 1 now (server 1 faster than 3 by 4.2 ms)', 7.0)
     view.task(1, 1, 1, True, 7.1)
     switch = ' '.join(row(view.lines(8.0), 'ROBOT', 1)[6:])
     assert switch == '1 s ago, 3 -> 1: server 1 faster than 3 by 4.2 ms', switch

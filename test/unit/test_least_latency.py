@@ -69,7 +69,7 @@ def test_least_latency_keeps_its_server_within_the_noise_and_leaves_beyond_it():
     clock = Clock()
     rule = least_latency(clock)
     moves = []
-    rule.on_move = lambda server, why: moves.append((server, why))
+    rule.on_move = lambda server, why, kind: moves.append((server, why))
     rule.started(1, 'image')
     for j in [0.0, 0.004, -0.004, 0.002, -0.002]:   # 1 ms apart under +-4 ms of noise
         rule.probed(1, 0.011 + j, load())
@@ -173,7 +173,7 @@ def herd(seed, robots=20, steps=150, work=0.04):
     for rule in rules:
         rule.started(1, 'image')
         rule.ended(1)
-        rule.on_move = lambda server, why: moves.update([server])
+        rule.on_move = lambda server, why, kind: moves.update([server])
     on, counts = [1] * robots, []
     for step in range(steps):
         servers = [1, 2] if step >= 20 else [1]
@@ -291,3 +291,25 @@ def test_least_latency_work_reports_that_vary_are_noise_not_a_reason_to_move():
     kept = newest(0.005)
     assert kept.server == 1 and kept.reason == 'kept: within the noise of server 2', kept
     assert newest(0.05).server == 2
+
+
+def test_least_latency_sends_each_kind_where_it_is_served_best_without_moving_back_and_forth():
+    """Frames are done soonest on server 1, sort tasks on server 2: each kind keeps its
+    server, and a frame sent to 1 is no move of the sort tasks (before, each task of the
+    other kind moved the robot: two moves a frame)."""
+    clock = Clock()
+    rule = least_latency(clock)
+    moves = []
+    rule.on_move = lambda server, why, kind: moves.append((kind, server))
+    work = {1: {'image': 0.050, 'sort': 0.020}, 2: {'image': 0.200, 'sort': 0.001}}
+    for j in [0.0, 0.0002, -0.0002, 0.0001, -0.0001]:
+        for server, rtt in [(1, 0.010), (2, 0.012)]:
+            rule.probed(server, rtt + j, Load(0, 0, 1, 0.0, work[server], 0.0, None))
+        clock.now += 0.1
+    sent = [(kind, send(rule, [1, 2], kind)) for _ in range(25)
+            for kind in ('sort', 'sort', 'image')]
+    assert set(sent) == {('sort', 2), ('image', 1)}
+    assert sorted(moves) == [('image', 1), ('sort', 2)]
+    # where the robot's tasks go, to its views: the kind it sends most of
+    assert rule.chosen == 2 and rule.chosen_for == {'sort': 2, 'image': 1}
+    assert rule.contenders([1, 2]) == {1, 2}

@@ -59,6 +59,8 @@ def test_the_legend_says_what_every_column_of_the_table_means():
 def test_one_count_of_switches_from_where_tasks_went():
     assert switch_count([1, 1, 2, -1, 2, -2, 3, 1]) == 3     # no server, local: left out
     assert switch_count([]) == 0
+    # frames to 1 and sort tasks to 2, taking turns: neither kind switches
+    assert switch_count([1, 2, 1, 2, 3], ['image', 'sort', 'image', 'sort', 'sort']) == 1
 
 
 def test_percentiles_match_numpys_linear_interpolation():

@@ -77,7 +77,7 @@ class ReportNode(object):
         if cut_off(report.error):       # a robot stopped with it out: not the fleet's doing
             return
         self.report.add_task(report.robot_id, report.ok, report.rtt, report.answered_by,
-                             report.error, report.task_id, report.server_id)
+                             report.error, report.task_id, report.server_id, report.kind)
 
     def finish(self, _event=None):
         summaries = self.report.summaries()   # one moment for the table and the verdict

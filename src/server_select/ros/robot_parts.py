@@ -109,8 +109,9 @@ class RobotWire(Transport, Events):
             rospy.logwarn('robot %d: server %d has not answered yet (%s): a candidate once '
                           'it answers', self.robot_id, server, why)
 
-    def moved(self, server, why):
-        rospy.loginfo('robot %d: tasks go to server %d now (%s)', self.robot_id, server, why)
+    def moved(self, server, why, kind):
+        rospy.loginfo('robot %d: %s tasks go to server %d now (%s)', self.robot_id, kind,
+                      server, why)
         if self.on_move is not None:
             self.on_move()
 

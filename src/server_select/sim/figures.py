@@ -10,6 +10,7 @@ time from the change to the robot's first task sent there (median over the chang
 
 import collections
 
+from server_select.core.observe.summary import switch_count
 from server_select.core.util.stats import percentile
 
 Figures = collections.namedtuple(
@@ -69,9 +70,8 @@ def figures(sim, variant):
     times = sorted(o.rtt if o.ok else sim.timeout for o in outcomes)
     switches = 0
     for robot in robots:
-        servers = [o.server_id for o in sorted(by_robot[robot.id], key=lambda o: o.stamp)
-                   if o.server_id >= 0]
-        switches += sum(1 for a, b in zip(servers, servers[1:]) if a != b)
+        mine = sorted(by_robot[robot.id], key=lambda o: o.stamp)
+        switches += switch_count([o.server_id for o in mine], [o.kind for o in mine])
     minutes = (end - start) / 60.0
     flows = [s.flow for r in robots for s in r.robot.streams]
     sent = sum(f.sent for f in flows)

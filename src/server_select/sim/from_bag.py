@@ -122,11 +122,12 @@ def recorded(run, measure_from, timeout=None):
     times = sorted(r.rtt if r.ok else timeout for r in mine)
     by_robot = collections.defaultdict(list)
     for r in mine:
-        by_robot[r.robot].append((r.task, r.server))
+        by_robot[r.robot].append((r.task, r.server, r.kind))
     end = max([r.t for r in run.reports] + [s.t for s in run.samples])
     minutes = max(1e-9, end - measure_from) / 60.0
     return {'tasks': len(mine), 'mean': sum(times) / len(times) if times else None,
             'p99': percentile(times, 99) if times else None,
             'failed': sum(1 for r in mine if not r.ok),
-            'switches': sum(switch_count([s for _, s in sorted(t)])
+            'switches': sum(switch_count([s for _, s, _ in sorted(t)],
+                                         [k for _, _, k in sorted(t)])
                             for t in by_robot.values()) / minutes / max(1, len(by_robot))}

@@ -63,7 +63,8 @@ def load(bag_path):
 
 
 def switches(reports):
-    """Changes of the server a robot sent its tasks to (in task order), per robot.
+    """Changes of the server a robot sent its tasks to (in task order, within each kind),
+    per robot.
 
     Counted from the robots' task reports, so that a fixed robot shows none whatever the
     manager publishes; tasks sent with no server selected do not count.
@@ -71,9 +72,10 @@ def switches(reports):
     counts = collections.Counter()
     by_robot = collections.defaultdict(list)
     for r in reports:
-        by_robot[r.robot].append((r.task, r.server))
+        by_robot[r.robot].append((r.task, r.server, r.kind))
     for robot, tasks in by_robot.items():
-        counts[robot] = switch_count([server for _, server in sorted(tasks)])
+        tasks.sort()
+        counts[robot] = switch_count([s for _, s, _ in tasks], [k for _, _, k in tasks])
     return counts
 
 

@@ -11,11 +11,12 @@ from server_select.core.load.board import LoadBoard
 
 class RobotLoad(object):
     """What the robot's tasks would wait for at each server: ``mix`` is ``{kind: tasks
-    per second}`` of the robot's streams. ``target()`` names the server the robot's next
-    task goes to: a probe of it announces the rate the robot sends tasks at (``sends``,
-    the robot's :class:`~server_select.core.load.demand.SendRate`, the count its rule
-    reads; a kind's rate in ``mix`` until its first task is sent), a probe of any other
-    announces none, so that servers count the robot where its tasks go now. A report older
+    per second}`` of the robot's streams. ``target(kind)`` names the server the robot's
+    next ``kind`` task goes to: a probe of it announces the rate the robot sends that kind
+    at (``sends``, the robot's :class:`~server_select.core.load.demand.SendRate`, the count
+    its rule reads; the kind's rate in ``mix`` until its first task is sent), a probe of
+    any other announces none of it, so that servers count the robot's tasks where they go
+    now (frames to one server and sort tasks to another, each where it goes). A report older
     than ``max_age`` s (the robot's window: one age for every use of an answer) counts as
     none. Thread-safe."""
 
@@ -44,12 +45,15 @@ class RobotLoad(object):
 
     def announcement(self, server):
         """``(kinds, tasks per second of each)`` for a probe of ``server``."""
-        if self.target is None or self.target() != server:
+        going = [self.target is not None and self.target(kind) == server
+                 for kind in self.kinds]
+        if not any(going):
             return self.kinds, [0.0] * len(self.kinds)
         now, sent = self._clock(), set(self.sends.kinds())
         with self._lock:
-            return self.kinds, [self.sends.count(kind, now) / self.sends.horizon
-                                if kind in sent else self.mix[kind] for kind in self.kinds]
+            return self.kinds, [0.0 if not there else self.sends.count(kind, now) /
+                                self.sends.horizon if kind in sent else self.mix[kind]
+                                for kind, there in zip(self.kinds, going)]
 
     def set_rate(self, kind, rate):
         """The robot's ``kind`` stream sends ``rate`` tasks a second from now (tuned)."""

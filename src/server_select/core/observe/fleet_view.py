@@ -21,7 +21,7 @@ Load = collections.namedtuple('Load', 'queued in_service workers utilization')
 
 # log lines of the fleet that say something an operator wants to see (robot nodes' own
 # wording: server_select.nodes.robot, ros.senders, ros.prober)
-_SWITCH = re.compile(r'robot (\d+): tasks go to server (\d+) now \((.*)\)')
+_SWITCH = re.compile(r'robot (\d+): (?:\S+ )?tasks go to server (\d+) now \((.*)\)')
 _ALONE = re.compile(r'robot (\d+): no fresh flag')
 _IGNORED = re.compile(r'^(.*?): ignored (.*?) published by (\S+)')
 

@@ -8,12 +8,25 @@ from server_select.core.util.stats import summarize
 from server_select.core.util.tables import markdown_table
 
 
-def switch_count(servers):
-    """Changes in ``servers``, the servers a robot sent its tasks to in task order (no
-    server, or its own CPU, left out): the one count of switches of the demo's table, the
+def switch_count(servers, kinds=None):
+    """Changes in ``servers``, the servers a robot sent its tasks to in task order, within
+    each kind (``kinds``: the tasks' kinds in the same order; None: one kind): a robot whose
+    frames go to one server and its sort tasks to another switches neither. No server, or
+    the robot's own CPU, is left out. The one count of switches of the demo's table, the
     bag analysis and the league."""
-    servers = [s for s in servers if s is not None and s >= 0]
-    return sum(1 for a, b in zip(servers, servers[1:]) if a != b)
+    last, count = {}, 0
+    for server, kind in zip(servers, kinds if kinds is not None else [None] * len(servers)):
+        if server is None or server < 0:
+            continue
+        count += last.get(kind, server) != server
+        last[kind] = server
+    return count
+
+
+def _servers_and_kinds(sent_to):
+    """([server], [kind]) of ``{task id: (server, kind)}`` in task order."""
+    ordered = [sent_to[task] for task in sorted(sent_to)]
+    return [s for s, _ in ordered], [k for _, k in ordered]
 
 
 class RunReport(object):
@@ -22,19 +35,21 @@ class RunReport(object):
     def __init__(self, timeout=default('task_timeout')):
         self.timeout = timeout   # a failed task's round trip in the statistics
         self.flags = {}
-        self.sent_to = collections.defaultdict(dict)   # robot -> {task id: server sent to}
+        self.sent_to = collections.defaultdict(dict)   # robot -> {task id: (server, kind)}
         self.tasks = collections.defaultdict(list)
         self.probes = collections.defaultdict(list)
 
     def add_flag(self, robot_id, server_id, ranking, means):
         self.flags[robot_id] = (server_id, list(ranking), list(means))
 
-    def add_task(self, robot_id, ok, rtt, server_id, error, task_id=None, sent_to=None):
+    def add_task(self, robot_id, ok, rtt, server_id, error, task_id=None, sent_to=None,
+                 kind=None):
         """A task report: answered by ``server_id``; ``sent_to`` the server it was first
-        sent to (its ``task_id`` orders them), which switches are counted from."""
+        sent to (its ``task_id`` orders them), which switches are counted from, per
+        ``kind``."""
         self.tasks[robot_id].append((ok, rtt, server_id, error))
         if task_id is not None and sent_to is not None:
-            self.sent_to[robot_id][task_id] = sent_to
+            self.sent_to[robot_id][task_id] = (sent_to, kind)
 
     def add_probe(self, robot_id, server_id, ok, rtt):
         self.probes[robot_id].append((server_id, ok, rtt))
@@ -48,7 +63,7 @@ class RunReport(object):
             'selected': selected,
             'ranking': ranking,
             'mean_latency_ms': [m * 1e3 for m in means],
-            'switches': switch_count([s for _, s in sorted(self.sent_to[robot_id].items())]),
+            'switches': switch_count(*_servers_and_kinds(self.sent_to[robot_id])),
             'tasks': len(tasks),
             'ok': sum(1 for t in tasks if t[0]),
             'failed': sum(1 for t in tasks if not t[0]),

@@ -58,7 +58,7 @@ class Robot(object):
             rule_args=dict(rule_args or {}, sends=self.sends))
         self.balancer = self.selection.balancer
         if self.balancer is not None:
-            self.balancer.on_move = lambda server, why: self.events.moved(server, why)
+            self.balancer.on_move = lambda server, why, kind: self.events.moved(server, why, kind)
         self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds),
                               self.selection.heading, self.balancer, clock,
                               max_age=get('window'), sends=self.sends) \

@@ -219,19 +219,19 @@ class Selection(object):
         """The first candidate, or NO_SERVER (a decision: :meth:`heading` makes none)."""
         return (self.candidates() or [NO_SERVER])[0]
 
-    def heading(self):
-        """Where the next task would go by the last decision, without making one (a
-        robot deciding alone decides when it sends): the manager's selection while its
-        flags are fresh, else the robot's own; when that one is ejected, where the rule
-        sends the next task; NO_SERVER: none."""
+    def heading(self, kind=None):
+        """Where the next task (of ``kind``; None: of the kind sent most) would go by the
+        last decision, without making one (a robot deciding alone decides when it sends):
+        the manager's selection while its flags are fresh, else the robot's own; when that
+        one is ejected, where the rule sends the next task; NO_SERVER: none."""
         if self.mode != 'select':
             return self.target()
         if self.balancer is not None:
-            last = self.balancer.chosen
+            last = self.balancer.chosen_for.get(kind, self.balancer.chosen)
             if last is None or self.health is None or self.health.usable(last):
                 return NO_SERVER if last is None else last
             usable = self._usable()     # (only then: heading() is asked at every probe)
-            return last if last in usable else (self.balancer.order(usable) or [NO_SERVER])[0]
+            return last if last in usable else (self.balancer.order(usable, kind) + [NO_SERVER])[0]
         ranking = self.manager_ranking()
         if ranking is None:
             with self._lock:

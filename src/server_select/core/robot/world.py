@@ -59,8 +59,8 @@ class Events(object):
         """``server`` failed (``why``) and the health table ejected it (``ejection``: its
         seconds; 0: it has not answered yet)."""
 
-    def moved(self, server, why):
-        """The per-task rule moved the robot's tasks to ``server`` for ``why``."""
+    def moved(self, server, why, kind):
+        """The per-task rule moved the robot's ``kind`` tasks to ``server`` for ``why``."""
 
     def waiting(self, kind, what):
         """``kind``'s first task waits for ``what``."""

@@ -42,7 +42,10 @@ class Balancer(object):
     answer of each, and a random source (``rng``), drawn from once per task (``draw``:
     the next decision's numbers, so that asking draws nothing); ``sends``: the robot's
     :class:`~server_select.core.load.demand.SendRate`, which the robot feeds (None: the
-    rule counts its own attempts, as a rule made alone). Thread-safe."""
+    rule counts its own attempts, as a rule made alone). Each kind of task goes where the
+    rule sends that kind (:attr:`chosen_for`): a robot sending frames and sort tasks may be
+    served best by two servers, and a frame sent to one is no move of its sort tasks.
+    Thread-safe."""
 
     name = None
     copies = 1
@@ -56,9 +59,10 @@ class Balancer(object):
         self._lock = threading.Lock()
         self.attempts_out = collections.Counter()     # server -> this robot's attempts out there
         self.probes = {}                     # server -> its newest ProbeAnswer
-        self.chosen = None                     # where the last task went
-        self.reason = ''                        # why tasks go there (the last decision's)
-        self.on_move = None                  # on_move(server, why): the rule moved, why
+        self.chosen_for = {}                 # kind -> where its last task went
+        self.reason_for = {}                 # kind -> why its tasks go there
+        self._main = None                    # the kind the robot sent most of lately
+        self.on_move = None                  # on_move(server, why, kind): kind's tasks moved
         self.next_draw = self._draws()
 
     def _draws(self):
@@ -96,13 +100,34 @@ class Balancer(object):
             if first:       # a decision's draw is spent (a re-send or a hedge takes the next
                 self.next_draw = self._draws()    # in the order, and draws nothing)
             said = getattr(order, 'reasons', {}).get(server) if first else None
-            if first and server != self.chosen:
+            if first and kind != self._main:
+                self._main = self._main_kind(now, kind)
+            if first and server != self.chosen_for.get(kind):
                 moved = said                          # (a peer's: unexplained)
-                self.chosen, self.reason = server, said or ''
+                self.chosen_for[kind], self.reason_for[kind] = server, said or ''
             elif said:      # kept: why, as the last decision said ("kept: the fastest")
-                self.reason = said
+                self.reason_for[kind] = said
         if moved is not None and self.on_move is not None:
-            self.on_move(server, moved)
+            self.on_move(server, moved, kind)
+
+    @property
+    def chosen(self):
+        """Where the robot's tasks go: those of the kind it sent most of lately (None: none
+        sent yet)."""
+        return self.chosen_for.get(self._main)
+
+    @property
+    def reason(self):
+        """Why :attr:`chosen` (the last decision's reason for that kind)."""
+        return self.reason_for.get(self._main, '')
+
+    def _main_kind(self, now, sent=None):
+        """The kind the robot sent most of lately (``sent``, the one just sent, when none
+        is counted yet)."""
+        counts = dict((k, self.sends.count(k, now)) for k in self.sends.kinds())
+        if not any(counts.values()):
+            return sent
+        return max(sorted(counts, key=str), key=counts.get)
 
     def _started(self, server, kind, now):
         """Subclasses: an attempt was sent (lock held)."""

@@ -116,8 +116,9 @@ class LeastLatency(Balancer):
             {decision.server: decision.reason})
 
     def _decide(self, servers, kind, now):
-        here = self.chosen if self.chosen in servers else None
-        gone = self.chosen is not None and here is None
+        chosen = self.chosen_for.get(kind)
+        here = chosen if chosen in servers else None
+        gone = chosen is not None and here is None
         rate = self.rate(kind, now)
         estimates = self._pooled(dict((s, self.estimate(s, kind, now, rate)) for s in servers))
         known = dict((s, e) for s, e in estimates.items() if e is not None)
@@ -136,7 +137,7 @@ class LeastLatency(Balancer):
         there = near[int(self.next_draw * len(near))]
         why = 'server %s faster than %s by %.3g ms' % (
             there, here, 1e3 * (known[here].latency - known[there].latency)) \
-            if here in known else 'server %s not usable' % self.chosen if gone else \
+            if here in known else 'server %s not usable' % chosen if gone else \
             'server %s not heard from in %g s' % (here, self.window) if here else 'the fastest'
         return Decision(there, why + (' (%d within the noise: one at random)' % len(near)
                                       if len(near) > 1 else ''), estimates)
@@ -153,11 +154,6 @@ class LeastLatency(Balancer):
         return dict((s, e._replace(error=max(e.error, spread)) if e and e.answers == 1 else e)
                     for s, e in estimates.items())
 
-    def _main_kind(self, now):
-        """The kind the robot sent most of lately (None: none sent)."""
-        counts = dict((k, self.sends.count(k, now)) for k in self.sends.kinds())
-        return max(sorted(counts, key=str), key=counts.get) if any(counts.values()) else None
-
     def _estimates(self, servers, now):
         """``{server: Estimate or None}`` for the kind the robot sent most of lately."""
         kind = self._main_kind(now)
@@ -165,14 +161,15 @@ class LeastLatency(Balancer):
         return self._pooled(dict((s, self.estimate(s, kind, now, rate)) for s in servers))
 
     def contenders(self, servers):
-        """The servers worth probing often, by the estimates the choice uses: where tasks
-        go, those within the noise of the best, and those with no answer in the window
-        (never heard from, or back from an outage)."""
+        """The servers worth probing often, by the estimates the choice uses: where each
+        kind's tasks go, those within the noise of the best, and those with no answer in
+        the window (never heard from, or back from an outage)."""
         with self._lock:
             estimates = self._estimates(servers, self._clock())
+            chosen = set(self.chosen_for.values())
         known = dict((s, e) for s, e in estimates.items() if e is not None)
         best = min(known.values(), key=lambda e: e.latency) if known else None
-        return set(s for s in servers if s == self.chosen or s not in known or
+        return set(s for s in servers if s in chosen or s not in known or
                    within(known[s], best))
 
     def view(self, servers):
