@@ -136,7 +136,7 @@ def unregister(endpoint):
     leaves that epoll descriptor to the garbage collector, and a closed topic sits in a
     reference cycle that only a full collection frees: a node that lives for hours and
     makes topics anew (a stalled connection renewed, a robot come and gone) held one more
-    descriptor for each, about ten an hour a robot under link outages."""
+    descriptor for each: a robot one or two per link outage of one of its servers."""
     impl = endpoint.impl
     endpoint.unregister()
     if impl is not None and impl.closed:
