@@ -13,7 +13,6 @@ hears, makes it anew. Each renewal leaves no descriptor behind: the robot's and 
 server's epoll descriptors (rospy makes one per topic) are as many after the cuts as
 before."""
 
-import os
 import subprocess
 import time
 import xmlrpc.client
@@ -23,7 +22,7 @@ import rosgraph
 import rospy
 
 from server_select.core.config import names
-from server_select.core.util.procs import wait_until
+from server_select.core.util.procs import epoll_descriptors as epolls, wait_until
 from server_select.ros.routing import DEAF_GRACE
 
 from support.fleet import Fleet
@@ -69,16 +68,6 @@ def _close_reports(rec):
     for connection in closed:
         connection.close()
     return len(closed)
-
-
-def epolls(pid):
-    """How many epoll descriptors process ``pid`` holds (rospy makes one per topic)."""
-    def target(fd):
-        try:
-            return os.readlink('/proc/%d/fd/%s' % (pid, fd))
-        except OSError:
-            return ''
-    return sum('eventpoll' in target(fd) for fd in os.listdir('/proc/%d/fd' % pid))
 
 
 def destroy_connections(from_pid, to_node='/robot%d' % ROBOT, topic=names.TASK_REPORT_TOPIC):

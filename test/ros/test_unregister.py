@@ -3,23 +3,13 @@ once, not at the garbage collector's next full collection (no master needed: ros
 and closes topics without one)."""
 
 import gc
-import os
 
 import pytest
 import rospy
 from std_msgs.msg import String
 
+from server_select.core.util.procs import epoll_descriptors as epolls
 from server_select.ros.node import unregister
-
-
-def epolls():
-    """This process's epoll descriptors."""
-    def target(fd):
-        try:
-            return os.readlink('/proc/self/fd/%s' % fd)
-        except OSError:
-            return ''
-    return sum('eventpoll' in target(fd) for fd in os.listdir('/proc/self/fd'))
 
 
 @pytest.fixture

@@ -173,3 +173,13 @@ def measure(pids, duration, clock=time.monotonic, sleep=time.sleep):
             'threads': threads,
         }
     return usage
+
+
+def epoll_descriptors(pid='self'):
+    """How many epoll descriptors process ``pid`` holds (rospy makes one per topic)."""
+    def target(fd):
+        try:
+            return os.readlink('/proc/%s/fd/%s' % (pid, fd))
+        except OSError:
+            return ''
+    return sum('eventpoll' in target(fd) for fd in os.listdir('/proc/%s/fd' % pid))
