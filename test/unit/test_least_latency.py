@@ -313,3 +313,45 @@ def test_least_latency_sends_each_kind_where_it_is_served_best_without_moving_ba
     # where the robot's tasks go, to its views: the kind it sends most of
     assert rule.chosen == 2 and rule.chosen_for == {'sort': 2, 'image': 1}
     assert rule.contenders([1, 2]) == {1, 2}
+
+
+def wandering(off=(), step=0.0, levels=(0.001, -0.001, 0.0, 0.001, -0.001, 0.001, 0.0, -0.001,
+                                        0.0)):
+    """Two servers alike, each round trip steady within a window (1.5 s) but moving by
+    ``levels`` from one window to the next (+-1 ms: as a server's level strays on a shared
+    host); in the last window server 1 (the robot's) is 2 ms above server 2, and ``step`` s
+    more. The decision then."""
+    clock = Clock()
+    rule = least_latency(clock, off=off)
+    rule.started(1, 'image')
+    for level in list(levels) + [None]:
+        ones, twos = (level, -level) if level is not None else (0.001 + step, -0.001)
+        for j in range(6):
+            jitter = 1e-5 * (j % 3 - 1)
+            rule.probed(1, 0.010 + ones + jitter, load())
+            rule.probed(2, 0.010 + twos - jitter, load())
+            clock.now += 0.25
+    return rule.choose([1, 2], 'image')
+
+
+def test_least_latency_a_level_that_wanders_from_window_to_window_is_noise():
+    """Answers steady within a window say nothing of how a server's level wanders between
+    windows: the robot counts that wander (the spread of its servers' levels) as noise and
+    keeps its server; counting only each window's own spread, it moves."""
+    kept = wandering()
+    assert kept.server == 1 and kept.reason.startswith('kept'), kept
+    assert wandering(off=('wander',)).server == 2
+
+
+def test_least_latency_a_step_is_not_wander():
+    """A server that becomes slower by 10 ms, after levels that wandered by 1 ms, is left at
+    once: one step is not counted as wander (the levels' median deviation is robust)."""
+    moved = wandering(step=0.010)
+    assert moved.server == 2 and 'faster than 1' in moved.reason, moved
+
+
+def test_least_latency_a_trend_is_not_wander():
+    """Server 1's round trip rising and server 2's falling by 0.2 ms a window (links that
+    cross, a robot on the move) stray from no trend: once 2 ms apart, the robot moves."""
+    moved = wandering(levels=[0.0002 * k - 0.0016 for k in range(9)])
+    assert moved.server == 2 and 'faster than 1' in moved.reason, moved

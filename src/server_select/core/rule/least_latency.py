@@ -7,8 +7,11 @@ per task, and its utilization. A server's estimate is the median round trip (a l
 answer or two must not hold it up) + the mean work in flight + the work, times the tries
 a server asked for more than it can do needs (its utilization with this robot's share,
 when above 1); its noise the errors of all three (the server reports its work's: on a
-shared CPU it varies with what else runs). ``choose`` keeps the robot's server while it
-is within 3 errors of the best; else moves to the best, or at random to one within 3
+shared CPU it varies with what else runs), or, when larger, how far the server's level
+strays from one window to the next (:meth:`wander`: on a shared host a server's round
+trip and work stray for seconds at a time, which answers counted as independent do not
+show). ``choose`` keeps the robot's server while it is within 3 errors of the best; else
+moves to the best, or at random to one within 3
 errors of it whose estimate is lower than its server's (robots that read the same answers
 do not all move to one, and no move is to a worse estimate).
 ``choose`` changes nothing: the move is made when a task's first attempt is sent
@@ -25,8 +28,9 @@ from server_select.core.util.stats import mean_error, median_error
 
 Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
+LEVELS = 10              # a server's levels kept, one a window: 8 second differences
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('keep', 'robust', 'tries', 'work_error')
+MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander')
 
 Estimate = collections.namedtuple('Estimate', 'latency error wait answers')
 
@@ -50,6 +54,9 @@ class LeastLatency(Balancer):
         self.window, self.mechanisms = float(window), set(MECHANISMS) - set(off)
         self.answers = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
         self.least_work = {}                   # kind -> the least work any server reported
+        # server -> its levels, a window apart: (when, the window's median round trip,
+        # {kind: the work it reported then})
+        self.levels = collections.defaultdict(lambda: collections.deque(maxlen=LEVELS))
 
     def _probed(self, answer):
         others = max(0, answer.rif - self.attempts_out[answer.server])
@@ -59,6 +66,22 @@ class LeastLatency(Balancer):
             answers.popleft()
         for kind, work in answer.service.items():
             self.least_work[kind] = min(work, self.least_work.get(kind, work))
+        levels = self.levels[answer.server]
+        if not levels or answer.at - levels[-1][0] >= self.window:
+            rtt = statistics.median(a.rtt for a, _ in answers)
+            levels.append((answer.at, rtt, answer.service))
+
+    def wander(self, server, kind):
+        """How far ``server``'s level for ``kind`` (its window's median round trip + work)
+        strays, as a standard deviation: the median of its last second differences over
+        0.6745 x sqrt 6. A trend (a robot moving, links crossing) has none, and one step
+        (a slowed server) makes two of eight, which the median passes over; 0.0 before
+        four levels."""
+        levels = [rtt + service.get(kind, 0.0) for _, rtt, service in self.levels.get(server, ())]
+        if len(levels) < 4 or 'wander' not in self.mechanisms:
+            return 0.0
+        bends = [abs(a - 2.0 * b + c) for a, b, c in zip(levels, levels[1:], levels[2:])]
+        return statistics.median(bends) / (0.6745 * math.sqrt(6.0))
 
     def _draws(self):
         return self.rng.random()     # the next decision's random number
@@ -97,9 +120,9 @@ class LeastLatency(Balancer):
         else:
             rtt, rtt_error = mean_error(rtts)
         wait, wait_error = mean_error(queued)
-        return Estimate((rtt + wait + work) * tries,
-                        math.sqrt(rtt_error ** 2 + wait_error ** 2 + work_error ** 2) * tries,
-                        wait, len(answers))
+        error = max(math.sqrt(rtt_error ** 2 + wait_error ** 2 + work_error ** 2),
+                    self.wander(server, kind))
+        return Estimate((rtt + wait + work) * tries, error * tries, wait, len(answers))
 
     def choose(self, servers, kind=None):
         """The :class:`Decision` for the next ``kind`` task among the usable ``servers``
