@@ -11,11 +11,10 @@ shared CPU it varies with what else runs), or, when larger, how far the server's
 strays from one window to the next (:meth:`wander`: on a shared host a server's round
 trip and work stray for seconds at a time, which answers counted as independent do not
 show). ``choose`` keeps the robot's server while it is within 3 errors of the best; else
-moves to the best, or at random to one within 3
-errors of it whose estimate is lower than its server's (robots that read the same answers
-do not all move to one, and no move is to a worse estimate).
-``choose`` changes nothing: the move is made when a task's first attempt is sent
-(:meth:`started`). docs/selection.md has each mechanism's worth.
+moves to the best, or at random to one within 3 errors of it whose estimate is lower than
+its server's (robots that read the same answers do not all move to one, and no move is to
+a worse estimate). ``choose`` changes nothing: the move is made when a task's first
+attempt is sent (:meth:`started`). docs/selection.md has each mechanism's worth.
 """
 
 import collections
