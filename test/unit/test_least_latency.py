@@ -336,8 +336,8 @@ def wandering(off=(), step=0.0, levels=(0.001, -0.001, 0.0, 0.001, -0.001, 0.001
 
 def test_least_latency_a_level_that_wanders_from_window_to_window_is_noise():
     """Answers steady within a window say nothing of how a server's level wanders between
-    windows: the robot counts that wander (the spread of its servers' levels) as noise and
-    keeps its server; counting only each window's own spread, it moves."""
+    windows: the robot counts that wander (from its levels' second differences) as noise
+    and keeps its server; counting only each window's own spread, it moves."""
     kept = wandering()
     assert kept.server == 1 and kept.reason.startswith('kept'), kept
     assert wandering(off=('wander',)).server == 2
@@ -345,7 +345,8 @@ def test_least_latency_a_level_that_wanders_from_window_to_window_is_noise():
 
 def test_least_latency_a_step_is_not_wander():
     """A server that becomes slower by 10 ms, after levels that wandered by 1 ms, is left at
-    once: one step is not counted as wander (the levels' median deviation is robust)."""
+    once: one step is not counted as wander (it makes few of the second differences, and
+    their median passes over them)."""
     moved = wandering(step=0.010)
     assert moved.server == 2 and 'faster than 1' in moved.reason, moved
 
