@@ -76,8 +76,10 @@ class LeastLatency(Balancer):
         0.6745 x sqrt 6. A trend (a robot moving, links crossing) has none, and one step
         (a slowed server) makes two of eight, which the median passes over; 0.0 before
         four levels."""
+        if 'wander' not in self.mechanisms:
+            return 0.0
         levels = [rtt + service.get(kind, 0.0) for _, rtt, service in self.levels.get(server, ())]
-        if len(levels) < 4 or 'wander' not in self.mechanisms:
+        if len(levels) < 4:
             return 0.0
         bends = [abs(a - 2.0 * b + c) for a, b, c in zip(levels, levels[1:], levels[2:])]
         return statistics.median(bends) / (0.6745 * math.sqrt(6.0))
