@@ -21,6 +21,7 @@ from support.record import FleetRecorder
 
 WINDOW = 2.0
 PUBLISH_RATE = 0.1
+SETTLE = 1.0 / PUBLISH_RATE  # how long a state is awaited; how soon it came is asserted apart
 
 
 class ManagerTest(unittest.TestCase):
@@ -77,14 +78,15 @@ class ManagerTest(unittest.TestCase):
             feeder.join()
         # without new samples everything goes stale: no server, all excluded
         last = time.monotonic()
-        stale = self.flag_after(1, last, lambda f: f.server_id == -1, WINDOW + 1.0)
+        stale = self.flag_after(1, last, lambda f: f.server_id == -1, SETTLE)
         self.assertIsNotNone(stale, self.rec.latest_flags())
         self.assertEqual(list(stale.msg.excluded), [1, 2, 3])
         self.assertEqual(list(stale.msg.ranking), [])
-        self.assertLessEqual(stale.time - last, WINDOW + 0.5)
+        # sooner than the 10 s period: sent because the window emptied
+        self.assertLessEqual(stale.time - last, WINDOW + 1.5)
 
     def check_ranking_and_change(self, start, scenario):
-        flag = self.flag_after(1, start, lambda f: list(f.ranking) == [2, 1], 3.0)
+        flag = self.flag_after(1, start, lambda f: list(f.ranking) == [2, 1], SETTLE)
         self.assertIsNotNone(flag, self.rec.latest_flags())
         rospy.sleep(0.5)  # the window now holds several samples of each pair
         f = self.flag_after(1, time.monotonic(), lambda f: True, 1.0 / PUBLISH_RATE + 1.0).msg
@@ -100,9 +102,9 @@ class ManagerTest(unittest.TestCase):
         # a faster server for robot 2 is published at once, not at the 10 s period
         changed_at = time.monotonic()
         scenario[(2, 2)] = 0.0002
-        f3 = self.flag_after(2, changed_at, lambda f: f.server_id == 2, 1.0)
-        self.assertIsNotNone(f3, 'no flag within 1 s of the change')
-        self.assertLess(f3.time - changed_at, 0.3)
+        f3 = self.flag_after(2, changed_at, lambda f: f.server_id == 2, SETTLE)
+        self.assertIsNotNone(f3, 'no flag after the change')
+        self.assertLess(f3.time - changed_at, 1.0)
         self.assertEqual(list(f3.msg.ranking), [2, 1, 3])
 
 

@@ -83,7 +83,9 @@ def test_the_top_benchmark_measures_top_beside_a_fleet(tmp_path):
                           stderr=subprocess.STDOUT, universal_newlines=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:]
     run, = json.loads((tmp_path / 'top_cost.json').read_text())
-    assert all(finite(run[k]) for k in ('top_cpu', 'robot_cpu')) and run['top_cpu'] > 0, run
+    # CPU time comes in 10 ms ticks: top's 0.3-0.7 % over 3 s is 0-2 of them, so 0 is a
+    # measurement; its resident memory says the process measured is top's
+    assert all(finite(run[k]) and run[k] >= 0 for k in ('top_cpu', 'robot_cpu')), run
     assert run['top_rss'] > 10, run
     assert 'top beside a fleet of 2 robots x 2 servers' in proc.stdout
 
