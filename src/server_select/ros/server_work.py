@@ -6,6 +6,7 @@ import time
 
 import rospy
 
+from server_select.core.load.pauses import Pauses
 from server_select.core.load.work_queue import WorkQueue
 
 
@@ -23,10 +24,13 @@ class ServerWork(object):
                                on_pushed_out=lambda job, why: self._busy(*job.item, why))
         self._lock = threading.Lock()
         self.busy = 0
+        self.pauses = Pauses()
 
     def start(self):
         for index in range(self.queue.workers):
             threading.Thread(target=self._run, name='worker%d' % index, daemon=True).start()
+        threading.Thread(target=self.pauses.run, args=(rospy.is_shutdown,), name='pauses',
+                         daemon=True).start()
 
     def submit(self, endpoint, task, direct):
         """A task addressed here (from a subscriber's thread: never blocks)."""
@@ -51,7 +55,7 @@ class ServerWork(object):
             if why is not None:
                 self._busy(endpoint, task, direct, why)
                 continue
-            start = time.perf_counter()
+            start = time.monotonic()
             try:
                 result = endpoint.handle(task)
             except Exception as error:    # a defect in one handler must not stop a worker
@@ -64,9 +68,20 @@ class ServerWork(object):
                 continue
             first = job.kind not in loaded
             loaded.add(job.kind)
-            self.queue.done(job, time.perf_counter() - start if result.ok and not first
+            self.queue.done(job, self._work(job.kind, start) if result.ok and not first
                             else None)
             endpoint.reply(task, direct, result)
+
+    def _work(self, kind, start):
+        """The seconds of work a task begun at ``start`` took, or None when the process
+        stood still meanwhile (its time says nothing of the kind's work)."""
+        end = time.monotonic()
+        if not self.pauses.across(start, end):
+            return end - start
+        rospy.loginfo_throttle(5.0, 'server %d: a %s task was timed across a pause of this '
+                               'process; its %.1f s are not counted as work'
+                               % (self.server_id, kind, end - start))
+        return None
 
     def _busy(self, endpoint, task, direct, why):
         with self._lock:
