@@ -123,6 +123,18 @@ def test_a_hung_server_works_and_answers_after_it_goes_on_and_a_stopped_one_neve
     assert stopped.probe_done(2.0) is None
 
 
+def test_a_hung_server_reports_the_work_of_a_task_it_did_across_the_hang_not_the_hang():
+    """As the node's server does (core/load/pauses.py): a task timed across a stop of its
+    process measured the stop, so the work reported is the task's own."""
+    loop = EventLoop()
+    server = _server({'cpu': 1.0, 'hang': [[1.0, 3.0]]}, loop)
+    reply = lambda task, ok, error, busy: None      # noqa: E731
+    loop.at(0.0, server.submit, Task(1, 1, 'sort', 0.2, 100), 0.0, reply)   # not timed
+    loop.at(0.5, server.submit, Task(1, 2, 'sort', 1.0, 100), 0.0, reply)   # across it
+    loop.run(10.0)
+    assert server.queue.times.get('sort') == pytest.approx(1.0)
+
+
 def test_median_interval_by_order_statistics():
     """n = 30: the 10th and 21st values (P = 0.957), the sign test's."""
     median, low, high = stats.median_interval(range(1, 31))
