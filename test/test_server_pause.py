@@ -66,10 +66,26 @@ class ServerPauseTest(unittest.TestCase):
         _, before = self.reported_work()
         self.assertAlmostEqual(before, WORK, delta=0.2)
 
+        for attempt in range(1, 4):
+            if self.stop_with_both_busy():
+                break
+        else:
+            self.fail('both workers were never caught busy by the stop in 3 attempts')
+        _, after = self.reported_work()
+        print('\nserver 1, 2 workers, %.1f s a task: reported %.3f s before, %.3f s after '
+              'a %.1f s stop with both workers busy (attempt %d)'
+              % (WORK, before, after, STOPPED, attempt))
+        self.assertLess(after, WORK + 0.3)
+
+    def stop_with_both_busy(self):
+        """Two tasks sent, the server stopped for STOPPED s once both are in progress, then
+        continued; True when both results came after it went on (its kernel delivers what
+        was written before the stop: a result that came sooner was done before it, as a
+        loaded host may let happen; then try again)."""
+        sent = self.sent
         self.send()
         self.send()
-        both = wait_until(lambda: self.reported_work()[0].in_service == 2, 5.0, period=0.02)
-        self.assertTrue(both, 'both workers never busy at once')
+        wait_until(lambda: self.reported_work()[0].in_service == 2, 5.0, period=0.02)
         pid = node_pid('/server1', rospy.get_name())
         os.kill(pid, signal.SIGSTOP)
         try:
@@ -77,12 +93,14 @@ class ServerPauseTest(unittest.TestCase):
             time.sleep(STOPPED)          # the fault's length
         finally:
             os.kill(pid, signal.SIGCONT)
-        self.assertTrue(wait_until(lambda: self.answered() >= 6, 10.0),
+            resumed = time.monotonic()
+
+        def results():
+            return self.topics.received('results', lambda m: m.robot_id == OWN and m.ok
+                                        and m.task_id > sent)
+        self.assertTrue(wait_until(lambda: len(results()) >= 2, 10.0),
                         'the tasks in progress were not answered after SIGCONT')
-        _, after = self.reported_work()
-        print('\nserver 1, 2 workers, %.1f s a task: reported %.3f s before, %.3f s after '
-              'a %.1f s stop with both workers busy' % (WORK, before, after, STOPPED))
-        self.assertLess(after, WORK + 0.3)
+        return all(received >= resumed for received, _ in results())
 
 
 if __name__ == '__main__':
