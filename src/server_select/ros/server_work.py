@@ -8,6 +8,7 @@ import rospy
 
 from server_select.core.load.pauses import Pauses
 from server_select.core.load.work_queue import WorkQueue
+from server_select.core.trust.senders import Throttle
 
 
 class ServerWork(object):
@@ -18,13 +19,15 @@ class ServerWork(object):
     passed while it waited, or that a task of a robot holding less of the queue pushed
     out, is answered busy too, without doing the work."""
 
-    def __init__(self, server_id, workers, max_queue, max_queue_bytes=None):
-        self.server_id = server_id
-        self.queue = WorkQueue(workers, max_queue, max_bytes=max_queue_bytes,
+    def __init__(self, server_id, workers, max_queue, max_queue_bytes=None,
+                 clock=time.monotonic):
+        self.server_id, self._clock = server_id, clock
+        self.queue = WorkQueue(workers, max_queue, max_bytes=max_queue_bytes, clock=clock,
                                on_pushed_out=lambda job, why: self._busy(*job.item, why))
         self._lock = threading.Lock()
         self.busy = 0
-        self.pauses = Pauses()
+        self.pauses = Pauses(clock=clock)
+        self._paused_lines = Throttle(5.0, clock=clock)
 
     def start(self):
         for index in range(self.queue.workers):
@@ -35,7 +38,7 @@ class ServerWork(object):
     def submit(self, endpoint, task, direct):
         """A task addressed here (from a subscriber's thread: never blocks)."""
         budget = getattr(task, 'budget', 0.0)
-        deadline = time.monotonic() + budget if budget > 0 else None
+        deadline = self._clock() + budget if budget > 0 else None
         why = self.queue.offer(endpoint.kind_name, (endpoint, task, direct), deadline,
                                owner=task.robot_id, size=endpoint.held_bytes(task))
         if why is not None:
@@ -55,7 +58,7 @@ class ServerWork(object):
             if why is not None:
                 self._busy(endpoint, task, direct, why)
                 continue
-            start = time.monotonic()
+            start = self._clock()
             try:
                 result = endpoint.handle(task)
             except Exception as error:    # a defect in one handler must not stop a worker
@@ -75,12 +78,14 @@ class ServerWork(object):
     def _work(self, kind, start):
         """The seconds of work a task begun at ``start`` took, or None when the process
         stood still meanwhile (its time says nothing of the kind's work)."""
-        end = time.monotonic()
+        end = self._clock()
         if not self.pauses.across(start, end):
             return end - start
-        rospy.loginfo_throttle(5.0, 'server %d: a %s task was timed across a pause of this '
-                               'process; its %.1f s are not counted as work'
-                               % (self.server_id, kind, end - start))
+        due, held = self._paused_lines.due()
+        if due:
+            rospy.loginfo('server %d: a %s task was timed across a pause of this process; '
+                          'its %.1f s are not counted as work (%d more such since the last '
+                          'line)' % (self.server_id, kind, end - start, held))
         return None
 
     def _busy(self, endpoint, task, direct, why):
