@@ -23,6 +23,7 @@ import rospy
 
 from server_select.core.config import names
 from server_select.core.util.procs import epoll_descriptors as epolls, wait_until
+from server_select.msg import SortTask
 from server_select.ros.routing import DEAF_GRACE
 
 from support.fleet import Fleet
@@ -95,8 +96,17 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
         topic = '/' + (names.server_topic(server, 'data') if profile == 'fleet' else 'data')
         pids = [fleet.pid(n) for n in ('/robot%d' % ROBOT, node)]
         epolls_before = [epolls(pid) for pid in pids]
+        # this node records the server's task topic too, as `rosbag record` would: the
+        # robot must still see that the server itself does not hear it (before: a
+        # recorder's connection hid that, and a soak's robot sent into the void for 8 min)
+        recorder = rospy.Subscriber(topic, SortTask, lambda _msg: None, queue_size=1) \
+            if profile == 'fleet' else None
+        assert recorder is None or wait_until(
+            lambda: rospy.get_name() in hearers(topic), 10.0), hearers(topic)
         destroyed, dropped, t_again = heard_again(
             node, topic, lambda: destroy_connections(fleet.pid(node)))
+        if recorder is not None:
+            recorder.unregister()
         again = t_again is not None
         said = wait_until(lambda: rec.log_lines('/robot%d' % ROBOT, 'connecting anew'), 5.0)
         rankings = _cut_rankings(fleet, rec) if profile == 'fleet' else None

@@ -123,9 +123,11 @@ class DirectRoute(object):
         """``server`` answered a probe: when its task connection is stalled
         (:func:`~server_select.ros.graph.stalled`), or it has not connected for
         DEAF_GRACE s, the publisher is made anew so that the server connects again, and
-        the subscribers it names are returned."""
+        the subscribers it names are returned. The server's ``node`` itself must hear it:
+        a recorder (``rosbag record``) connected to the topic is no server."""
         with self._lock:
-            deaf = self._pub(server).get_num_connections() == 0
+            pub = self._pub(server)
+            deaf = node not in hearing(pub) if node else pub.get_num_connections() == 0
             return renew(self.pubs, server, lambda: self._pub(server),
                          [node or 'server %d' % server] if self.deaf.held(server, deaf)
                          else [])
