@@ -5,8 +5,8 @@ Server 1 has 2 workers and each task takes 0.4 s (``~work_delay``). This node se
 tasks of its own (no deadline) until it has timed three, then two more, and stops it with
 SIGSTOP for STOPPED s once its probe answer says both are in progress. Both finish the
 moment it continues, timed across the stop: counted as work, the newest three tasks were
-0.4, 3.4 and 3.4 s, and the server told every robot that a sort takes 3.4 s until it had
-none for 10 s. It must still say about 0.4 s, and say why in its log.
+0.4 s and twice about 3 s, and the server told every robot that a sort takes 3 s (3.003
+measured) until it had none for 10 s. It must still say about 0.4 s.
 """
 
 import os
