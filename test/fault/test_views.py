@@ -63,6 +63,15 @@ def fleet(ros):
         yield running
 
 
+def status_gaps(statuses):
+    """How many statuses, the newest stamp, and the longest gap between two."""
+    stamps = sorted(s for s, _, _ in statuses)
+    gaps = [b - a for a, b in zip(stamps, stamps[1:])]
+    return '%d statuses, newest %s, longest gap %s s' % (
+        len(stamps), '%.2f' % stamps[-1] if stamps else '-',
+        '%.2f' % max(gaps) if gaps else '-')
+
+
 def moves(rec, since):
     """Robot 1's moves logged after ``since`` (a stamp): ``[(stamp, server, why)]``."""
     with rec.lock:
@@ -118,7 +127,9 @@ def test_every_view_names_where_a_robots_tasks_go_at_each_switch(ros, fleet):
             warm_up(rec, robots=(1,), tasks=len([r for r in rec.of(rec.reports, 1)
                                                  if r.msg.ok]) + 5)
         last = moves(rec, start)[-1][0]
-        assert wait_until(lambda: any(s > last + 1.5 for s, _, _ in views.statuses), 10.0)
+        assert wait_until(lambda: any(s > last + 1.5 for s, _, _ in views.statuses), 10.0), \
+            'no status of robot 1 stamped 1.5 s after its last move (%.2f) by %.2f: %s' % (
+                last, rospy.get_time(), status_gaps(views.statuses))
         found = moves(rec, start)
         wrong = disagreements(views, rec, found)
     finally:

@@ -2,6 +2,8 @@
 that ``rosdiagnostic``, ``rqt_robot_monitor`` and ``rqt_runtime_monitor`` show the fleet
 (what each status says: :mod:`server_select.core.observe.health_status`)."""
 
+import traceback
+
 import diagnostic_updater
 import rospy
 
@@ -31,7 +33,12 @@ class Diagnostics(object):
         self.names.add(name)
 
         def run(stat):
-            level, message, values = status()
+            try:
+                level, message, values = status()
+            except Exception as error:  # raised, it would end rospy's timer: no status again
+                rospy.logerr_throttle(10.0, '%s: status %r failed: %s' % (
+                    rospy.get_name(), name, traceback.format_exc(limit=4)))
+                level, message, values = health_status.ERROR, 'status failed: %r' % error, []
             stat.summary(level, message)
             for key, value in values:
                 stat.add(key, str(value))
