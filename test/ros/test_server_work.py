@@ -1,4 +1,5 @@
-"""A server's workers (ros/server_work.py): what they report as a kind's work."""
+"""A server's workers (ros/server_work.py): what they report as a kind's work, and the
+lines that name the robots they answer busy."""
 
 import collections
 import threading
@@ -38,6 +39,10 @@ class Endpoint(object):
     def reply(self, task, direct, result):
         self.replies.append(result)
 
+    @staticmethod
+    def error_result(task, why, busy):
+        return Result(False)
+
 
 def reported(durations, stopped=()):
     """The work the server reports after frames of ``durations`` s (one worker)."""
@@ -66,3 +71,23 @@ def test_a_task_timed_across_a_stop_of_the_process_is_not_a_measure_of_its_work(
     # three would be 5.6 s, what robots would have read for 10 s
     assert reported([6.0, 0.5, 5.6, 0.7, 0.5], stopped=[3]) == pytest.approx({'image': 0.5})
     assert reported([6.0, 0.5, 5.6, 0.7, 0.5]) == pytest.approx({'image': 0.7})
+
+
+def test_a_robot_answered_busy_is_named_though_another_was_a_moment_before(monkeypatch):
+    # one line a period for every robot answered busy would let robot 1's shed task hide
+    # the robot flooding the server; a line per robot, 4 a period in all, names both
+    lines = []
+    monkeypatch.setattr(server_work.rospy, 'logwarn', lines.append)
+    clock = [0.0]
+    work = server_work.ServerWork(1, 1, 2, clock=lambda: clock[0])
+    endpoint = Endpoint(clock, [])
+    # (task 4 of robot 9 pushes out task 2 of robot 1, which holds more of the queue)
+    for robot, task_id in [(1, 1), (1, 2), (1, 3), (9, 4), (9, 5), (9, 6)]:
+        work.submit(endpoint, Task(robot, task_id, 0.0), True)   # 2 places, no worker
+    clock[0] += 5.0
+    work.submit(endpoint, Task(9, 7, 0.0), True)
+    assert [r.ok for r in endpoint.replies] == [False] * 5
+    assert [line.split(':')[1] for line in lines] == [
+        ' answered image task 3 of robot 1 busy', ' answered image task 5 of robot 9 busy',
+        ' answered image task 7 of robot 9 busy']
+    assert lines[-1].endswith('(5 busy answers so far; 1 more to robot 9 before)'), lines

@@ -95,3 +95,21 @@ def test_a_claimed_key_is_the_first_senders_while_it_lives_then_the_next_ones():
     assert rule.refusal('/tb3_2/robot', 2) == '/robot2'         # the claim moved
     with pytest.raises(ValueError):
         ExpectedSender('/manager', alive=alive)
+
+
+def test_one_senders_lines_do_not_hide_anothers_and_all_lines_are_bounded():
+    from server_select.core.trust.senders import SenderThrottle
+    clock = Clock()
+    throttle = SenderThrottle(5.0, lines=3, most=4, clock=clock)
+    assert throttle.due(1) == (True, 0)
+    assert throttle.due(1) == (False, 0)      # robot 1 again within the period
+    assert throttle.due(9) == (True, 0)       # robot 9 named at once all the same
+    assert throttle.due(9) == (False, 0)
+    assert throttle.due(2) == (True, 0)
+    assert throttle.due(3) == (False, 0)      # a 4th line within the period: held
+    clock.now += 5.0
+    assert throttle.due(1) == (True, 1)       # robot 1's held line counted in its next
+    assert throttle.due(3) == (True, 1)
+    # made-up senders: 3 lines a period whatever their number, and 4 remembered
+    written = sum(throttle.due(1000 + n)[0] for n in range(500))
+    assert written == 1 and len(throttle._senders) == 4

@@ -8,7 +8,7 @@ import rospy
 
 from server_select.core.load.pauses import Pauses
 from server_select.core.load.work_queue import WorkQueue
-from server_select.core.trust.senders import Throttle
+from server_select.core.trust.senders import SenderThrottle, Throttle
 
 
 class ServerWork(object):
@@ -28,6 +28,7 @@ class ServerWork(object):
         self.busy = 0
         self.pauses = Pauses(clock=clock)
         self._paused_lines = Throttle(5.0, clock=clock)
+        self._busy_lines = SenderThrottle(5.0, clock=clock)    # a line per robot
 
     def start(self):
         for index in range(self.queue.workers):
@@ -92,9 +93,12 @@ class ServerWork(object):
         with self._lock:
             self.busy += 1
             count = self.busy
-        rospy.logwarn_throttle(
-            5.0, 'server %d: answered %s task %d of robot %d busy: %s (%d busy answers so far)'
-            % (self.server_id, endpoint.kind_name, task.task_id, task.robot_id, why, count))
+        due, held = self._busy_lines.due(task.robot_id)
+        if due:
+            rospy.logwarn('server %d: answered %s task %d of robot %d busy: %s (%d busy answers '
+                          'so far%s)' % (self.server_id, endpoint.kind_name, task.task_id,
+                                         task.robot_id, why, count, '; %d more to robot %d '
+                                         'before' % (held, task.robot_id) if held else ''))
         endpoint.reply(task, direct, endpoint.error_result(task, why, busy=True))
 
     def announce(self, robot, rates):

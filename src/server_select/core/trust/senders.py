@@ -9,6 +9,7 @@ lives, whatever its name (a robot is known by the id it announces; with a fleet 
 a robot's key can announce one).
 """
 
+import collections
 import re
 import threading
 import time
@@ -97,4 +98,36 @@ class Throttle(object):
                 self._held += 1
                 return False, 0
             held, self._held, self._last = self._held, 0, now
+            return True, held
+
+
+class SenderThrottle(object):
+    """At most one line a ``period`` for each sender, and ``lines`` a ``period`` in all:
+    one sender's lines (a robot answered busy now and then) do not hide another's (a robot
+    flooding the server), and senders under made-up names cannot flood the log. The
+    ``most`` latest senders are remembered. :meth:`due` says whether to write a line for
+    ``sender`` now and how many of its lines were held back since its last (thread-safe)."""
+
+    def __init__(self, period=5.0, lines=4, most=64, clock=time.monotonic):
+        self.period, self.lines, self.most, self._clock = period, lines, most, clock
+        self._lock = threading.Lock()
+        self._senders = collections.OrderedDict()   # sender -> [its last line or None, held]
+        self._written = collections.deque()         # when the last lines were written
+
+    def due(self, sender):
+        """``(write now, lines of ``sender`` held back before this one)``."""
+        with self._lock:
+            now = self._clock()
+            entry = self._senders.pop(sender, None) or [None, 0]
+            self._senders[sender] = entry
+            while len(self._senders) > self.most:
+                self._senders.popitem(last=False)
+            while self._written and now - self._written[0] >= self.period:
+                self._written.popleft()
+            if entry[0] is not None and now - entry[0] < self.period or \
+                    len(self._written) >= self.lines:
+                entry[1] += 1
+                return False, 0
+            held, entry[:] = entry[1], [now, 0]
+            self._written.append(now)
             return True, held
