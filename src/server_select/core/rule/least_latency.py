@@ -44,6 +44,7 @@ class LeastLatency(Balancer):
     """The ``least_latency`` rule (the module docstring says what it does)."""
     name = 'least_latency'
     own_view = True
+    memos = ('_wanders', '_parts')    # what its answers give anyway, kept to answer faster
 
     def __init__(self, window=1.5, off=(), **kwargs):
         Balancer.__init__(self, **kwargs)
@@ -56,11 +57,15 @@ class LeastLatency(Balancer):
         # server -> its levels, a window apart: (when, the window's median round trip,
         # {kind: the work it reported then})
         self.levels = collections.defaultdict(lambda: collections.deque(maxlen=LEVELS))
+        self._wanders = {}     # server -> {kind: its wander}, until its next level
+        self._heard = collections.Counter()   # server -> its answers so far
+        self._parts = {}       # (server, kind) -> (answers they are of, rate-free parts)
 
     def _probed(self, answer):
         others = max(0, answer.rif - self.attempts_out[answer.server])
         answers = self.answers[answer.server]
-        answers.append((answer, others))
+        answers.append((answer, others))     # (in the order heard: a window is a suffix)
+        self._heard[answer.server] += 1
         while answer.at - answers[0][0].at > self.window:   # out of every later window
             answers.popleft()
         for kind, work in answer.service.items():
@@ -69,6 +74,7 @@ class LeastLatency(Balancer):
         if not levels or answer.at - levels[-1][0] >= self.window:
             rtt = statistics.median(a.rtt for a, _ in answers)
             levels.append((answer.at, rtt, answer.service))
+            self._wanders.pop(answer.server, None)
 
     def wander(self, server, kind):
         """How far ``server``'s level for ``kind`` (its window's median round trip + work)
@@ -78,11 +84,14 @@ class LeastLatency(Balancer):
         four levels."""
         if 'wander' not in self.mechanisms:
             return 0.0
-        levels = [rtt + service.get(kind, 0.0) for _, rtt, service in self.levels.get(server, ())]
-        if len(levels) < 4:
-            return 0.0
-        bends = [abs(a - 2.0 * b + c) for a, b, c in zip(levels, levels[1:], levels[2:])]
-        return statistics.median(bends) / (0.6745 * math.sqrt(6.0))
+        known = self._wanders.setdefault(server, {})    # (asked per estimate: kept)
+        if kind not in known:
+            levels = [rtt + service.get(kind, 0.0)
+                      for _, rtt, service in self.levels.get(server, ())]
+            known[kind] = 0.0 if len(levels) < 4 else statistics.median(
+                [abs(a - 2.0 * b + c) for a, b, c in zip(levels, levels[1:], levels[2:])]) \
+                / (0.6745 * math.sqrt(6.0))
+        return known[kind]
 
     def _draws(self):
         return self.rng.random()     # the next decision's random number
@@ -98,11 +107,25 @@ class LeastLatency(Balancer):
 
     def estimate(self, server, kind, now, rate=None):
         """The :class:`Estimate` of a ``kind`` task at ``server`` from its answers of the
-        window (None: none); ``rate``: the robot's ``kind`` tasks a second (:meth:`rate`)."""
+        window (None: none); ``rate``: the robot's ``kind`` tasks a second (:meth:`rate`).
+        What does not depend on the rate is worked out once per window of answers (an
+        estimate is asked at every probe round, for every server)."""
         answers = [(a, o) for a, o in self.answers.get(server, ()) if now - a.at <= self.window]
         if not answers:
             return None
         rate = self.rate(kind, now) if rate is None else rate
+        heard = (self._heard[server], len(answers), self.least_work.get(kind))
+        parts = self._parts.get((server, kind))
+        if parts is None or parts[0] != heard:
+            parts = self._parts[(server, kind)] = (heard, self._rate_free(server, kind, answers))
+        rtt, wait, work, workers, error, utilizations = parts[1]
+        mine = rate * work / workers
+        tries = math.fsum([max(1.0, u + mine) for u in utilizations]) / len(utilizations) \
+            if 'tries' in self.mechanisms else 1.0
+        return Estimate((rtt + wait + work) * tries, error * tries, wait, len(answers))
+
+    def _rate_free(self, server, kind, answers):
+        """``(round trip, wait, work, workers, error, utilizations)`` of ``answers``."""
         newest = answers[-1][0]
         # a server that has not done this kind yet: the least work seen for it (what the
         # task takes where nothing slows it; one task there tells)
@@ -111,11 +134,8 @@ class LeastLatency(Balancer):
         # (a median of its last second's tasks, which a shared CPU makes vary)
         work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.mechanisms else 0.0
         workers = float(newest.workers)
-        mine = rate * work / workers
         rtts = [a.rtt for a, _ in answers]
         queued = [others * work / workers for _, others in answers]
-        tries = math.fsum([max(1.0, a.utilization + mine) for a, _ in answers]) / len(answers) \
-            if 'tries' in self.mechanisms else 1.0
         if 'robust' in self.mechanisms:     # a late answer or two (a retransmission, a hang ending)
             rtt, rtt_error = median_error(rtts)   # must not hold the mean up for a window
         else:
@@ -123,7 +143,7 @@ class LeastLatency(Balancer):
         wait, wait_error = mean_error(queued)
         error = max(math.sqrt(rtt_error ** 2 + wait_error ** 2 + work_error ** 2),
                     self.wander(server, kind))
-        return Estimate((rtt + wait + work) * tries, error * tries, wait, len(answers))
+        return rtt, wait, work, workers, error, [a.utilization for a, _ in answers]
 
     def choose(self, servers, kind=None):
         """The :class:`Decision` for the next ``kind`` task among the usable ``servers``
