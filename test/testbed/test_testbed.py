@@ -12,6 +12,7 @@ import sys
 
 import pytest
 
+from server_select.core.util.procs import wait_until
 from server_select.testbed import bag_analysis
 from server_select.testbed.evaluation import RunOptions, run_modes
 from server_select.testbed.netns import available
@@ -158,8 +159,10 @@ def test_teardown_leaves_nothing(tmp_path, how):
     assert proc.stdout.readline().strip() == 'up'
     assert leftovers(CRASH), 'the testbed should be up'
     # what must be gone afterwards is there now: the host's process and the emulator,
-    # whose command line names this run's folder (its --hosts file)
-    assert len(pgrep('^sleep %s$' % marker)) == 1
+    # whose command line names this run's folder (its --hosts file); the host's process
+    # is "sleep" once the namespace's launcher has exec'd it, which may be after "up"
+    assert wait_until(lambda: len(pgrep('^sleep %s$' % marker)) == 1, 10.0), \
+        pgrep('%s' % marker)
     assert len(pgrep('testbed.linkemu .*%s' % tmp_path)) == 1
     if how != 'crash':
         proc.send_signal(signal.SIGINT if how == 'ctrl-c' else signal.SIGTERM)
