@@ -94,7 +94,9 @@ def capped(pids, share):
               for s in (1, 2, 3)] if share else []
     try:
         for server, limit in enumerate(limits, 1):
-            limit.join(pids['/server%d' % server])
+            pid = pids['/server%d' % server]
+            assert pid, 'server %d is not registered' % server   # (None: this process)
+            limit.join(pid)
         yield
     finally:
         for limit in limits:

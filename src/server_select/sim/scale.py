@@ -17,9 +17,8 @@ import random
 import sys
 import time
 
-from server_select.sim import cells
-
 from server_select.core.robot.selection import Selection
+from server_select.sim import cells
 from server_select.sim.figures import figures
 from server_select.sim.model import Model
 from server_select.sim.run import simulate
