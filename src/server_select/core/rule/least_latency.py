@@ -58,14 +58,13 @@ class LeastLatency(Balancer):
         # {kind: the work it reported then})
         self.levels = collections.defaultdict(lambda: collections.deque(maxlen=LEVELS))
         self._wanders = {}     # server -> {kind: its wander}, until its next level
-        self._heard = collections.Counter()   # server -> its answers so far
-        self._parts = {}       # (server, kind) -> (answers they are of, rate-free parts)
+        self._parts = {}       # (server, kind) -> (the window's newest answer, its count,
+        #                         the kind's least work, the rate-free parts of them)
 
     def _probed(self, answer):
         others = max(0, answer.rif - self.attempts_out[answer.server])
         answers = self.answers[answer.server]
         answers.append((answer, others))     # (in the order heard: a window is a suffix)
-        self._heard[answer.server] += 1
         while answer.at - answers[0][0].at > self.window:   # out of every later window
             answers.popleft()
         for kind, work in answer.service.items():
@@ -114,11 +113,12 @@ class LeastLatency(Balancer):
         if not answers:
             return None
         rate = self.rate(kind, now) if rate is None else rate
-        heard = (self._heard[server], len(answers), self.least_work.get(kind))
+        newest, least = answers[-1][0], self.least_work.get(kind)
         parts = self._parts.get((server, kind))
-        if parts is None or parts[0] != heard:
-            parts = self._parts[(server, kind)] = (heard, self._rate_free(server, kind, answers))
-        rtt, wait, work, workers, error, utilizations = parts[1]
+        if parts is None or parts[0] is not newest or parts[1:3] != (len(answers), least):
+            parts = self._parts[(server, kind)] = (newest, len(answers), least,
+                                                   self._rate_free(server, kind, answers))
+        rtt, wait, work, workers, error, utilizations = parts[3]
         mine = rate * work / workers
         tries = math.fsum([max(1.0, u + mine) for u in utilizations]) / len(utilizations) \
             if 'tries' in self.mechanisms else 1.0
