@@ -212,11 +212,11 @@ def test_a_robot_flooding_every_server_takes_only_its_share_of_their_queues(
     share: 2 of the robots' tasks failed, 3.8 of 10 answered a second; in the issue's
     run, robots at 2 a second fell to 1.0-1.6, all answered busy.) A server reporting a
     utilization of 1 or more shows that the flood reached it, a warning naming robot 9
-    that they said so. (First
-    of the attacks: the flooder finds the probe services by their names at the master,
-    which the ``results`` and ``announce`` attackers take and leave.) The servers' memory
-    peaks at 146-150 MiB here while they work at 1.3x their capacity, at the edge of a
-    Pi's 150 (test_exhaustion floods one server: under 100), so 180 is its bound."""
+    that they said so. (First of the attacks: the flooder finds the probe services by
+    their names at the master, which the ``results`` and ``announce`` attackers take and
+    leave.) The servers' memory peaks at 146-150 MiB here while they work at 1.3x their
+    capacity, at the edge of a Pi's 150 (test_exhaustion floods one server: under 100),
+    so 180 is its bound."""
     attack(ros, keyed_fleet, 'flood', role='robot', tmp_path=tmp_path, source='robot 9',
            reported=(1.0, float('inf')), kept=0.5, name='robot9', most_mib=180,
            server_cpu=0.2)
