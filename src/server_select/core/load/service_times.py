@@ -6,7 +6,7 @@ import statistics
 import threading
 import time
 
-from server_select.core.util.stats import mean_error
+from server_select.core.util.stats import mean_error, median_error
 
 # the standard error of a median of n draws: its variance is 1 / (4 n f(median)^2) for
 # large n, sqrt(pi / 2) x sigma / sqrt(n) when the draws are normal
@@ -22,26 +22,33 @@ class ServiceTimes(object):
     as noise.
 
     A kind none of whose tasks was done in the last ``idle`` s says what the server was,
-    not what it is: it reports the least work the server has had for it (its least median
-    of at least ``least`` tasks, and that median's error), and its next task is measured
-    alone. A server that did a kind slowly in a burst, and was left by the robots that sent
-    it, would otherwise report the burst's work until it restarted: nothing sent it a task
-    to learn otherwise. The price is a task now and then on a server still slow; 10 s is
-    the decay time of tower's and Finagle's peak-EWMA, which forget a left server alike.
+    not what it is: it reports its typical work, the median of its last ``history`` tasks
+    (and that median's error), and its next task is measured alone. Not its least median:
+    the luck of its best second out of many made a server that robots had just left look
+    faster than identical ones still in use, and robots moved to it for nothing. Not the
+    last median either: a server that did a kind slowly in a burst, and was left by the
+    robots that sent it, would report the burst until it restarted (nothing sent it a task
+    to learn otherwise); the few slow tasks a burst had before its robots fled move a
+    median of ``history`` little. 10 s is the decay time of tower's and Finagle's
+    peak-EWMA, which forget a left server alike.
     """
 
-    def __init__(self, keep=20, horizon=1.0, least=3, idle=10.0, clock=time.monotonic):
-        if keep < 1 or not 1 <= least <= keep:
-            raise ValueError('need 1 <= least <= keep, got %r, %r' % (least, keep))
+    def __init__(self, keep=20, horizon=1.0, least=3, idle=10.0, history=60,
+                 clock=time.monotonic):
+        if keep < 1 or not 1 <= least <= keep <= history:
+            raise ValueError('need 1 <= least <= keep <= history, got %r, %r, %r'
+                             % (least, keep, history))
         if idle < horizon:
             raise ValueError('need idle >= horizon, got %r < %r' % (idle, horizon))
         self.keep, self.horizon, self.least, self.idle = keep, float(horizon), least, idle
+        self.history = history
         self._clock = clock
         self._lock = threading.Lock()
         self._times = {}
         self._medians = {}
         self._errors = {}
-        self._best = {}       # {kind: (rank, (its least median, that median's error))}
+        self._history = {}    # {kind: its last `history` tasks' seconds}
+        self._typical = {}    # {kind: (median, its error) of its history}, until its next task
 
     def add(self, kind, seconds):
         now = self._clock()
@@ -52,20 +59,24 @@ class ServiceTimes(object):
             elif now - times[-1][0] > self.idle:
                 times.clear()
             times.append((now, float(seconds)))
+            history = self._history.get(kind)
+            if history is None:
+                history = self._history[kind] = collections.deque(maxlen=self.history)
+            history.append(float(seconds))
+            self._typical.pop(kind, None)
             while len(times) > self.least and now - times[0][0] > self.horizon:
                 times.popleft()
             values = [value for _, value in times]
-            median = self._medians[kind] = statistics.median(values)
-            error = self._errors[kind] = MEDIAN_ERROR * mean_error(values)[1]
-            # the least median of `least` tasks or more (of fewer: while none is known)
-            rank = (len(values) < self.least, median)
-            if kind not in self._best or rank < self._best[kind][0]:
-                self._best[kind] = (rank, (median, error))
+            self._medians[kind] = statistics.median(values)
+            self._errors[kind] = MEDIAN_ERROR * mean_error(values)[1]
 
     def _work(self, kind, now):
         """``(seconds, error)`` of ``kind``'s work now (lock held; it was done before)."""
         if now - self._times[kind][-1][0] > self.idle:
-            return self._best[kind][1]
+            typical = self._typical.get(kind)
+            if typical is None:
+                typical = self._typical[kind] = median_error(self._history[kind])
+            return typical
         return self._medians[kind], self._errors[kind]
 
     def get(self, kind, default=0.0):
