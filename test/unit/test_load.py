@@ -98,6 +98,28 @@ def test_a_server_left_idle_looks_no_faster_than_one_still_in_use():
     assert abs(times.get('sort') - statistics.median(draws)) < 3 * error
 
 
+def test_a_server_left_after_a_long_burst_reports_what_its_tasks_took_alone():
+    """Robots fled a server whose frames ran side by side for long (more of them than
+    its history holds) and slowly: left idle, it says what a frame took alone, as its
+    next one will run, not what the burst's took."""
+    clock = Clock()
+    q = WorkQueue(2, 10, clock=clock)
+    for _ in range(10):                       # one frame at a time
+        q.offer('image', 'x')
+        q.done(q.take(), 0.25)
+        clock.now += 0.5
+    for _ in range(40):                       # two at a time, each twice as slow
+        q.offer('image', 'a')
+        q.offer('image', 'b')
+        first, second = q.take(), q.take()
+        q.done(first, 0.5)
+        q.done(second, 0.5)
+        clock.now += 0.5
+    assert q.load().service == {'image': pytest.approx(0.5)}
+    clock.now += 10.5
+    assert q.load().service == {'image': pytest.approx(0.25)}
+
+
 def test_a_queue_admits_by_what_an_idle_kind_typically_took():
     clock = Clock()
     q = WorkQueue(1, 10, clock=clock)

@@ -22,15 +22,16 @@ class ServiceTimes(object):
     as noise.
 
     A kind none of whose tasks was done in the last ``idle`` s says what the server was,
-    not what it is: it reports its typical work, the median of its last ``history`` tasks
-    (and that median's error), and its next task is measured alone. Not its least median:
+    not what it is: it reports what its tasks took when each ran alone (no other task of
+    the server beside it, as the next one will), the median of the last ``history`` such
+    and that median's error, and its next task is measured alone. Not its least median:
     the luck of its best second out of many made a server that robots had just left look
-    faster than identical ones still in use, and robots moved to it for nothing. Not the
-    last median either: a server that did a kind slowly in a burst, and was left by the
-    robots that sent it, would report the burst until it restarted (nothing sent it a task
-    to learn otherwise); the few slow tasks a burst had before its robots fled move a
-    median of ``history`` little. 10 s is the decay time of tower's and Finagle's
-    peak-EWMA, which forget a left server alike.
+    faster than identical ones still in use, and robots moved to it for nothing. Not what
+    it last did: a server left after a burst, whose tasks ran side by side, would report
+    the burst until it restarted (nothing sent it a task to learn otherwise); a slowed
+    server's few slow tasks before its robots fled move a median of ``history`` little.
+    (Tasks that never ran alone: what it last did.) 10 s is the decay time of tower's and
+    Finagle's peak-EWMA, which forget a left server alike.
     """
 
     def __init__(self, keep=20, horizon=1.0, least=3, idle=10.0, history=60,
@@ -47,10 +48,11 @@ class ServiceTimes(object):
         self._times = {}
         self._medians = {}
         self._errors = {}
-        self._history = {}    # {kind: its last `history` tasks' seconds}
+        self._history = {}    # {kind: its last `history` tasks' seconds, run alone}
         self._typical = {}    # {kind: (median, its error) of its history}, until its next task
 
-    def add(self, kind, seconds):
+    def add(self, kind, seconds, alone=True):
+        """A ``kind`` task took ``seconds``; ``alone``: no other task ran beside it."""
         now = self._clock()
         with self._lock:
             times = self._times.get(kind)
@@ -59,11 +61,12 @@ class ServiceTimes(object):
             elif now - times[-1][0] > self.idle:
                 times.clear()
             times.append((now, float(seconds)))
-            history = self._history.get(kind)
-            if history is None:
-                history = self._history[kind] = collections.deque(maxlen=self.history)
-            history.append(float(seconds))
-            self._typical.pop(kind, None)
+            if alone:
+                history = self._history.get(kind)
+                if history is None:
+                    history = self._history[kind] = collections.deque(maxlen=self.history)
+                history.append(float(seconds))
+                self._typical.pop(kind, None)
             while len(times) > self.least and now - times[0][0] > self.horizon:
                 times.popleft()
             values = [value for _, value in times]
@@ -74,9 +77,9 @@ class ServiceTimes(object):
         """``(seconds, error)`` of ``kind``'s work now (lock held; it was done before)."""
         if now - self._times[kind][-1][0] > self.idle:
             typical = self._typical.get(kind)
-            if typical is None:
+            if typical is None and kind in self._history:
                 typical = self._typical[kind] = median_error(self._history[kind])
-            return typical
+            return typical or (self._medians[kind], self._errors[kind])
         return self._medians[kind], self._errors[kind]
 
     def get(self, kind, default=0.0):
