@@ -20,8 +20,36 @@ class ClosedUpdater(object):
 
 def diagnostics():
     diag = Diagnostics.__new__(Diagnostics)
-    diag.updater, diag.before = ClosedUpdater(), None
+    diag.updater, diag.before, diag.news, diag._news_seen = ClosedUpdater(), None, None, None
     return diag
+
+
+class Counting(object):
+    """An Updater whose period has not passed: what is published, and how."""
+    period, last_time = 1.0, rospy.Time(100)
+
+    def __init__(self):
+        self.calls = []
+
+    def update(self):
+        self.calls.append('update (nothing due)')
+
+    def force_update(self):
+        self.calls.append('published')
+
+
+def test_news_is_published_at_the_next_tick_not_the_next_period(monkeypatch):
+    monkeypatch.setattr(rospy, 'is_shutdown', lambda: False)
+    monkeypatch.setattr(rospy.Time, 'now', staticmethod(lambda: rospy.Time(100.25)))
+    diag, news, befores = diagnostics(), [5], []
+    diag.updater, diag.news, diag._news_seen = Counting(), lambda: news[0], 5
+    diag.before = lambda: befores.append(1)
+    diag._update(types.SimpleNamespace())
+    news[0] = 6                                   # a robot left a server out
+    diag._update(types.SimpleNamespace())
+    diag._update(types.SimpleNamespace())
+    assert diag.updater.calls == ['update (nothing due)', 'published', 'update (nothing due)']
+    assert befores == [1]                         # its statuses made anew first
 
 
 def test_an_update_on_the_closed_topic_at_the_stop_is_quiet(monkeypatch):

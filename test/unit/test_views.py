@@ -97,6 +97,23 @@ def test_a_server_that_left_leaves_every_view():
     assert views.rank(1, 0.1).ranking == [1] and views.rank(2, 0.1).excluded == []
 
 
+def test_the_manager_counts_a_change_of_the_servers_a_robot_ranks_or_leaves_out():
+    """What its statuses on /diagnostics publish at once: not a view renewed, nor a new
+    order of the same servers."""
+    views = ViewRankings(3.0)
+    views.take(1, 0.0, ranking([2, 1], [0.001, 0.002]))
+    assert views.changes == 1
+    views.take(1, 1.0, ranking([1, 2], [0.001, 0.002]))        # reordered
+    views.take(1, 2.0, ranking([1, 2], [0.001, 0.002]))        # renewed
+    assert views.changes == 1
+    views.take(1, 2.5, ranking([1], [0.001], [2]))             # server 2 left out
+    assert views.changes == 2
+    views.forget_server(3)                                     # in no view
+    assert views.changes == 2
+    views.forget_server(2)
+    assert views.changes == 3
+
+
 def test_a_robots_view_is_the_ranking_the_manager_made_from_its_samples():
     """What the robot sends equals what the manager ranked from the same samples."""
     clock = [0.0]

@@ -26,6 +26,10 @@ class Diagnostics(object):
         self.names = set()
         self.timer = None
         self.before = None      # called before each update (a node adding statuses)
+        # a count that grows when what a status says may have changed: published at once
+        # (a killed server is an ERROR on the manager's status within a tick, not a period)
+        self.news = None
+        self._news_seen = None
 
     def add(self, name, status):
         if name in self.names:
@@ -51,11 +55,16 @@ class Diagnostics(object):
     def _update(self, _event):
         if rospy.is_shutdown():
             return
-        if self.before is not None and rospy.Time.now() >= \
-                self.updater.last_time + rospy.Duration(self.updater.period):
+        news = self.news() if self.news is not None else None
+        force, self._news_seen = news != self._news_seen, news
+        if self.before is not None and (force or rospy.Time.now() >= self.updater.last_time
+                                        + rospy.Duration(self.updater.period)):
             self.before()
         try:
-            self.updater.update()
+            if force:
+                self.updater.force_update()
+            else:
+                self.updater.update()
         except rospy.ROSException:      # "publish() to a closed topic": the node stops
             if not rospy.is_shutdown():
                 raise
@@ -117,6 +126,7 @@ def _manager(node, diag):
             diag.add('server %d' % server, lambda s=server: latest.get(s, (
                 health_status.STALE, 'no robot ranks it any more', [])))
     diag.before = before
+    diag.news = lambda: node.rankings.changes
 
 
 ROLES = {'server': _server, 'robot': _robot, 'manager': _manager}

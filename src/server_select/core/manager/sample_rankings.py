@@ -34,6 +34,9 @@ class Members(object):
         self.learn_robots, self.learn_servers = not robots, not servers
         self._lock = threading.Lock()
         self._heard = {}          # robot -> what is known of it (a subclass's)
+        # how many times a robot's servers, ranked or left out, changed (a subclass that
+        # counts them: its manager's statuses say so at once rather than at their period)
+        self.changes = 0
 
     def set_members(self, robots, servers):
         """Fix the robots and servers (a group manager: what the top manager assigned to

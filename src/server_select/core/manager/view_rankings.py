@@ -39,6 +39,10 @@ class ViewRankings(Members):
         if not self.learn_servers:
             ranking = only(ranking, self._server_set.__contains__)
         with self._lock:
+            before = self._views.get(robot)
+            if before is None or set(before[1].ranking) != set(ranking.ranking) or \
+                    set(before[1].excluded) != set(ranking.excluded):
+                self.changes += 1
             self._views[robot] = (now, ranking)
             heapq.heappush(self._due, (now + self.stale, robot))
 
@@ -68,6 +72,8 @@ class ViewRankings(Members):
                 if server in view.ranking or server in view.excluded:
                     self._views[robot] = (when, only(view, lambda other: other != server))
                     robots.append(robot)
+            if robots:
+                self.changes += 1
         return sorted(robots)
 
     def selected(self, robot, server):
