@@ -232,29 +232,30 @@ check: deps
 	  $(PY) -m pytest -q -p no:cacheprovider test/unit
 
 # Lint first. Then three streams at once (test/alongside.sh; each mostly waits for nodes,
-# messages and windows: alone, a stream kept this host's 2 cores about half busy), after
-# the tests of CPU limits (QUIET_TESTS: they need no other work beside them). At the
-# lowest priority: the package in a fresh catkin workspace (`catkin_make run_tests` runs
-# every launch-level rostest once, then the demo and a bag), then one tiny run of every
-# benchmark (beside the catkin stage, a fourth stream, they overloaded the 2 cores: timing
-# tests failed in 3 runs of 4). At normal priority, each in a scheduling group of its own: the fault
-# tests (a roscore of their own, real signals; they print their counts), and in the
-# foreground the unit tests, the ROS-side tests that need the build but no master and the
-# testbed tests (root and TUN; reported as skipped elsewhere). The streams held back print
-# when the foreground is done; the slowest tests are listed.
+# messages and windows: a make test kept this host's 2 cores 63 % busy), after the tests of
+# CPU limits (QUIET_TESTS: they need no other work beside them). At the lowest priority:
+# the package in a fresh catkin workspace (`catkin_make run_tests` runs every launch-level
+# rostest once, then the demo and a bag), then one tiny run of every benchmark (beside the
+# catkin stage, a fourth stream, they overloaded the 2 cores: timing tests failed in 3 runs
+# of 4). At normal priority, each in a scheduling group of its own: the fault tests (two
+# pytest workers, each with a roscore of its own and whole files; real signals; they print
+# their counts), then the unit tests, the ROS-side tests that need the build but no master
+# and the longest benchmark runs; and in the foreground the testbed tests (root and TUN;
+# reported as skipped elsewhere). The streams held back print when the foreground is done;
+# the slowest tests are listed.
 test: build
 	@$(ROSENV) cd $(TOP) && $(LINT) && bash test/alongside.sh \
 	  'bash test/catkin_workspace.sh; c=$$?; $(PY) -m pytest -q -rs --durations=5 test/bench \
 	    --ignore=$(BENCH_LAST) && exit $$c' \
 	  bash -c '$(PY) -m pytest -q -rs $(QUIET_TESTS); quiet=$$?; bash test/alongside.sh --nice 0 \
-	    "$(FAULT_TEST)" \
-	    bash -c "$(PY) -m pytest -q -rs --durations=20 --ignore=$(QUIET_TESTS) \
-	      test/unit test/ros test/testbed; t=\$$?; $(PY) -m pytest -q -rs $(BENCH_LAST) \
-	      && exit \$$t" && exit $$quiet'
+	    "$(FAULT_TEST); f=\$$?; $(PY) -m pytest -q -rs --durations=10 test/unit test/ros \
+	      $(BENCH_LAST) && exit \$$f" \
+	    bash -c "$(PY) -m pytest -q -rs --durations=20 --ignore=$(QUIET_TESTS) test/testbed" \
+	    && exit $$quiet'
 # Tests that measure this machine's CPU: first, while only the lowest priority runs beside.
 QUIET_TESTS := test/testbed/test_cpu_limit.py
-# The longest benchmark smoke runs: after the unit, ros and testbed tests, which end before
-# the fault tests (the longest stream).
+# The longest benchmark smoke runs: after the fault, unit and ros tests, which end before
+# the testbed tests (the longest stream).
 BENCH_LAST := test/bench/test_bench_reports.py
 
 # The package in a fresh catkin workspace with Debian's packages only: catkin_make,
@@ -262,10 +263,11 @@ BENCH_LAST := test/bench/test_bench_reports.py
 catkin-test: deps
 	@bash test/catkin_workspace.sh
 
-# Servers killed and stopped, manager and roscore killed, forged input: counts printed.
-# A process of its own: this pytest process is a ROS node of the roscore it starts.
-FAULT_TEST := $(PY) -m pytest -q -rs -s -p no:logging -W ignore::DeprecationWarning --durations=10 \
-  test/fault
+# Servers killed and stopped, manager and roscore killed, forged input: counts printed
+# (-rP: each test's output after the run). Two worker processes (pytest-xdist), whole files
+# each: a worker is a ROS node of the roscore it starts.
+FAULT_TEST := $(PY) -m pytest -q -rsP -n 2 --dist loadfile -p no:logging \
+  -W ignore::DeprecationWarning --durations=10 test/fault
 fault-test: build
 	@$(ROSENV) cd $(TOP) && $(FAULT_TEST)
 

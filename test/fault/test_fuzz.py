@@ -16,6 +16,7 @@ import pytest
 import rospy
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from rospy.impl.registration import Registration, get_service_manager, get_topic_manager
 from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 
 from server_select.core.util.procs import wait_until
@@ -65,8 +66,34 @@ CAMERA_RAW = _serialized(Image(**dict(zip(('encoding', 'height', 'width', 'step'
                                           from_array(_PHOTO)))))
 
 
+def registrations():
+    """This process's topic registrations (``{(PUB or SUB, topic): references}``) and
+    services, as rospy keeps them."""
+    manager = get_topic_manager()
+    with manager.lock:
+        counts = dict(((Registration.PUB, n), i.ref_count) for n, i in manager.pubs.items())
+        counts.update(((Registration.SUB, n), i.ref_count) for n, i in manager.subs.items())
+    return counts, set(name for name, _ in get_service_manager().get_services())
+
+
+def release_since(before):
+    """Unregister what this process registered since ``before`` (:func:`registrations`):
+    the nodes built here are this process, /fault_tests. Left registered, server 1's
+    probe service and the manager's flags stayed /fault_tests's for the session, and a
+    later test's fleet, whose master restarted, took them for its own servers' and
+    manager's."""
+    counts, services = before
+    now_counts, now_services = registrations()
+    for (kind, topic), count in now_counts.items():
+        for _ in range(count - counts.get((kind, topic), 0)):
+            get_topic_manager().release_impl(kind, topic)
+    for name in now_services - services:
+        get_service_manager().get_service(name).shutdown('the fuzz tests are over')
+
+
 @pytest.fixture(scope='module')
 def nodes(ros):
+    before = registrations()
     for name, value in {'server_id': 1, 'robot_id': 1, 'robots': '1,2', 'servers': '1,2',
                         'max_task_len': 2000, 'image_source': 'search:' + AREA,
                         'frame_rate': 1.0, 'task_rate': 1.0, 'tasks': 1}.items():
@@ -82,6 +109,8 @@ def nodes(ros):
     built['robot'].on_shutdown()       # its timers, streams and prober
     for timer in built['manager'].timers:
         timer.shutdown()
+    built['server'].on_shutdown()      # its announcements (it leaves), timers and workers
+    release_since(before)
 
 
 @FUZZ
