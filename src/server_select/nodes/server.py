@@ -100,6 +100,7 @@ class ServerNode(object):
         self.direct = direct = param('routing') == 'direct'
         self._known_robots = collections.OrderedDict()   # robots prepared for, newest last
         self._pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='routes')
+        self.stopped = False
         # every task type, built in or plug-in, is served the same way
         self.announcer = ServerAnnouncer(self.server_id, param('announce_period'))
         self.admission = RobotAdmission('server %d' % self.server_id, rospy.resolve_name(
@@ -215,6 +216,9 @@ class ServerNode(object):
                               self.server_id, handler.plugin.kind, robot, ', '.join(nodes))
 
     def on_shutdown(self):
+        if self.stopped:       # (once: a node built in a test process is also stopped by it)
+            return
+        self.stopped = True
         self.announcer.leave()
         if self.work_timer is not None:
             self.work_timer.shutdown()
