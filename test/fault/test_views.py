@@ -103,7 +103,10 @@ def disagreements(views, rec, found):
                     list(flag.ranking[:1]) != [flag.server_id]):
                 wrong.append(('flag', stamp, flag.server_id, list(flag.ranking), server))
         for stamp, named, message in views.statuses:
-            if t + SETTLE <= stamp < t_next and named not in (str(server), str(after)):
+            # (as a flag: once the robot's server is ejected, where its next task goes)
+            anticipating = message.startswith('server %d not answering;' % server)
+            if t + SETTLE <= stamp < t_next and named not in (str(server), str(after)) \
+                    and not anticipating:
                 wrong.append(('diagnostics', stamp, named, message, server))
         # (the manager may say it first: once the robot's server is ejected, the robot's
         # view names where its next task goes)
