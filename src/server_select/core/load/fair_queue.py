@@ -22,15 +22,14 @@ MIN_COST = 1e-6          # s: the least a task's turn costs (work not known yet 
 
 class Job(object):
     """A task in a :class:`WorkQueue`: what the worker needs, its kind, deadline and
-    owner (who sent it: a robot's id, or None); once taken, when it started, whether it
-    started alone (no other job running) and how many jobs had started by then."""
-    __slots__ = ('kind', 'item', 'deadline', 'queued_at', 'started', 'owner', 'size', 'alone',
-                 'starts')
+    owner (who sent it: a robot's id, or None); once taken, when it started and whether
+    it ran alone (no other job started or ran beside it)."""
+    __slots__ = ('kind', 'item', 'deadline', 'queued_at', 'started', 'owner', 'size', 'alone')
 
     def __init__(self, kind, item, deadline, queued_at, owner=None, size=0):
         self.kind, self.item, self.deadline, self.queued_at = kind, item, deadline, queued_at
         self.owner, self.size = owner, size
-        self.started, self.alone, self.starts = None, False, 0
+        self.started, self.alone = None, False
 
 
 class FairQueue(object):

@@ -76,7 +76,6 @@ class WorkQueue(object):
         self._queue = FairQueue()
         self._shares = SenderShares()     # each robot's share of its kind's usual work
         self._running = set()
-        self._starts = 0                  # jobs taken so far (a job alone saw none start)
         self._closed = False
         self.refused = self.shed = self.finished = self.pushed_out = 0
 
@@ -183,8 +182,9 @@ class WorkQueue(object):
             now = self._clock()
             job = self._queue.pop(lambda queued: self._job_work(queued, now))
             job.started = now
-            self._starts += 1                 # (alone: no other job runs beside it yet)
-            job.alone, job.starts = not self._running, self._starts
+            job.alone = not self._running     # no other job beside it: so far
+            for other in self._running:       # nor, from now on, beside these
+                other.alone = False
             self._running.add(job)
             return job
 
@@ -208,11 +208,10 @@ class WorkQueue(object):
         with self._cond:
             self._running.discard(job)
             self.finished += 1
-            alone = job.alone and job.starts == self._starts and not self._running
             if seconds is not None:
                 self._shares.add(job.owner, job.kind, seconds)
         if seconds is not None:
-            self.times.add(job.kind, seconds, alone)
+            self.times.add(job.kind, seconds, job.alone)
 
     def announce(self, owner, rates):
         """``owner`` sends ``(kind, tasks per second)`` pairs here now (none: nothing)."""
