@@ -1,8 +1,9 @@
 """Servers that join and leave a running fleet (fleet profile), on the testbed.
 
-server3 is launched at 20 s on its own host, nearer to the robot than any other; server2
-(selected until then) is stopped cleanly at 38 s. Nothing is restarted: server3 announces
-itself, the manager lists it, the robot probes it, and the flag follows. Needs root and TUN, as
+server3 is launched at 12 s (scenario time: from the others' registration) on its own host,
+nearer to the robot than any other; server2 (selected until then) is stopped cleanly at
+26 s. Nothing is restarted: server3 announces itself, the manager lists it, the robot probes
+it, and the flag follows. Needs root and TUN, as
 the other testbed tests (reported as skipped elsewhere).
 """
 
@@ -18,7 +19,7 @@ from server_select.testbed.traces import leftovers, own_prefix
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENARIO = os.path.join(HERE, 'join_leave.yaml')
 PREFIX = own_prefix('ssmem')      # this run's own namespaces
-JOIN, LEAVE = 20.0, 38.0
+JOIN, LEAVE = 12.0, 26.0
 
 ok, why = available()
 pytestmark = pytest.mark.skipif(not ok, reason=why)

@@ -17,7 +17,7 @@ from server_select.testbed.traces import leftovers, own_prefix
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENARIO = os.path.join(HERE, 'outage.yaml')
-DOWN, UP = 30.0, 38.0          # robot1 - server1, as outage.yaml has it
+DOWN, UP = 16.0, 24.0          # robot1 - server1, as outage.yaml has it
 PREFIX = own_prefix('ssout')
 
 ok, why = available()

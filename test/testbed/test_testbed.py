@@ -20,7 +20,7 @@ from server_select.testbed.traces import cleanup_abandoned, leftovers, own_prefi
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENARIO = os.path.join(HERE, 'step_down.yaml')
-STEP_AT = 28.0
+STEP_AT = 14.0
 WINDOW, PROBE_PERIOD, PROBE_TIMEOUT = 5.0, 1.0, 0.5
 PREFIX, CRASH = own_prefix('sstbd'), own_prefix('sscrh')     # this run's own
 

@@ -118,3 +118,17 @@ def test_a_rate_limit_spaces_packets_by_their_size():
     emu.deliver(1.2101)                     # queued behind the first
     assert delivered(pipes, 'b') == second
     assert emu.stats['a>b']['bytes'] == 200
+
+
+def test_a_held_clock_keeps_the_links_as_at_time_zero_until_it_starts(monkeypatch):
+    emu, pipes = emulator([{'at': 0, 'delay': 10}, {'at': 1, 'down': True}])
+    emu.t0_mono = None      # --hold: no clock yet, however long the nodes take to come up
+    os.write(pipes['a'][0], packet('a', 'b', b'held'))
+    emu.receive(emu.fds['a'], now=100.0)
+    assert emu.stats['a>b'] == {'forwarded': 1, 'lost': 0, 'down': 0, 'bytes': 24}
+    monkeypatch.setattr('time.monotonic', lambda: 100.0)
+    emu.start_clock()       # time 0 now: the link goes down 1 s later
+    for now, counted in ((100.5, 'forwarded'), (101.5, 'down')):
+        os.write(pipes['a'][0], packet('a', 'b', b'x'))
+        emu.receive(emu.fds['a'], now=now)
+        assert emu.stats['a>b'][counted] == 2 if counted == 'forwarded' else 1

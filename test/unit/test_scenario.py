@@ -93,7 +93,7 @@ def test_bad_hosts(hosts, message):
 @pytest.mark.parametrize('key, message', [
     ('duraton', r"\['duraton'\] \(did you mean duration\?\)"),
     ('link', r"\['link'\] \(did you mean links\?\)"),
-    ('zzz', 'zzz is not one of name, duration, hosts, default, links, suite')])
+    ('zzz', 'zzz is not one of name, duration, time_zero, hosts, default, links, suite')])
 def test_an_unknown_key_at_top_level_is_named_with_the_nearest_known_one(key, message):
     hosts = {'m': {'role': 'manager'}, 'r1': {'role': 'robot', 'id': 1}}
     with pytest.raises(ScenarioError, match=message):
@@ -213,3 +213,10 @@ def test_own_work_keeps_its_pace_and_forgets_what_it_could_not_run():
     assert used - state['mark'] == pytest.approx(0.2, abs=0.015)
     with pytest.raises(ValueError):
         burn(1.5, lambda: True)
+
+
+def test_time_zero_is_at_launch_unless_the_scenario_waits_for_its_nodes():
+    assert scenario().time_zero == 'launch'
+    assert scenario(time_zero='ready').time_zero == 'ready'
+    with pytest.raises(ScenarioError, match="time_zero: 'later' is neither launch nor ready"):
+        scenario(time_zero='later')

@@ -69,7 +69,6 @@ def run_once(variant, kind, rate, args, work, name):
     with scenario_run(data, work, name, 'sscap', record=(
             '/task_report', '/detections', '/server_select_flag',
             '/latency_samples')) as (run, bag):
-        t0 = run.tb.t0
         if variant != 'static':
             run.launch('manager', 'manager.launch', 'profile:=%s' % profile,
                        'robots:=%s' % ','.join(str(r) for r in range(1, args.robots + 1)),
@@ -91,6 +90,7 @@ def run_once(variant, kind, rate, args, work, name):
                        'fixed_server:=%d' % fixed[robot], 'task_timeout:=%g' % TIMEOUT,
                        'start_delay:=5', *(robot_args(kind, rate, args.frames) +
                                            peer + args.robot_args.split()), stage=0)
+    t0 = run.tb.t0
     done = capacity_report.detections(bag, t0) if kind == 'image' else None
     # each server's tasks/s by its share (frames: the CPU a frame takes is the work; a sort
     # task's is mostly message handling, which is not modelled: no overload figure)

@@ -12,7 +12,7 @@ SCENARIOS = {
     'herd': dict(shares='0.25,0.25,0.25', robots=6, loads='0.5', late=True),
 }
 TIMEOUT = 5.0        # the task timeout: an answer later than this is not wanted
-WARMUP = 15.0        # s of scenario time before the measured part (nodes up, first tasks)
+WARMUP = 8.0         # s of scenario time before the measured part (first tasks answered)
 # s after the late server came up (herd), or after every robot's first task report
 # (the others), that "settled switches" start
 SETTLE = 10.0
@@ -32,5 +32,5 @@ def scenario(shares, robots, seconds, delays, late=None):
         for server, delay in enumerate(delays, start=1):
             links['robot%d server%d' % (robot, server)] = [
                 {'at': 0, 'delay': delay, 'jitter': delay / 10.0}]
-    return {'name': 'capacity', 'duration': WARMUP + seconds, 'hosts': hosts,
-            'default': {'delay': 0.5, 'jitter': 0.05}, 'links': links}
+    return {'name': 'capacity', 'duration': WARMUP + seconds, 'time_zero': 'ready',
+            'hosts': hosts, 'default': {'delay': 0.5, 'jitter': 0.05}, 'links': links}

@@ -198,7 +198,8 @@ def us(summary):
 def scenario_run(data, work, name, prefix, record=('/task_report',)):
     """The scenario ``data`` (a dict) up on the testbed under ``work/name`` with its
     roscore and a rosbag recording ``record``: yields ``(HostRun, bag path)``; the run
-    lasts until the scenario's duration once the block has started the nodes. The link
+    lasts until the scenario's duration once the block has started the nodes (whose
+    registration starts a ``time_zero: ready`` scenario's time). The link
     emulator's counts are then in ``work/name/link_stats.json``, and the scenario's time
     zero beside the bag (``<bag>.json``), so that a loaded bag's times are scenario times.
     ``prefix``: the tag of the run's namespaces (``traces.own_prefix``)."""
@@ -216,6 +217,7 @@ def scenario_run(data, work, name, prefix, record=('/task_report',)):
         run.start_master()
         run.record(bag, *record)
         yield run, bag
+        run.start_clock()
         tb.sleep_until(tb.scenario.duration)
     with open(bag + '.json', 'w') as stream:
         json.dump({'t0': tb.t0}, stream)

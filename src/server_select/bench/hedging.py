@@ -35,8 +35,10 @@ def scenario(delay, loss, seconds):
     hosts = {'manager': {'role': 'manager'}, 'server1': {'role': 'server', 'id': 1},
              'server2': {'role': 'server', 'id': 2}}
     hosts.update(('robot%d' % r, {'role': 'robot', 'id': r}) for r in ROBOTS.values())
-    return {'name': 'hedging', 'duration': seconds + 12, 'hosts': hosts,
-            'default': {'delay': 0.5}, 'links': links}
+    # time from the nodes' registration: the first tasks 3 s later, the manager's window
+    # full 5 s later
+    return {'name': 'hedging', 'duration': seconds + 7, 'time_zero': 'ready',
+            'hosts': hosts, 'default': {'delay': 0.5}, 'links': links}
 
 
 def figures(reports):

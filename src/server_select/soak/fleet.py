@@ -10,86 +10,24 @@ them as they are. ``rosbag record`` does not register again with a restarted ros
 so each roscore gets a recorder of its own (``soak_<n>.bag``); the analysis merges them.
 """
 
-import ctypes
-import concurrent.futures
 import os
 import signal
 import sys
-import xmlrpc.client
 
 import rosgraph
 
 from server_select.core.trust.keys import copy_key
 from server_select.core.util.procs import stop_group, stop_groups, wait_until
 from server_select.ros import key_reload
-from server_select.ros.graph import node_pid
 from server_select.soak import plan
+from server_select.testbed.master_link import CALLER, MasterLink
 
-CALLER = '/soak'            # the caller id of the harness's calls
-CLONE_NEWNET = 0x40000000
 RECORDED = ('/(task_report|robot_rankings|fleet_servers|rosout|robot_[0-9]+/server_select_flag'
             '|server_[0-9]+/data)')
 CAMERA_TOPIC = '/camera%d/image_raw/compressed' % plan.CAMERA_ROBOT
 CAMERA_RATE = 1.5          # frames/s of the camera robot (about a quarter of the capacity)
 BURST_RATE = 4.0           # frames/s of each burst robot: 3 of them, about 2x the capacity
 TASK_RATE = 5.0            # sort tasks/s of each robot
-
-
-def _enter_netns(netns):
-    """Move the calling thread into network namespace ``netns`` (its address space)."""
-    libc = ctypes.CDLL(None, use_errno=True)
-    fd = os.open('/run/netns/%s' % netns, os.O_RDONLY)
-    try:
-        if libc.setns(fd, CLONE_NEWNET) != 0:
-            raise OSError(ctypes.get_errno(), 'setns %s' % netns)
-    finally:
-        os.close(fd)
-
-
-class MasterLink(object):
-    """Calls to the master (and to nodes) from a thread inside the manager's namespace."""
-
-    def __init__(self, netns, uri):
-        self.uri = uri
-        self.pool = concurrent.futures.ThreadPoolExecutor(1, initializer=_enter_netns,
-                                                          initargs=(netns,))
-
-    def call(self, function, *args, timeout=10.0):
-        return self.pool.submit(function, *args).result(timeout)
-
-    def _ask(self, question, failed):
-        """``question(master)`` from the namespace's thread; ``failed`` when the master or
-        the node asked does not answer."""
-        def ask():
-            try:
-                return question(rosgraph.Master(CALLER, master_uri=self.uri))
-            except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
-                return failed
-        return self.call(ask)
-
-    def pid(self, node):
-        """The pid ``node`` says it has, None when the master or the node does not answer
-        (a stopped node within 2 s)."""
-        return self._ask(lambda master: node_pid(node, CALLER, master, timeout=2.0), None)
-
-    def bus_info(self, node):
-        """``node``'s connections (getBusInfo: id, peer, direction, transport, topic, ...);
-        [] when it does not answer."""
-        def connections(master):
-            code, _, info = xmlrpc.client.ServerProxy(master.lookupNode(node)).getBusInfo(CALLER)
-            return info if code == 1 else []
-        return self._ask(connections, [])
-
-    def master_pid(self):
-        """The master's pid, None when it does not answer."""
-        return self._ask(lambda master: master.getPid(), None)
-
-    def up(self):
-        """Whether the master answers."""
-        return self.master_pid() is not None
-
-    def close(self):
-        self.pool.shutdown(wait=False)
 
 
 class SoakFleet(object):

@@ -21,7 +21,9 @@ BURST_ROBOTS = (101, 102, 103)   # the overload's extra robots, on the first rob
 RECOVERY = 5.0            # s: the fleet is back this long after a fault ends
 KEY_RECOVERY = 1.0        # s: after a key rotation (no node restarts)
 ROSCORE_RECOVERY = 15.0   # s: after a roscore restart
-WARMUP = (45.0, 25.0)     # s before the first fault (nodes up, windows full): full, short
+# s from the nodes' registration (the scenario's time zero) to the first fault (windows
+# full, first tasks answered): full, short
+WARMUP = (45.0, 12.0)
 TAIL = (20.0, 10.0)       # s after the last fault's allowed recovery: full, short
 
 # Fault kinds and their length (s) in a full soak and in the short one (make test).
@@ -161,7 +163,7 @@ def scenario(faults, duration, name='soak'):
             events = links.setdefault(pair, [{'at': 0, 'delay': 0.5, 'jitter': 0.05}])
             events.append({'at': fault.at, 'down': True})
             events.append({'at': fault.at + fault.length, 'down': False})
-    return {'name': name, 'duration': duration, 'hosts': hosts,
+    return {'name': name, 'duration': duration, 'time_zero': 'ready', 'hosts': hosts,
             'default': {'delay': 0.5, 'jitter': 0.05}, 'links': links}
 
 

@@ -103,6 +103,7 @@ def soak(args, say=print):
         chaos.core = roscore()
         fleet.start_recorder()
         _start_fleet(fleet, say)
+        run.start_clock()           # the faults' times count from here
         measured_from = time.time() + SETTLE
         emulator = tb.emulator.pid      # the testbed's own share of this host's CPU
 

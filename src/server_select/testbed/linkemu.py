@@ -9,7 +9,10 @@ Packets of one direction of a pair leave in the order they came (jitter never re
 
 Run as ``python3 -m server_select.testbed.linkemu --scenario S --hosts HOSTS.json`` (root needed);
 it prints ``ready <t0>`` (t0: scenario time zero, epoch seconds) once every device is up,
-and stops on SIGINT/SIGTERM, which deletes the devices.
+and stops on SIGINT/SIGTERM, which deletes the devices. With ``--hold`` it prints ``ready
+held`` instead and keeps every link as the scenario has it at time zero until a line ``go``
+comes on its standard input; then it prints ``clock <t0>``: a scenario's time may start once
+its nodes are up, not when their hosts are.
 """
 
 import argparse
@@ -26,6 +29,7 @@ import socket
 import struct
 import subprocess
 import sys
+import threading
 import time
 
 from server_select.testbed.scenario import Scenario, ScenarioError
@@ -133,7 +137,8 @@ class LinkEmulator(object):
             if dst_fd is None:
                 continue
             dst = self.host_of_fd[dst_fd]
-            state = self.scenario.link(src, dst, now - self.t0_mono)
+            state = self.scenario.link(   # time stands at 0 until the clock starts
+                src, dst, 0.0 if self.t0_mono is None else now - self.t0_mono)
             stat = self._stat(src, dst)
             if state.down:
                 stat['down'] += 1
@@ -188,6 +193,12 @@ class LinkEmulator(object):
         self.fds.clear()
 
 
+def _start_on_go(emulator):
+    """Start ``emulator``'s clock when stdin's line says ``go``; say its t0."""
+    if sys.stdin.readline().strip() == 'go':
+        print('clock %.6f' % emulator.start_clock(), flush=True)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--scenario', required=True, help='scenario YAML file')
@@ -195,6 +206,8 @@ def main(argv=None):
                         help='JSON: {host: {netns, address, device}}')
     parser.add_argument('--stats', help='write per-direction packet counts here (JSON)')
     parser.add_argument('--seed', type=int, default=0, help='jitter/loss random seed')
+    parser.add_argument('--hold', action='store_true',
+                        help='links as at time zero until "go" on stdin (then: clock <t0>)')
     args = parser.parse_args(argv)
     try:
         scenario = Scenario.load(args.scenario)
@@ -212,8 +225,11 @@ def main(argv=None):
     stop = []
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.append(True))
-    t0 = emulator.start_clock()
-    print('ready %.6f' % t0, flush=True)
+    if args.hold:
+        print('ready held', flush=True)
+        threading.Thread(target=_start_on_go, args=(emulator,), daemon=True).start()
+    else:
+        print('ready %.6f' % emulator.start_clock(), flush=True)
     try:
         emulator.run(lambda: bool(stop))
     finally:

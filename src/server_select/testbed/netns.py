@@ -94,16 +94,18 @@ class Testbed(object):
             hosts_file = os.path.join(self.run_dir, 'hosts.json')
             with open(hosts_file, 'w') as stream:
                 json.dump(self.hosts, stream, indent=1)
+            held = ['--hold'] if self.scenario.time_zero == 'ready' else []
             self.emulator = subprocess.Popen(
                 [sys.executable, '-m', 'server_select.testbed.linkemu',
                  '--scenario', self.scenario_path, '--hosts', hosts_file, '--seed', str(self.seed),
-                 '--stats', os.path.join(self.run_dir, 'link_stats.json')],
-                stdout=subprocess.PIPE, universal_newlines=True, start_new_session=True)
+                 '--stats', os.path.join(self.run_dir, 'link_stats.json')] + held,
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE, universal_newlines=True,
+                start_new_session=True)
             self._write_state(self.emulator.pid)
             line = self.emulator.stdout.readline().split()
             if len(line) != 2 or line[0] != 'ready':
                 raise EmulatorError('link emulator did not start (exit %s)' % self.emulator.wait())
-            self.t0 = float(line[1])
+            self.t0 = None if held else float(line[1])
             self._start_own_work()
         except BaseException:
             self.down()
@@ -125,8 +127,22 @@ class Testbed(object):
     def _on_signal(self, signum, _frame):
         raise KeyboardInterrupt('signal %d' % signum)
 
+    def start_clock(self):
+        """Start the scenario's time now, if it waits for this (its ``time_zero: ready``:
+        the runner calls this once its nodes are up); t0, epoch s."""
+        if self.t0 is None:
+            self.emulator.stdin.write('go\n')
+            self.emulator.stdin.flush()
+            line = self.emulator.stdout.readline().split()
+            if len(line) != 2 or line[0] != 'clock':
+                raise EmulatorError('link emulator did not start its clock (exit %s)'
+                                    % self.emulator.poll())
+            self.t0 = float(line[1])
+        return self.t0
+
     def scenario_time(self):
-        return time.time() - self.t0
+        """Seconds since time zero; 0 while the scenario's time has not started."""
+        return 0.0 if self.t0 is None else time.time() - self.t0
 
     def sleep_until(self, t):
         """Sleep until scenario time ``t``."""

@@ -14,6 +14,7 @@ import threading
 from server_select.core.util.procs import wait_until
 from server_select.core.settings import default
 from server_select.testbed.linkemu import EmulatorError
+from server_select.testbed.master_link import MasterLink
 from server_select.testbed.scenario import ScenarioError
 
 MASTER_PORT = 11311
@@ -49,6 +50,21 @@ def _given(options, *names):
             if getattr(options, n) is not None]
 
 
+def node_of(launch_file, args):
+    """The node a launch file of this package starts with ``args`` (``name:=`` or the
+    file's default name), None for another file."""
+    given = dict(a.split(':=', 1) for a in args if ':=' in a)
+    base = launch_file[:-len('.launch')]
+    if 'name' in given:
+        return '/' + given['name']
+    if base in ('server', 'robot'):
+        ident = given.get(base + '_id', '-')
+        return '/' + base + ('' if ident == '-' else ident)
+    if base == 'manager' and given.get('group', '-') not in ('', '-'):
+        return '/manager_g' + given['group']
+    return '/' + base if base in ('manager', 'oracle') else None
+
+
 def host_ids(hosts):
     return ','.join(str(h.id) for h in sorted(hosts, key=lambda h: h.id))
 
@@ -61,6 +77,7 @@ class HostRun(object):
         self.scenario = scenario
         self.run_dir = run_dir
         self.master = 'http://%s:%d' % (tb.address(scenario.manager.name), MASTER_PORT)
+        self.nodes = set()          # the nodes launched so far, by name
 
     def env(self, host):
         env = dict(os.environ, ROS_MASTER_URI=self.master, ROS_IP=self.tb.address(host),
@@ -81,24 +98,40 @@ class HostRun(object):
         """``roslaunch server_select NAME ARGS`` on ``host``. At the end robots (stage 0)
         stop first, then the other nodes: a robot's last task never meets a server that
         is shutting down (it would be answered busy and count as failed)."""
+        node = node_of(name, args)
+        if node is not None:
+            self.nodes.add(node)
         return self.popen(host, ['roslaunch', '--wait', 'server_select', name] + list(args)
                           + ['output:=log'], host, stage)
+
+    def master_link(self):
+        return MasterLink(self.tb.hosts[self.scenario.manager.name]['netns'], self.master)
 
     def start_master(self):
         manager = self.scenario.manager.name
         self.popen(manager, ['roscore', '-p', str(MASTER_PORT)], 'roscore', stage=3)
-        up = wait_until(lambda: self.tb.run(manager, ['rostopic', 'list'], env=self.env(manager),
-                                            timeout=10).returncode == 0, 30.0, period=0.3)
-        if not up:
-            raise EmulatorError('roscore on %s did not come up within 30 s' % manager)
+        with self.master_link() as link:
+            if not wait_until(link.up, 30.0, period=0.2):
+                raise EmulatorError('roscore on %s did not come up within 30 s' % manager)
+
+    def start_clock(self, timeout=90.0):
+        """The scenario's time zero (epoch s). A scenario whose time starts once its nodes
+        are up (``time_zero: ready``) starts it here, when every node launched so far is
+        registered with the master."""
+        if self.tb.t0 is None:
+            with self.master_link() as link:
+                def missing():
+                    return sorted(self.nodes - link.nodes())
+                if not wait_until(lambda: not missing(), timeout, period=0.2):
+                    raise EmulatorError('nodes not registered within %.0f s of their launch: '
+                                        '%s' % (timeout, ', '.join(missing())))
+            self.tb.start_clock()
+        return self.tb.t0
 
     def start_nodes(self, mode, options, bag):
         scenario, manager = self.scenario, self.scenario.manager.name
         servers, robots = scenario.of_role('server'), scenario.of_role('robot')
-        if mode == 'oracle':
-            self.launch(manager, 'oracle.launch', 'scenario:=%s' % scenario.source,
-                        't0:=%.6f' % self.tb.t0, 'robots:=%s' % host_ids(robots))
-        elif mode == 'select':   # fixed mode has no manager: no flag names an unused server
+        if mode == 'select':   # fixed mode has no manager: no flag names an unused server
             fleet = options.profile == 'fleet'   # robots and servers learned at run time
             self.launch(manager, 'manager.launch', 'profile:=%s' % options.profile,
                         'robots:=%s' % ('[]' if fleet else host_ids(robots)),
@@ -126,6 +159,10 @@ class HostRun(object):
                         'start_delay:=%g' % options.start_delay,
                         'manager_node:=%s' % ('/oracle' if mode == 'oracle' else '/manager'),
                         *_given(options, 'probe_rate'), stage=0)
+        if mode == 'oracle':    # told the scenario's time zero: once the others are up
+            self.launch(manager, 'oracle.launch', 'scenario:=%s' % scenario.source,
+                        't0:=%.6f' % self.start_clock(), 'robots:=%s' % host_ids(robots))
+        self.start_clock()
 
     def server_lifetime(self, server, options):
         """A server that starts late or stops early (the scenario's ``start`` / ``stop``):

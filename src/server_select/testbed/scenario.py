@@ -5,6 +5,7 @@ share, a memory limit or work of its own: docs/evaluation.md has every key)::
 
     name: paper_moving_robots
     duration: 120               # seconds the experiment runs
+    time_zero: launch           # or ready: time starts once the nodes started at 0 are up
     hosts:                      # every host of the topology
       manager: {role: manager}
       server1: {role: server, id: 1}
@@ -110,7 +111,7 @@ class LinkProfile(object):
         return state
 
 
-TOP_KEYS = ('name', 'duration', 'hosts', 'default', 'links', 'suite')
+TOP_KEYS = ('name', 'duration', 'time_zero', 'hosts', 'default', 'links', 'suite')
 
 
 def _nearest(key):
@@ -132,17 +133,17 @@ class Scenario(object):
         self.source = source
         self.name = str(data.get('name', 'scenario'))
         self.duration = _number(data.get('duration', 60), 'duration', minimum=1.0)
+        self.time_zero = str(data.get('time_zero', 'launch'))   # or ready: see the example
+        if self.time_zero not in ('launch', 'ready'):
+            raise ScenarioError('time_zero: %r is neither launch nor ready' % self.time_zero)
         self.hosts = self._hosts(data.get('hosts'))
-        # what the suite and the simulator run on it (robot_args, variants, measure_from)
-        self.suite = data.get('suite') or {}
-        if not isinstance(self.suite, dict):
-            raise ScenarioError('suite: expected a mapping')
-        default = data.get('default', {}) or {}
-        if not isinstance(default, dict):
-            raise ScenarioError('default: expected a mapping')
-        base = LinkProfile([dict(default, at=0)], LinkState(0.0, 0.0, 0.0, False),
-                           'default').value_at(0)
-        self.default_state = base
+        # suite: what the suite and the simulator run on it (robot_args, variants, ...)
+        self.suite, default = data.get('suite') or {}, data.get('default') or {}
+        for key, value in (('suite', self.suite), ('default', default)):
+            if not isinstance(value, dict):
+                raise ScenarioError('%s: expected a mapping' % key)
+        self.default_state = base = LinkProfile(
+            [dict(default, at=0)], LinkState(0.0, 0.0, 0.0, False), 'default').value_at(0)
         self.links = {}
         for key, events in (data.get('links') or {}).items():
             names = str(key).replace(',', ' ').replace('-', ' ').split()
@@ -214,9 +215,8 @@ class Scenario(object):
         return self.of_role('manager')[0]
 
     def host_for(self, role, ident):
-        for host in self.hosts.values():
-            if host.role == role and host.id == ident:
-                return host
+        for host in (h for h in self.hosts.values() if h.role == role and h.id == ident):
+            return host
         raise KeyError('%s %s' % (role, ident))
 
     def link(self, a, b, t):

@@ -117,11 +117,7 @@ class SuiteRun(HostRun):
         self.record(bag, '-e', SUITE_RECORDED)
         for name in variants:
             variant, ids = VARIANTS[name], ','.join(str(r) for r in robots_of[name])
-            if variant.mode == 'oracle':
-                self.launch(manager, 'oracle.launch', 'scenario:=%s' % self.scenario.source,
-                            't0:=%.6f' % self.tb.t0, 'robots:=%s' % ids, 'name:=%s' % name,
-                            'profile:=%s' % variant.profile)
-            elif variant.mode == 'select':
+            if variant.mode == 'select':
                 self.launch(manager, 'manager.launch', 'name:=manager_%s' % name,
                             'profile:=%s' % variant.profile, 'robots:=%s' % ids,
                             'servers:=%s' % ('[]' if variant.profile == 'fleet' else
@@ -132,11 +128,20 @@ class SuiteRun(HostRun):
                         'routing:=direct',      # takes broadcast and direct tasks
                         'test_knobs:=true')     # its events may set ~work_delay
             threading.Thread(target=self.server_events, args=(server,), daemon=True).start()
+        if robot_args and self.tb.t0 is None:
+            raise ScenarioError('%s: a sweep starts at time zero, which its robots must be '
+                                'told: time_zero: launch' % self.scenario.source)
         extra = scenario_robot_args(robot_args, self.tb.t0)
         for robot in self.scenario.of_role('robot'):
             name, original = owners[robot.id]
             args = dict(extra, robot_index=original - 1) if extra else {}
             self.start_robot(robot, name, VARIANTS[name], options, robot_args_of, args)
+        for name in (n for n in variants if VARIANTS[n].mode == 'oracle'):
+            self.launch(manager, 'oracle.launch', 'scenario:=%s' % self.scenario.source,
+                        't0:=%.6f' % self.start_clock(), 'name:=%s' % name,
+                        'robots:=%s' % ','.join(str(r) for r in robots_of[name]),
+                        'profile:=%s' % VARIANTS[name].profile)
+        self.start_clock()
 
     def start_robot(self, robot, name, variant, options, accepted, extra):
         learned = variant.profile == 'fleet' and variant.mode == 'select'
