@@ -237,16 +237,16 @@ check: deps
 # the package in a fresh catkin workspace (`catkin_make run_tests` runs every launch-level
 # rostest once, then the demo and a bag), then one tiny run of every benchmark (beside the
 # catkin stage, a fourth stream, they overloaded the 2 cores: timing tests failed in 3 runs
-# of 4). At normal priority, each in a scheduling group of its own: the fault tests (two
-# pytest workers, each with a roscore of its own and whole files; real signals; they print
-# their counts), then the unit tests, the ROS-side tests that need the build but no master
+# of 4; two at a time, after it). At normal priority, each in a scheduling group of its
+# own: the fault tests (three pytest workers, each with a roscore of its own and whole
+# files; real signals; they print their counts), then the unit tests, the ROS-side tests that need the build but no master
 # and the longest benchmark runs; and in the foreground the testbed tests (root and TUN;
 # reported as skipped elsewhere). The streams held back print when the foreground is done;
 # the slowest tests are listed.
 test: build
 	@$(ROSENV) cd $(TOP) && $(LINT) && bash test/alongside.sh \
-	  'bash test/catkin_workspace.sh; c=$$?; $(PY) -m pytest -q -rs --durations=5 test/bench \
-	    --ignore=$(BENCH_LAST) && exit $$c' \
+	  'bash test/catkin_workspace.sh; c=$$?; $(PY) -m pytest -q -rs -n 2 --durations=5 \
+	    test/bench --ignore=$(BENCH_LAST) && exit $$c' \
 	  bash -c '$(PY) -m pytest -q -rs $(QUIET_TESTS); quiet=$$?; bash test/alongside.sh --nice 0 \
 	    "$(FAULT_TEST); f=\$$?; $(PY) -m pytest -q -rs --durations=10 test/unit test/ros \
 	      $(BENCH_LAST) && exit \$$f" \
@@ -264,9 +264,9 @@ catkin-test: deps
 	@bash test/catkin_workspace.sh
 
 # Servers killed and stopped, manager and roscore killed, forged input: counts printed
-# (-rP: each test's output after the run). Two worker processes (pytest-xdist), whole files
-# each: a worker is a ROS node of the roscore it starts.
-FAULT_TEST := $(PY) -m pytest -q -rsP -n 2 --dist loadfile -p no:logging \
+# (-rP: each test's output after the run). Three worker processes (pytest-xdist), whole
+# files each: a worker is a ROS node of the roscore it starts.
+FAULT_TEST := $(PY) -m pytest -q -rsP -n 3 --dist loadfile -p no:logging \
   -W ignore::DeprecationWarning --durations=10 test/fault
 fault-test: build
 	@$(ROSENV) cd $(TOP) && $(FAULT_TEST)
