@@ -14,6 +14,15 @@ def parser(doc, out='results/bench'):
     return parsed
 
 
+def messages(parsed, count, interval=0.01, size=4):
+    """``--count``, ``--size`` (bytes) and ``--interval`` (s) of a stream of timed
+    messages, added to the (sub)parser ``parsed``; returns it."""
+    parsed.add_argument('--count', type=int, default=count)
+    parsed.add_argument('--size', type=int, default=size)
+    parsed.add_argument('--interval', type=float, default=interval)
+    return parsed
+
+
 def write(out, name, data):
     """``data`` to ``out/name`` (JSON for a ``.json`` name, else text); returns the path."""
     os.makedirs(out, exist_ok=True)

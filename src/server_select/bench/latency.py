@@ -20,6 +20,7 @@ import threading
 import time
 
 from server_select.core.util.procs import wait_until
+from server_select.bench import cli
 from server_select.bench.netbench import connect, recv_frame, send_frame
 
 STAMP = struct.Struct('!d')
@@ -93,11 +94,8 @@ def main(argv=None):
     rec.add_argument('--port', type=int, required=True)
     rec.add_argument('--count', type=int, default=500)
     rec.add_argument('--nagle', action='store_true', help='tcp_nodelay off on both paths')
-    snd = sub.add_parser('sender')
+    snd = cli.messages(sub.add_parser('sender'), count=500)
     snd.add_argument('--port', type=int, required=True)
-    snd.add_argument('--count', type=int, default=500)
-    snd.add_argument('--size', type=int, default=4)
-    snd.add_argument('--interval', type=float, default=0.01)
     args = parser.parse_args(argv)
     if args.command == 'receiver':
         print(json.dumps(receiver(args.port, args.count, nodelay=not args.nagle)), flush=True)

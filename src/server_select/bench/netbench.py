@@ -18,6 +18,7 @@ import struct
 import sys
 import time
 
+from server_select.bench import cli
 from server_select.core.util.procs import wait_until
 HEADER = struct.Struct('!I')
 
@@ -133,12 +134,9 @@ def main(argv=None):
     server = sub.add_parser('echo-server')
     server.add_argument('--port', type=int, required=True)
     server.add_argument('--nagle', action='store_true', help='leave Nagle on')
-    client = sub.add_parser('echo-client')
+    client = cli.messages(sub.add_parser('echo-client'), count=200)
     client.add_argument('--host', required=True)
     client.add_argument('--port', type=int, required=True)
-    client.add_argument('--count', type=int, default=200)
-    client.add_argument('--size', type=int, default=4)
-    client.add_argument('--interval', type=float, default=0.01)
     client.add_argument('--nagle', action='store_true', help='leave Nagle on')
     probe = sub.add_parser('probe-client')
     probe.add_argument('--server-id', type=int, required=True)
