@@ -60,10 +60,9 @@ def work_rate(run_dir, t0, start, end):
 
 def detections(bag_path, t0):
     """``[(t, robot, task, server)]`` of the servers' ``detections`` (one per frame done)."""
-    import rosbag
-    with rosbag.Bag(bag_path) as bag:
-        return [(stamp.to_sec() - t0, m.robot_id, m.task_id, m.server_id)
-                for _, m, stamp in bag.read_messages(topics=['/detections'])]
+    from server_select.ros import bags
+    return [(t - t0, m.robot_id, m.task_id, m.server_id)
+            for _, m, t, _ in bags.read(bag_path, {'detections'})]
 
 
 def overloaded(reports, capacities, timeout, start, end, span=2.0, slack=1.25):
