@@ -131,4 +131,4 @@ def test_a_held_clock_keeps_the_links_as_at_time_zero_until_it_starts(monkeypatc
     for now, counted in ((100.5, 'forwarded'), (101.5, 'down')):
         os.write(pipes['a'][0], packet('a', 'b', b'x'))
         emu.receive(emu.fds['a'], now=now)
-        assert emu.stats['a>b'][counted] == 2 if counted == 'forwarded' else 1
+        assert emu.stats['a>b'][counted] == (2 if counted == 'forwarded' else 1), emu.stats
