@@ -87,8 +87,11 @@ class FleetTest(unittest.TestCase):
         own = ['/' + names.robot_topic(r, names.SELECTION_TOPIC) for r in self.robots]
         shared_topic = '/' + names.SELECTION_TOPIC
         if self.mode == 'fixed' or not self.direct:
-            self.assertTrue(self.rec.wait_for(lambda: len(self.rec.reports_of(
-                self.robots[-1])) >= 3, 30.0), 'no task reports')
+            # every robot's: one that started later may not listen yet when another has
+            # (a paper robot's tasks follow its first flag)
+            self.assertTrue(self.rec.wait_for(lambda: all(len(self.rec.reports_of(r)) >= 3
+                                                          for r in self.robots), 30.0),
+                            'no task reports')
             pubs, subs = (dict(x) for x in master.getSystemState()[:2])
             self.assertEqual([t for t in own if t in pubs], [], pubs)
             flaggers = pubs.get(shared_topic, [])
