@@ -373,6 +373,15 @@ def test_hedges_do_not_draw_on_the_reserve():
     assert budget.spend() and budget.spend() and not budget.spend()          # + 2 for re-sends
 
 
+def test_the_reserve_covers_every_task_stranded_on_a_server_that_stopped():
+    clock = Clock()
+    budget = RetryBudget(ratio=0.1, window=10.0, reserve=2, clock=clock)
+    for _ in range(10):
+        budget.sent()
+    assert [budget.spend(stranded=5) for _ in range(7)] == [True] * 6 + [False]  # 1 + 5
+    assert not budget.spend(reserve=False, stranded=5)       # a hedge has no reserve
+
+
 def test_a_zero_retry_budget_means_no_limit():
     budget = RetryBudget(ratio=0.0, reserve=0)
     assert all(budget.spend() for _ in range(100)) and budget.describe() == 'no limit'

@@ -6,6 +6,7 @@ import itertools
 import pytest
 
 from server_select.core.flow.attempts import AttemptClock
+from server_select.core.flow.budget import RetryBudget
 from server_select.core.flow.task_flow import (DUPLICATE, FOREIGN, LATE, LOCAL, NO_SERVER,
                                                OUTRUN, RETRIED, UNKNOWN, TaskFlow)
 
@@ -116,9 +117,25 @@ def test_when_every_candidate_was_tried_the_task_fails_at_its_timeout():
     (outcome,) = w.reports
     assert (outcome.ok, outcome.answered_by, outcome.attempts, outcome.stamp) == \
         (False, NO_SERVER, 2, 's1')
-    assert 'task_timeout 2 s (2 attempts: servers 3, 1)' in outcome.error
+    assert outcome.error == ('no result within task_timeout 2 s (2 attempts: servers 3, 1; '
+                             'not sent again: no other server to try (candidates [3, 1]))')
     assert w.failures == [3, 1]
     assert w.answer(1, 1).status == LATE
+
+
+def test_a_task_the_retry_budget_keeps_from_another_server_says_so_when_it_fails():
+    budget = RetryBudget(ratio=0.1, window=10.0, reserve=0, clock=Clock())
+    assert all(budget.spend(stranded=3) for _ in range(3))   # a server failed earlier
+    w = World(candidates=(3, 1), timeout=2.0, first=0.5, budget=budget)
+    w.flow.send_next('s1')
+    for _ in range(30):
+        w.clock.now += 0.1
+        w.flow.tick()
+    (outcome,) = w.reports
+    assert [server for _, server in w.published] == [3]
+    assert outcome.error.endswith('(1 attempts: servers 3; not sent again: the retry budget '
+                                  '(10 % of tasks + 0 per 10 s) is spent)'), outcome.error
+    assert w.flow.unfunded == 1
 
 
 def test_duplicate_late_unknown_and_foreign_results_are_ignored_and_counted():
@@ -306,3 +323,28 @@ def test_at_its_next_wake_a_task_out_of_time_ends():
     assert w.clock.now - 11.12 < 5.0
     ended = w.flow.tick()
     assert [o.ok for o in ended] == [False] and len(w.flow) == 0
+
+
+def test_every_task_out_on_a_server_that_stops_goes_elsewhere_past_the_fixed_reserve():
+    # 5 tasks/s with 1 s attempt deadlines: 5 are out on server 3 when it stops; 10 % of
+    # the 10 tasks sent plus a reserve of 2 would re-send 3 of them
+    budget = RetryBudget(ratio=0.1, window=10.0, reserve=2, clock=Clock())
+    w = World(candidates=(3, 1), timeout=2.0, first=1.0, budget=budget)
+    budget._clock = w.clock
+    for task in range(1, 6):
+        w.flow.send_next('s%d' % task)
+        w.clock.now += 0.05
+        w.answer(task, 3)
+        w.clock.now += 0.15
+    for task in range(6, 11):                      # server 3 stopped: no answer any more
+        w.flow.send_next('s%d' % task)
+        w.clock.now += 0.2
+        w.flow.tick()
+    w.clock.now += 0.3                             # past the last one's attempt deadline
+    w.flow.tick()
+    sent_to = [s for _, s in w.published]
+    assert (sent_to.count(3), sent_to.count(1)) == (10, 5)
+    assert (w.flow.resent, w.flow.unfunded, len(w.flow)) == (5, 0, 5)
+    for task in range(6, 11):
+        assert w.answer(task, 1).status == 'ended'
+    assert not any(r.ok is False for r in w.reports)

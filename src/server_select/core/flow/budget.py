@@ -3,9 +3,12 @@
 Under overload a re-send or a hedge is one more task for servers that have no time to
 spare. As Finagle's ``RetryBudget`` and gRPC's retry throttling do, extra sends are paid
 from a budget: at most ``ratio`` of the tasks first sent in the last ``window`` s, plus a
-``reserve`` so that the few tasks in flight when a server dies can always go elsewhere. A
-hedge (a copy of a task nobody has failed) never draws on the reserve: in a scenario with a
-link outage, hedges had spent what the re-sends after it needed, and a task failed.
+``reserve`` so that the tasks in flight when a server dies can always go elsewhere: 2, or
+as many as were sent to the dead server since it last answered, when more (a robot at 5
+tasks/s with 1 s attempt deadlines has 5 out on a server that stops, and a fixed 2 failed
+the last of them). A hedge (a copy of a task nobody has failed) never draws on the
+reserve: in a scenario with a link outage, hedges had spent what the re-sends after it
+needed, and a task failed.
 """
 
 import collections
@@ -40,15 +43,19 @@ class RetryBudget(object):
             self._prune(now)
             self._sent.append(now)
 
-    def spend(self, reserve=True):
+    def spend(self, reserve=True, stranded=0):
         """Whether one extra send may go now (and it is counted when it may); ``reserve``
-        False (a hedge): only within the ratio."""
+        False (a hedge): only within the ratio; ``stranded``: the attempts sent since it
+        last answered anything to the server this task is re-sent from, which did not
+        answer it in time (the reserve covers them all: none of them is being worked on,
+        so their re-sends add no work; a server that answers late resets the count)."""
         if not self.ratio:
             return True
         with self._lock:
             now = self._clock()
             self._prune(now)
-            allowed = self.ratio * len(self._sent) + (self.reserve if reserve else 0)
+            allowed = self.ratio * len(self._sent) + (max(self.reserve, stranded)
+                                                      if reserve else 0)
             if len(self._spent) >= allowed:
                 self.refused += 1
                 return False

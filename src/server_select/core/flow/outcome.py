@@ -67,12 +67,13 @@ class EndedTasks(object):
 class Pending(object):
     """A task in flight: its request, check context, and the attempts made so far."""
     __slots__ = ('task_id', 'stamp', 'request', 'context', 'started', 'attempts', 'deadline',
-                 'hedged', 'open')
+                 'hedged', 'open', 'not_resent')
 
     def __init__(self, task_id, stamp, request, context, started):
         self.task_id, self.stamp, self.request, self.context = task_id, stamp, request, context
         self.started, self.attempts, self.deadline = started, [], started
         self.hedged = False
+        self.not_resent = None  # why its last failed attempt went nowhere else (None: it did)
         self.open = set()       # servers of attempts not ended yet (no answer, no deadline)
 
     def attempt(self, server, now, observer=None, kind=None, order=None):
@@ -124,9 +125,11 @@ class Pending(object):
         return next((t for s, t in reversed(self.attempts) if s == server), None)
 
     def unanswered(self, kind, why):
-        """How it ended without an answer: failed, ``why``, and the servers it was sent to."""
-        return self.outcome(kind, NO_SERVER, False, '%s (%d attempts: servers %s)' % (
-            why, len(self.attempts), ', '.join(str(s) for s, _ in self.attempts)), None)
+        """How it ended without an answer: failed, ``why``, the servers it was sent to and,
+        when an attempt failed with no other after it, why there was none."""
+        return self.outcome(kind, NO_SERVER, False, '%s (%d attempts: servers %s%s)' % (
+            why, len(self.attempts), ', '.join(str(s) for s, _ in self.attempts),
+            '; not sent again: %s' % self.not_resent if self.not_resent else ''), None)
 
     def outcome(self, kind, answered_by, ok, error, rtt):
         """How it ended (``rtt`` None: no answer)."""

@@ -105,6 +105,8 @@ class TaskFlow(Timing):
         self._last_first = None
         self.ignored = collections.Counter()   # DUPLICATE / OUTRUN / LATE / UNKNOWN / FOREIGN
         self.rtts = collections.deque(maxlen=keep_rtts)   # recent answered round trips
+        # server -> attempts sent there since it last answered anything (stranded tasks)
+        self._silent = collections.Counter()
 
     def candidates(self):
         """Where a task may go now, best first."""
@@ -163,6 +165,7 @@ class TaskFlow(Timing):
     def _attempt(self, pending, server, order):
         now = self._clock()
         pending.attempt(server, now, self._attempts, self.kind, order)
+        self._silent[server] += 1
         pending.deadline = min(pending.started + self.timeout,
                                now + self.deadlines.seconds(server))
         self._publish(pending.request, server, self.deadlines.budget(
@@ -180,6 +183,7 @@ class TaskFlow(Timing):
         ended, or it was not sent there). A ``busy`` answer blames nobody."""
         now = self._clock()
         with self._lock:
+            self._silent.pop(answered_by, None)     # it is up, late or not
             pending = self._pending.get(task_id)
             if pending is None:
                 why = self._ended.why(task_id, answered_by)

@@ -29,7 +29,8 @@ class Timing(object):
                         self._drop(pending)
                         ended.append((pending, 'no result within its attempt deadline and '
                                       'a newer task waits'))
-                    elif not self._next(pending):   # nobody left: wait for any late answer
+                    elif not self._next(pending, stranded=self._silent[server]):
+                        # nobody left: wait for any late answer
                         pending.deadline = pending.started + self.timeout
                 elif self.hedge is not None and pending.hedge_due(   # the first not blamed
                         now, lambda server: self.deadlines.hedge_seconds(server, self.hedge)):
@@ -48,19 +49,26 @@ class Timing(object):
                           if t is not None]
         return min(times) if times else None
 
-    def _next(self, pending, hedge=False):
+    def _next(self, pending, hedge=False, stranded=0):
         """Send ``pending`` to the next candidate it has not tried (a re-send, or a
         ``hedge``); False if there is none. A task with a freshness deadline goes only
-        where the load says it can still be done in time."""
+        where the load says it can still be done in time. ``stranded``: the attempts sent to
+        the server that failed to answer it in time since it last answered anything
+        (:meth:`RetryBudget.spend`)."""
         tried = set(s for s, _ in pending.attempts)
         elapsed = self._clock() - pending.started
         order = self._candidates()
         untried = [s for s in order if s not in tried and s != LOCAL
                    and not self.deadlines.too_busy(s, elapsed)]
         if not untried:
+            if not hedge:
+                pending.not_resent = 'no other server to try (candidates %s)' % (order,)
             return False
-        if self.budget is not None and not self.budget.spend(reserve=not hedge):
+        if self.budget is not None and not self.budget.spend(reserve=not hedge,
+                                                             stranded=stranded):
             self.unfunded += 1
+            if not hedge:
+                pending.not_resent = 'the retry budget (%s) is spent' % self.budget.describe()
             return False
         if hedge:
             self.hedged += 1
