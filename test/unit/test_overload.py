@@ -171,7 +171,8 @@ def test_a_hedge_waits_past_the_usual_spread_by_one_round_trip():
     clock = AttemptClock(5.0, min_samples=5)
     for rtt in [0.010] * 50 + [0.016] * 45 + [0.230] * 3:   # 3 % retransmissions
         clock.add(1, rtt)
-    assert clock.hedge_seconds(1, 0.95) == pytest.approx(0.016 + 0.010)
+    # median 10 ms, quartiles 10 and 16 ms: 10 + 1.645 x 6 / 1.349, then a round trip
+    assert clock.hedge_seconds(1, 0.95) == pytest.approx(0.010 + 0.00732 + 0.010, abs=1e-4)
     jitter = [0.010 + 0.0001 * i for i in range(100)]        # 10-20 ms, no tail
     for rtt in jitter:
         clock.add(2, rtt)
@@ -183,3 +184,15 @@ def test_one_retransmission_among_few_round_trips_does_not_stop_hedging():
     for rtt in [0.018] * 12 + [0.247]:           # a new server's first 13 answers
         clock.add(4, rtt)
     assert clock.hedge_seconds(4, 0.95) == pytest.approx(0.018 + 0.018)
+
+
+def test_a_tail_of_lost_packets_does_not_set_the_delay_of_the_hedges_that_cut_it():
+    # 1 % loss on a 3-packet task and its result: 6 % of round trips wait for a 200 ms
+    # retransmission. The p95 by rank is in that tail (a hedge after 233 ms never wins);
+    # the p95 of the usual spread is not, so the tail's tasks are hedged
+    clock = AttemptClock(5.0, min_samples=5)
+    for rtt in [0.020 + 0.0005 * (i % 7) for i in range(94)] + [0.221] * 6:
+        clock.add(3, rtt)
+    rtts = sorted(clock._rtts[3])
+    assert rtts[int(0.95 * (len(rtts) - 1))] == 0.221
+    assert 0.040 < clock.hedge_seconds(3, 0.95) < 0.050
