@@ -356,3 +356,24 @@ def test_least_latency_a_trend_is_not_wander():
     cross, a robot on the move) stray from no trend: once 2 ms apart, the robot moves."""
     moved = wandering(levels=[0.0002 * k - 0.0016 for k in range(9)])
     assert moved.server == 2 and 'faster than 1' in moved.reason, moved
+
+
+def test_least_latency_sends_a_frame_where_it_comes_back_fresh_before_where_it_is_faster():
+    # server 1 answers a frame in about 110 ms, server 2 in 130 ms; a frame is worth an
+    # answer from server 1 for 50 ms only (its freshness there): server 2 gets it
+    clock = Clock()
+    rule = least_latency(clock)
+    feed(rule, clock, {1: (0.010, 0, 0.0), 2: (0.030, 0, 0.0)})
+    assert rule.order([1, 2], 'image') == [1, 2]
+    fresh = {1: 0.05, 2: 0.5}.get
+    order = rule.order([1, 2], 'image', fresh)
+    assert order == [2, 1] and 'server 1: an answer after the task is stale' in order.reasons[2]
+    assert rule.order([1, 2], 'image', fresh) == order        # asking changes nothing
+    assert rule.order([1, 2], 'image', {1: 0.05, 2: 0.05}.get) == [1, 2]   # late everywhere
+    assert rule.order([1, 2], 'image', {1: None, 2: 0.5}.get) == [1, 2]    # not known
+
+
+def test_rules_without_estimates_take_no_freshness_into_account():
+    clock = Clock()
+    rule = balancers.make('round_robin', rng=random.Random(1), clock=clock)
+    assert rule.order([1, 2], 'image', {1: 0.0, 2: 0.0}.get) == rule.order([1, 2], 'image')

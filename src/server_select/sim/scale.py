@@ -58,10 +58,10 @@ class _Timed(object):
     def __enter__(self):
         self.original = original = Selection.candidates
 
-        def timed(selection, kind=None):
+        def timed(selection, kind=None, fresh=None):
             start = time.perf_counter()
             try:
-                return original(selection, kind)
+                return original(selection, kind, fresh)
             finally:
                 self.seconds += time.perf_counter() - start
                 self.calls += 1

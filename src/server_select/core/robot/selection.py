@@ -190,7 +190,7 @@ class Selection(object):
         return self.mode == 'select' and self.balancer is None and \
             self.manager_ranking() is None
 
-    def candidates(self, kind=None):
+    def candidates(self, kind=None, fresh=None):
         """Where a ``kind`` task may go now, best first: ``[LOCAL]``, ``[fixed server]``,
         the balancer's order of the servers the robot's evidence has not ejected, or the
         (manager's or own) ranking without them (:meth:`ServerHealth.order`)."""
@@ -198,8 +198,8 @@ class Selection(object):
             return [LOCAL]
         if self.mode == 'fixed':
             return [self.fixed_server]
-        if self.balancer is not None:
-            return self.balancer.order(self._usable(), kind)
+        if self.balancer is not None:     # (``fresh``: :meth:`Balancer.order`'s)
+            return self.balancer.order(self._usable(), kind, fresh)
         ranking = self.manager_ranking()
         if ranking is None:
             ranking = self.own_ranking()

@@ -41,14 +41,15 @@ class Stream(object):
         self.period = 1.0 / rate
         self.random = robot._random('tasks/%s' % kind.kind)
         selection, balancer = robot.selection, robot.balancer
+        deadlines = attempts.from_params(get, kind.kind, lambda: self.period,
+                                         kind.newest_wins, robot.load)
         self.flow = TaskFlow(
             kind.kind, get('task_timeout'),
-            candidates=functools.partial(selection.candidates, kind.kind), make=kind.make,
+            candidates=functools.partial(selection.candidates, kind.kind,
+                                         fresh=deadlines.fresh), make=kind.make,
             publish=self._publish, check=kind.check, report=self._report,
             run_local=kind.run_local, on_failure=robot.on_failure,
-            on_success=robot.health.task_ok,
-            deadlines=attempts.from_params(get, kind.kind, lambda: self.period,
-                                           kind.newest_wins, robot.load),
+            on_success=robot.health.task_ok, deadlines=deadlines,
             ids=ids, clock=robot.clock, hedge=HEDGE_QUANTILE if get('hedge') else None,
             budget=robot.budget, max_in_flight=get('max_in_flight'),
             newest_wins=kind.newest_wins, on_busy=functools.partial(robot.on_busy, kind.kind),

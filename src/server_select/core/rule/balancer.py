@@ -148,18 +148,34 @@ class Balancer(object):
     def _ended(self, server, rtt, now):
         """Subclasses: an attempt's round trip (lock held)."""
 
-    def order(self, servers, kind=None):
+    def order(self, servers, kind=None, fresh=None):
         """``servers`` (the usable ones) in this rule's order for the next ``kind`` task
-        (the first gets it; re-sends and hedges take the next)."""
+        (the first gets it; re-sends and hedges take the next). ``fresh(server)``: how long
+        a ``kind`` task's answer from there is worth having (s; None: unknown); servers
+        the rule expects to answer later than that come after the others, in its order."""
         servers = list(servers)
         if not servers:
             return Order([])
         with self._lock:
-            ordered = self._order(servers, kind, self._clock())
+            now = self._clock()
+            late = self._late(servers, kind, now, fresh) if fresh is not None else []
+            if not late or len(late) == len(servers):
+                ordered = self._order(servers, kind, now)
+            else:
+                ordered = self._order([s for s in servers if s not in late], kind, now)
+                ordered = Order(list(ordered) + self._order(late, kind, now), dict(
+                    (s, '%s (server %s: an answer after the task is stale)'
+                     % (why, ', '.join(str(s) for s in late)))
+                    for s, why in getattr(ordered, 'reasons', {}).items()))
         return ordered if isinstance(ordered, Order) else Order(ordered)
 
     def _order(self, servers, kind, now):
         raise NotImplementedError
+
+    def _late(self, servers, kind, now, fresh):
+        """Subclasses: the ``servers`` whose ``kind`` answer the rule expects after
+        ``fresh(server)`` s (lock held; a rule without estimates: none)."""
+        return []
 
     def contenders(self, servers):
         """The servers worth probing often: all of them (a rule with estimates of its own

@@ -13,8 +13,11 @@ trip and work stray for seconds at a time, which answers counted as independent 
 show). ``choose`` keeps the robot's server while it is within 3 errors of the best; else
 moves to the best, or at random to one within 3 errors of it whose estimate is lower than
 its server's (robots that read the same answers do not all move to one, and no move is to
-a worse estimate). ``choose`` changes nothing: the move is made when a task's first
-attempt is sent (:meth:`started`). docs/selection.md has each mechanism's worth.
+a worse estimate). A task with a freshness (a camera frame) goes first to the servers
+whose estimate is within it: a frame sent where it would come back stale is refused
+busy or wasted (:meth:`_late`). ``choose`` changes nothing: the move is made when a
+task's first attempt is sent (:meth:`started`). docs/selection.md has each mechanism's
+worth.
 """
 
 import collections
@@ -29,7 +32,7 @@ Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
 LEVELS = 10              # a server's levels kept, one a window: 8 second differences
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander')
+MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'fresh')
 
 Estimate = collections.namedtuple('Estimate', 'latency error wait answers')
 
@@ -185,6 +188,19 @@ class LeastLatency(Balancer):
             'server %s not heard from in %g s' % (here, self.window) if here else 'the fastest'
         return Decision(there, why + (' (%d within the noise: one at random)' % len(near)
                                       if len(near) > 1 else ''), estimates)
+
+    def _late(self, servers, kind, now, fresh):
+        """The servers whose estimate for a ``kind`` task is past what ``fresh`` gives it
+        there: a frame sent where it would come back stale is refused busy, or wasted."""
+        if 'fresh' not in self.mechanisms:
+            return []
+        rate = self.rate(kind, now)
+        late = []
+        for server in servers:
+            estimate, limit = self.estimate(server, kind, now, rate), fresh(server)
+            if estimate is not None and limit is not None and estimate.latency > limit:
+                late.append(server)
+        return late
 
     @staticmethod
     def _pooled(estimates):
