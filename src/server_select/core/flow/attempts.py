@@ -1,10 +1,13 @@
 """How long one attempt of a task may take on a server, from that server's round trips."""
 
 import collections
+import functools
 import threading
 from statistics import NormalDist
 
 IQR_SIGMAS = 1.349       # a normal spread's quartiles are this many standard deviations apart
+# standard deviations above the mean of a normal spread's ``quantile`` (asked at every tick)
+_sigmas = functools.lru_cache(maxsize=8)(NormalDist().inv_cdf)
 
 
 class AttemptClock(object):
@@ -73,7 +76,7 @@ class AttemptClock(object):
         # not make the quartiles' width its own)
         quartiles = rtts[int(0.25 * (len(rtts) - 1))], rtts[int(0.75 * (len(rtts) - 1))]
         spread = (quartiles[1] - quartiles[0]) / IQR_SIGMAS
-        seconds = median + NormalDist().inv_cdf(quantile) * spread + median
+        seconds = median + _sigmas(quantile) * spread + median
         expected = self.expected(server) if self.expected is not None else None
         return seconds if expected is None else max(seconds, self.load_factor * expected)
 

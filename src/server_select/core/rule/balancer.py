@@ -163,9 +163,9 @@ class Balancer(object):
                 ordered = self._order(servers, kind, now)
             else:
                 ordered = self._order([s for s in servers if s not in late], kind, now)
+                stale = ', '.join(str(server) for server in late)
                 ordered = Order(list(ordered) + self._order(late, kind, now), dict(
-                    (s, '%s (server %s: an answer after the task is stale)'
-                     % (why, ', '.join(str(s) for s in late)))
+                    (s, '%s (server %s: an answer after the task is stale)' % (why, stale))
                     for s, why in getattr(ordered, 'reasons', {}).items()))
         return ordered if isinstance(ordered, Order) else Order(ordered)
 
