@@ -1,23 +1,15 @@
 """The fleet profile's rule, ``least_latency`` (no rospy): the server a task is expected to
 be answered soonest by, kept while nothing beats it beyond the noise.
 
-Each probe answer of the last ``window`` s shows a server as a task sent then would meet
-it: the robot's round trip, the other robots' work in flight there per worker, the work
-per task, and its utilization. A server's estimate is the median round trip (a late
-answer or two must not hold it up) + the mean work in flight + the work, times the tries
-a server asked for more than it can do needs (its utilization with this robot's share,
-when above 1); its noise the errors of all three (the server reports its work's: on a
-shared CPU it varies with what else runs), or, when larger, how far the server's level
-strays from one window to the next (:meth:`wander`: on a shared host a server's round
-trip and work stray for seconds at a time, which answers counted as independent do not
-show). ``choose`` keeps the robot's server while it is within 3 errors of the best; else
-moves to the best, or at random to one within 3 errors of it whose estimate is lower than
-its server's (robots that read the same answers do not all move to one, and no move is to
-a worse estimate). A task with a freshness (a camera frame) goes first to the servers
-whose estimate is within it: a frame sent where it would come back stale is refused
-busy or wasted (:meth:`_late`). ``choose`` changes nothing: the move is made when a
-task's first attempt is sent (:meth:`started`). docs/selection.md has each mechanism's
-worth.
+A server's estimate, from its probe answers of the last ``window`` s: the median round
+trip + the other robots' work in flight per worker (+ the robot's own tasks of its other
+kinds there, :meth:`_own_kinds`) + the work per task, times the tries a server asked for
+more than it can do needs; its noise the errors of these, or, when larger, how far its
+level strays between windows (:meth:`wander`). ``choose`` keeps the robot's server while
+it is within 3 errors of the best; else moves to the best, or at random to one within 3
+errors of it whose estimate is lower than its server's. A camera frame goes first where
+it would not come back stale (:meth:`_late`). ``choose`` changes nothing: the move is made
+at a task's first send (:meth:`started`). docs/selection.md has each mechanism and its worth.
 """
 
 import collections
@@ -32,7 +24,7 @@ Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
 LEVELS = 10              # a server's levels kept, one a window: 8 second differences
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'fresh')
+MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'fresh', 'own_kinds')
 
 Estimate = collections.namedtuple('Estimate', 'latency error wait answers')
 
@@ -122,10 +114,24 @@ class LeastLatency(Balancer):
             parts = self._parts[(server, kind)] = (newest, len(answers), least,
                                                    self._rate_free(server, kind, answers))
         rtt, wait, work, workers, error, utilizations = parts[3]
+        wait += self._own_kinds(server, kind, now, newest) / workers
         mine = rate * work / workers
         tries = math.fsum([max(1.0, u + mine) for u in utilizations]) / len(utilizations) \
             if 'tries' in self.mechanisms else 1.0
         return Estimate((rtt + wait + work) * tries, error * tries, wait, len(answers))
+
+    def _own_kinds(self, server, kind, now, newest):
+        """Worker-seconds a ``kind`` task at ``server`` waits on average for the robot's own
+        tasks of other kinds there (its frames, for its sort tasks; answers count only the
+        other robots'): each is in service rate x work of the time, and is half done then."""
+        if 'own_kinds' not in self.mechanisms:
+            return 0.0
+        wait = 0.0
+        for other, there in sorted(self.chosen_for.items(), key=str):
+            if other != kind and there == server:
+                work = newest.service.get(other, self.least_work.get(other, 0.0))
+                wait += self.sends.count(other, now) / self.sends.horizon * work * work / 2.0
+        return wait
 
     def _rate_free(self, server, kind, answers):
         """``(round trip, wait, work, workers, error, utilizations)`` of ``answers``."""
