@@ -66,13 +66,15 @@ step keyed_task "source devel/setup.bash && (roscore -p $port > roscore2.out 2>&
 # and what the nodes launched beside that test logged (its launch's log directory)
 /usr/bin/python3 - "$ws/build/test_results" "$ws/ros_home/log" <<'PY'
 import glob, os, re, sys, xml.etree.ElementTree as ET
-failed, ROSOUT = set(), re.compile(r'\[rosout\]\[(\w+)\] (\S+ \S+): (.*)')
+failed, summary, ROSOUT = set(), [], re.compile(r'\[rosout\]\[(\w+)\] (\S+ \S+): (.*)')
 for path in sorted(glob.glob(sys.argv[1] + '/*/*.xml')):
     for case in ET.parse(path).getroot().iter('testcase'):
         for bad in list(case.iter('failure')) + list(case.iter('error')):
             text = (bad.get('message') or bad.text or '').strip().splitlines() or ['']
-            print('catkin: FAILED %s %s: %s' % (path.rsplit('/', 1)[-1], case.get('name'),
-                                                text[0][:300]))
+            summary.append('catkin: FAILED %s %s: %s' % (
+                path.rsplit('/', 1)[-1], case.get('name'),
+                ' ... '.join(dict.fromkeys((text[0][:300], text[-1][:300])))))
+            print(summary[-1])
             failed.add(re.sub(r'^rosunit-|\.xml$', '', os.path.basename(path)))
 for name in sorted(failed):   # rospy's own log of each node: every rosout line, by time
     for run in set(os.path.dirname(p) for p in glob.glob(
@@ -87,6 +89,8 @@ for name in sorted(failed):   # rospy's own log of each node: every rosout line,
               % (name, len(lines)))
         print('\n'.join('%s %s %s: %s' % (when, level, node, text)
                         for when, level, text, node in sorted(lines)[:80]))
+for line in summary:    # again, last: a long log above must not hide which case failed
+    print(line)
 PY
 echo "catkin: $passed passed, $failed failed"
 [ $failed -eq 0 ]
