@@ -102,8 +102,7 @@ class LeastLatency(Balancer):
     def estimate(self, server, kind, now, rate=None):
         """The :class:`Estimate` of a ``kind`` task at ``server`` from its answers of the
         window (None: none); ``rate``: the robot's ``kind`` tasks a second (:meth:`rate`).
-        What does not depend on the rate is worked out once per window of answers (an
-        estimate is asked at every probe round, for every server)."""
+        The rate-free parts: once per window of answers (asked every probe round, per server)."""
         answers = [(a, o) for a, o in self.answers.get(server, ()) if now - a.at <= self.window]
         if not answers:
             return None
@@ -121,26 +120,27 @@ class LeastLatency(Balancer):
         return Estimate((rtt + wait + work) * tries, error * tries, wait, len(answers))
 
     def _own_kinds(self, server, kind, now, newest):
-        """Worker-seconds a ``kind`` task at ``server`` waits on average for the robot's own
-        tasks of other kinds there (its frames, for its sort tasks; answers count only the
-        other robots'): each is in service rate x work of the time, and is half done then."""
+        """Worker-seconds a ``kind`` task at ``server`` waits for the robot's own tasks of other
+        kinds there (no answer counts them): each in service rate x work of the time, half done."""
         if 'own_kinds' not in self.mechanisms:
             return 0.0
         wait = 0.0
         for other, there in sorted(self.chosen_for.items(), key=str):
             if other != kind and there == server:
-                work = newest.service.get(other, self.least_work.get(other, 0.0))
+                work = self._work(newest, other)
                 wait += self.sends.count(other, now) / self.sends.horizon * work * work / 2.0
         return wait
+
+    def _work(self, answer, kind):
+        """A ``kind`` task's work (s) by ``answer``, else the least any server reported."""
+        return answer.service.get(kind, self.least_work.get(kind, 0.0))
 
     def _rate_free(self, server, kind, answers):
         """``(round trip, wait, work, workers, error, utilizations)`` of ``answers``."""
         newest = answers[-1][0]
-        # a server that has not done this kind yet: the least work seen for it (what the
-        # task takes where nothing slows it; one task there tells)
-        work = newest.service.get(kind, self.least_work.get(kind, 0.0))
-        # the newest report (a step in the work shows at once) and its error, the server's
-        # (a median of its last second's tasks, which a shared CPU makes vary)
+        # the newest report (a step shows at once); a kind not done there yet: what it takes
+        # where nothing slows it (one task there tells). The error: the server's, of a median
+        work = self._work(newest, kind)
         work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.mechanisms else 0.0
         workers = float(newest.workers)
         rtts = [a.rtt for a, _ in answers]
