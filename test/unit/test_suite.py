@@ -6,7 +6,9 @@ import pytest
 
 from server_select.testbed.bag_analysis import Flag, Report
 from server_select.testbed.scenario import Scenario, ScenarioError
-from server_select.testbed.suite_scenario import expand, launch_args, replica_id, scenario_path
+from server_select.testbed.runner import RunOptions
+from server_select.testbed.suite_scenario import (expand, launch_args, replica_id, robot_params,
+                                                  scenario_path)
 from server_select.testbed import suite_report
 
 DATA = {'name': 't', 'duration': 60,
@@ -47,6 +49,17 @@ def test_launch_args_and_scenario_files_are_the_packages():
 
 def report(t, robot, ok=True, rtt=0.01):
     return Report(t, robot, int(t * 10), ok, rtt if ok else float('nan'), 1, 1, '', 1)
+
+
+def test_a_scenarios_robot_args_win_over_the_runs_task_rate_and_timeout():
+    """config/sim/mixed_kinds.yaml's robots send 5 sort tasks a second on the testbed as in
+    the simulator (its task_rate once made the suite stop: given twice)."""
+    options = RunOptions(task_rate=2.0, task_timeout=3.0, start_delay=10.0)
+    params = robot_params({'policy': 'least_latency', 'task_rate': 1.0}, options,
+                          {'task_rate': 5, 'frame_rate': 0.4, 'robot_index': 0})
+    assert params == {'policy': 'least_latency', 'task_rate': 5, 'task_timeout': 3.0,
+                      'start_delay': 10.0, 'frame_rate': 0.4, 'robot_index': 0}
+    assert robot_params({}, options, {})['task_rate'] == 2.0
 
 
 def test_figures_count_failed_tasks_at_the_timeout_and_switches_per_minute():

@@ -28,8 +28,9 @@ from server_select.testbed.linkemu import EmulatorError
 from server_select.testbed.netns import Testbed
 from server_select.testbed.traces import netns_pids
 from server_select.testbed.scenario import Scenario, ScenarioError
-from server_select.testbed.suite_scenario import (expand, launch_args, scenario_path,
-                                                  scenario_robot_args, short_name)
+from server_select.testbed.suite_scenario import (expand, launch_args, robot_params,
+                                                  scenario_path, scenario_robot_args,
+                                                  short_name)
 
 Variant = collections.namedtuple('Variant', 'mode profile params host')
 Variant.__new__.__defaults__ = ({},)     # host: what its robots' hosts are like (scenario keys)
@@ -145,9 +146,7 @@ class SuiteRun(HostRun):
 
     def start_robot(self, robot, name, variant, options, accepted, extra):
         learned = variant.profile == 'fleet' and variant.mode == 'select'
-        params = dict(variant.params, task_rate=options.task_rate,
-                      task_timeout=options.task_timeout,
-                      start_delay=options.start_delay, **extra)
+        params = robot_params(variant.params, options, extra)
         self.launch(robot.name, 'robot.launch', 'robot_id:=%d' % robot.id,
                     'profile:=%s' % variant.profile,
                     'servers:=%s' % ('[]' if learned else

@@ -77,6 +77,16 @@ def scenario_robot_args(args, t0):
     return args
 
 
+def robot_params(variant_params, options, scenario_args):
+    """A suite robot's parameters: its variant's, the run's task rate, timeout and start
+    delay, and then the scenario's own ``robot_args`` (``scenario_robot_args``), which
+    win: a scenario that says its robots send 5 tasks a second means it."""
+    params = dict(variant_params, task_rate=options.task_rate,
+                  task_timeout=options.task_timeout, start_delay=options.start_delay)
+    params.update(scenario_args)
+    return params
+
+
 def launch_args(name):
     """The arguments launch file ``name`` declares."""
     root = ElementTree.parse(package_file('launch', name)).getroot()
