@@ -4,6 +4,7 @@ import pytest
 
 from server_select.srv import LatencyProbeResponse
 from server_select.core.load.robot_load import RobotLoad
+from server_select.core.load.work_queue import Load
 from server_select.ros.load import load_of
 
 from support.clock import Clock
@@ -47,7 +48,7 @@ def test_each_kind_is_announced_to_where_that_kind_goes():
 def test_the_wait_comes_from_the_answers_utilization():
     load = RobotLoad({'image': 1.0}, lambda kind: 1)
     answer = LatencyProbeResponse(server_id=1, workers=1, backlog=3.0, utilization=0.5,
-                                  kinds=['image'], service_time=[0.6])
+                                  kinds=['image'], service_time=[0.6], service_error=[0.0])
     assert load.on_answer(1, load_of(answer)) == pytest.approx(0.6 + 0.5 * 0.6 / 2 / 0.5)
     assert load.expected('image')(1) == pytest.approx(3.0 + 0.6)   # deadlines: backlog
 
@@ -55,10 +56,34 @@ def test_the_wait_comes_from_the_answers_utilization():
 def test_a_frame_is_fresh_until_the_next_one_is_due_and_for_twice_its_best_answer():
     load = RobotLoad({'image': 1.0}, lambda kind: 1)
     answer = LatencyProbeResponse(server_id=1, workers=1, backlog=3.0, utilization=0.5,
-                                  kinds=['image'], service_time=[0.6])
+                                  kinds=['image'], service_time=[0.6], service_error=[0.0])
     fresh = load.fresh_for('image', 2.0, lambda: 1.0 / 0.5)        # a frame every 2 s
     assert fresh(1) is None                                 # nothing heard of server 1
     load.on_answer(1, load_of(answer), 0.05)
     assert fresh(1) == pytest.approx(2.0)                   # the next frame is due first
     fast = load.fresh_for('image', 2.0, lambda: 1.0 / 5.0)          # 5 frames/s: past capacity
     assert fast(1) == pytest.approx(2.0 * (0.05 + 0.6))     # the queue (3 s) left out
+
+
+@pytest.mark.parametrize('fields, why', [
+    (dict(kinds=['image'], service_time=[0.6], service_error=[]), '1 kinds with 1 work times'),
+    (dict(kinds=['image', 'image'], service_time=[0.6, 0.6], service_error=[0.0, 0.0]),
+     '2 kinds \\(1 different'),
+    (dict(kinds=['k%d' % i for i in range(40)], service_time=[0.1] * 40,
+          service_error=[0.0] * 40), '40 kinds'),
+    (dict(others_work=float('nan')), 'others_work is nan'),
+    (dict(backlog=-1.0), 'backlog is -1.0'),
+    (dict(kinds=['image'], service_time=[float('inf')], service_error=[0.0]),
+     'work of image is inf'),
+])
+def test_a_load_report_that_makes_no_sense_is_refused_saying_why(fields, why):
+    with pytest.raises(ValueError, match=why):
+        load_of(LatencyProbeResponse(server_id=1, workers=1, **fields))
+
+
+def test_a_load_report_is_read_whole():
+    answer = LatencyProbeResponse(server_id=1, queued=2, in_service=1, workers=2, backlog=0.4,
+                                  utilization=0.5, others_work=0.9, kinds=['image', 'sort'],
+                                  service_time=[0.3, 0.002], service_error=[0.01, 0.0])
+    assert load_of(answer) == Load(2, 1, 2, 0.4, {'image': 0.3, 'sort': 0.002}, 0.5,
+                                   {'image': 0.01, 'sort': 0.0}, 0.9)

@@ -30,9 +30,10 @@ class Prober(object):
     and, with a fleet key, sealed by the node ``node_of(server, refresh)`` names (with
     ``addresses``, a ``ProbeAddresses``: at the address, and by the node, its sealed
     announcement names); anything else is a failed probe naming who answered. ``load_of``
-    (load-aware) reads an answer's load report. Samples go out as ``stream`` says
-    (``ProbeSamples``; ``view``: for recorders, the manager hears the robot's own ranking),
-    a batch per round; ``after_answers`` is called once after each batch of answers.
+    (load-aware) reads an answer's load report (one it cannot read fails the probe).
+    Samples go out as ``stream`` says (``ProbeSamples``; ``view``: for recorders, the
+    manager hears the robot's own ranking), a batch per round; ``after_answers`` is called
+    once after each batch of answers.
     """
 
     def __init__(self, robot_id, timeout, stream='pair', load_of=None, node_of=None,
@@ -160,8 +161,12 @@ class Prober(object):
             self.robot.probe_failed(server, seq, 'answer not sealed by the fleet key: %s'
                                     % forged)
             return
-        self.robot.probe_answered(server, seq, rtt, self.load_of(response)
-                                  if self.load_of is not None else None)
+        try:
+            load = self.load_of(response) if self.load_of is not None else None
+        except ValueError as bad:
+            self.robot.probe_failed(server, seq, 'answer not understood: %s' % bad)
+            return
+        self.robot.probe_answered(server, seq, rtt, load)
 
     def sample(self, server, seq, rtt, error, wait, round_number):
         """A sample of the robot's: published, and added to its round's batch."""
