@@ -1,6 +1,7 @@
 """The scenario suite's pure parts: replicated robots, figures and ratios."""
 
 import collections
+import os
 
 import pytest
 
@@ -8,7 +9,7 @@ from server_select.testbed.bag_analysis import Flag, Report
 from server_select.testbed.scenario import Scenario, ScenarioError
 from server_select.testbed.runner import RunOptions
 from server_select.testbed.suite_scenario import (expand, launch_args, replica_id, robot_params,
-                                                  scenario_path)
+                                                  scenario_path, scenario_robot_args)
 from server_select.testbed import suite_report
 
 DATA = {'name': 't', 'duration': 60,
@@ -60,6 +61,12 @@ def test_a_scenarios_robot_args_win_over_the_runs_task_rate_and_timeout():
     assert params == {'policy': 'least_latency', 'task_rate': 5, 'task_timeout': 3.0,
                       'start_delay': 10.0, 'frame_rate': 0.4, 'robot_index': 0}
     assert robot_params({}, options, {})['task_rate'] == 2.0
+
+
+def test_the_simulators_camera_is_a_folder_of_one_frame_on_the_testbed():
+    args = scenario_robot_args({'image_source': 'frames', 'frame_rate': 0.4}, 12.5)
+    assert os.listdir(args['image_source']) == ['face.png']
+    assert args['frame_rate'] == 0.4 and args['sweep_start'] == '12.500000'
 
 
 def test_figures_count_failed_tasks_at_the_timeout_and_switches_per_minute():

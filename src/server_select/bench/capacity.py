@@ -35,7 +35,8 @@ import threading
 from server_select.bench import capacity_report, cli
 from server_select.bench.capacity_cases import SCENARIOS, TIMEOUT, WARMUP, SETTLE, scenario
 from server_select.bench.capacity_report import static_assignment
-from server_select.bench.capacity_work import SORT_SIZE, cpu_per_task, write_frame
+from server_select.bench.capacity_work import SORT_SIZE, cpu_per_task
+from server_select.vision.image_source import write_frame
 from server_select.bench.harness import scenario_run
 from server_select.testbed import bag_analysis, suite
 

@@ -3,30 +3,16 @@ robots send, and the CPU seconds one task of a kind takes a server on one core o
 machine (what the servers' capacity is computed from)."""
 
 import io
-import os
 import random
 import time
-
-import cv2
 
 from server_select.core.flow.sort_kernel import make_values, sort_values
 from server_select.msg import SortResult, SortTask
 from server_select.vision import image_codec
 from server_select.vision.detection import Detector, search_frame
-from server_select.vision.search import sample_image
+from server_select.vision.image_source import frame
 
 SORT_SIZE = 20000    # 80 kB a task: on this testbed bytes, not CPU, limit larger ones
-
-
-def frame():
-    """The camera frame: a photograph with one face, 640x480."""
-    return cv2.resize(sample_image('astronaut.png'), (640, 480))
-
-
-def write_frame(folder):
-    """The camera frame as the robots' image source in ``folder`` (made if missing)."""
-    os.makedirs(folder, exist_ok=True)
-    cv2.imwrite(os.path.join(folder, 'face.png'), frame())
 
 
 def cpu_per_task(kind, repeats=10):

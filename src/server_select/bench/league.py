@@ -47,6 +47,7 @@ def capacity_runs(args, log):
     """``{case: [row]}``: the capacity benchmark's figures of each run (variant, load and
     repeat in each row)."""
     from server_select.bench import capacity, capacity_work   # OpenCV, messages: only here
+    from server_select.vision import image_source
     results = collections.OrderedDict()
     for case in args.cases:
         options = capacity.parse(CAPACITY[case] + ['--seconds', str(args.seconds)] +
@@ -56,7 +57,7 @@ def capacity_runs(args, log):
         rows = results[case] = []
         work = os.path.join(args.out, 'capacity', case)
         options.frames = os.path.join(work, 'frames')
-        capacity_work.write_frame(options.frames)
+        image_source.write_frame(options.frames)
         options.cpu = capacity_work.cpu_per_task('image')
         rate = options.capacity.get('image', sum(options.shares) / options.cpu)
         for repeat in args.runs:

@@ -17,7 +17,7 @@ import random
 import sys
 import time
 
-from server_select.bench.capacity_work import write_frame
+from server_select.vision.image_source import write_frame
 from server_select.core.trust.keys import make_key
 from server_select.core.util.procs import wait_until
 from server_select.soak import history, nemesis, plan, report

@@ -234,7 +234,9 @@ def run_scenario(name, out_dir, repeat, variants, options, log=print):
                 'owners': dict((str(k), v) for k, v in owners.items()), 't0': tb.t0,
                 'duration': scenario.duration,
                 'measure_from': float(suite.get('measure_from', MEASURE_FROM)),
-                'options': vars(options)}
+                'options': robot_params(vars(options), options, dict(   # as the robots ran
+                    (k, v) for k, v in (suite.get('robot_args') or {}).items()
+                    if k in vars(options)))}
     with open(bag + '.json', 'w') as stream:
         json.dump(meta, stream, indent=1)
     if not os.path.exists(bag):

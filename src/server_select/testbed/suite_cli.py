@@ -97,5 +97,9 @@ def main(argv=None):
         for repeat in range(1, args.repeats + 1) for name in args.scenarios])
     if status:
         return status
-    print(report(args))
+    try:
+        print(report(args))
+    except (OSError, ValueError) as error:      # no bags, or a run with no task reported
+        print('evaluate --suite: %s' % error, file=sys.stderr)
+        return 1
     return 0

@@ -24,6 +24,9 @@ def plot_time(run, owners, changes, timeout, path, title):
     plt = pyplot()
     per_robot = _by_robot(run, owners)
     robots = sorted(per_robot)
+    if not robots:
+        raise ValueError('%s: no robot reported a task (see the run folder\'s robot logs)'
+                         % title)
     fig, axes = plt.subplots(len(robots), 1, figsize=(14, 3.4 * len(robots)), squeeze=False)
     for ax, robot in zip(axes[:, 0], robots):
         for index, (variant, reports) in enumerate(sorted(per_robot[robot].items())):

@@ -3,11 +3,13 @@ arguments their nodes take (no rospy)."""
 
 import json
 import os
+import tempfile
 import xml.etree.ElementTree as ElementTree
 
 from server_select.ros.paths import package_file
 from server_select.testbed.scenario import ScenarioError
 
+FRAMES = os.path.join(tempfile.gettempdir(), 'server_select_frames')   # image_source: frames
 REPLICA = 10        # robot r of variant k is robot REPLICA * k + r
 # the suite's network scenarios that the leagues run (simulated and on the testbed)
 NETWORK = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
@@ -67,11 +69,16 @@ def expand(data, variants, hosts=None):
 
 def scenario_robot_args(args, t0):
     """A scenario's ``suite: robot_args`` for its robots: a ``search:`` area of this
-    package made a path, the sweep started at the scenario's time zero ``t0``."""
+    package made a path, ``image_source: frames`` a folder of one camera frame (the
+    capacity benchmark's), the sweep started at the scenario's time zero ``t0``."""
     if not args:
         return {}
     args = dict(args, sweep_start='%.6f' % t0)
     source = str(args.get('image_source', ''))
+    if source == 'frames':      # the simulator's camera: the capacity benchmark's frame
+        from server_select.vision.image_source import write_frame
+        write_frame(FRAMES)
+        args['image_source'] = FRAMES
     if source.startswith('search:') and not os.path.isabs(source[len('search:'):]):
         args['image_source'] = 'search:' + package_file(source[len('search:'):])
     return args

@@ -3,10 +3,22 @@ or a robot moving over a synthetic search area."""
 
 import os
 
-
-from server_select.vision.search import PathFollower, SearchWorld, lawnmower
+from server_select.vision.search import PathFollower, SearchWorld, lawnmower, sample_image
 
 IMAGE_SUFFIXES = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.tif', '.tiff')
+
+
+def frame():
+    """The benchmarks' camera frame: a photograph with one face, 640x480."""
+    import cv2      # (OpenCV only where frames are made: a node loads it when it needs it)
+    return cv2.resize(sample_image('astronaut.png'), (640, 480))
+
+
+def write_frame(folder):
+    """The benchmarks' camera frame as an image source in ``folder`` (made if missing)."""
+    import cv2
+    os.makedirs(folder, exist_ok=True)
+    cv2.imwrite(os.path.join(folder, 'face.png'), frame())
 
 
 class SourceError(ValueError):
