@@ -71,7 +71,7 @@ def test_a_frame_is_fresh_until_the_next_one_is_due_and_for_twice_its_best_answe
      '2 kinds \\(1 different'),
     (dict(kinds=['k%d' % i for i in range(40)], service_time=[0.1] * 40,
           service_error=[0.0] * 40), '40 kinds'),
-    (dict(others_work=float('nan')), 'others_work is nan'),
+    (dict(utilization=float('nan')), 'utilization is nan'),
     (dict(backlog=-1.0), 'backlog is -1.0'),
     (dict(kinds=['image'], service_time=[float('inf')], service_error=[0.0]),
      'work of image is inf'),
@@ -83,7 +83,7 @@ def test_a_load_report_that_makes_no_sense_is_refused_saying_why(fields, why):
 
 def test_a_load_report_is_read_whole():
     answer = LatencyProbeResponse(server_id=1, queued=2, in_service=1, workers=2, backlog=0.4,
-                                  utilization=0.5, others_work=0.9, kinds=['image', 'sort'],
+                                  utilization=0.5, kinds=['image', 'sort'],
                                   service_time=[0.3, 0.002], service_error=[0.01, 0.0])
     assert load_of(answer) == Load(2, 1, 2, 0.4, {'image': 0.3, 'sort': 0.002}, 0.5,
-                                   {'image': 0.01, 'sort': 0.0}, 0.9)
+                                   {'image': 0.01, 'sort': 0.0})

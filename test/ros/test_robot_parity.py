@@ -285,8 +285,7 @@ class _ProbeLoop(object):
                 server_id=server, seq=request.seq, stamp=request.stamp, queued=load.queued,
                 in_service=load.in_service, workers=load.workers, backlog=load.backlog,
                 kinds=['sort'], service_time=[WORK], service_error=[0.0],
-                utilization=load.utilization, others_work=load.others_work),
-                (sent + rtt) - sent, None)
+                utilization=load.utilization), (sent + rtt) - sent, None)
         loop.at(sent + timeout, end, None, None, ProbeTimeout('no answer within %.3g s'
                                                               % timeout))
 

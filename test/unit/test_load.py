@@ -152,7 +152,7 @@ def test_the_backlog_counts_the_work_left_of_tasks_in_service_over_the_workers()
     clock.now += 0.4                                 # both 0.4 s into their 1 s of work
     # (three arrivals at one instant: three per 10 s horizon, 1 s of work each, 2 workers)
     assert q.load() == Load(1, 2, 2, pytest.approx((1.0 + 0.6 + 0.6) / 2), {'image': 1.0},
-                            pytest.approx(0.3 * 1.0 / 2), {'image': 0.0}, 3.0)
+                            pytest.approx(0.3 * 1.0 / 2), {'image': 0.0})
     q.done(first, 1.0)
     q.done(second, 1.0)
     assert q.load().backlog == 0.0                   # one queued, a worker free: no wait
@@ -174,20 +174,6 @@ def test_a_robot_is_told_the_backlog_of_the_others_tasks_not_of_its_own():
     assert q.load(excluding=7).queued == 1            # the counts are of every task
     q.done(mine, 1.0)
     assert q.load(excluding=3).backlog == 0.0
-
-
-def test_the_others_work_is_every_other_robots_task_at_its_kinds_whole_work():
-    """A sort task waits behind a frame as long as the frame takes, whatever a sort takes;
-    a task's own robot's tasks are left out (its robot counts them itself)."""
-    q, clock = queue_with(0.3, workers=2)
-    q.times.add('sort', 0.002)
-    assert q.offer('image', 'frame', owner=3) is None
-    assert q.offer('sort', 's1', owner=3) is None and q.offer('sort', 's2', owner=7) is None
-    q.take()
-    clock.now += 0.1                          # (in service: counted whole, not what is left)
-    assert q.load(excluding=7).others_work == pytest.approx(0.302)
-    assert q.load(excluding=3).others_work == pytest.approx(0.002)
-    assert q.load().others_work == pytest.approx(0.304)
 
 
 def test_a_full_queue_answers_busy_at_once():

@@ -167,8 +167,7 @@ class ServerNode(object):
         return seal.seal_answer(LatencyProbeResponse(
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),
             queued=load.queued, in_service=load.in_service, workers=load.workers,
-            backlog=load.backlog, utilization=load.utilization, others_work=load.others_work,
-            kinds=list(load.service),
+            backlog=load.backlog, utilization=load.utilization, kinds=list(load.service),
             service_time=list(load.service.values()),
             service_error=[load.service_error.get(k, 0.0) for k in load.service]),
             self.probe_srv.resolved_name,

@@ -20,8 +20,7 @@ def load_of(response):
     if len(kinds) > MAX_KINDS or len(set(kinds)) < len(kinds):
         raise ValueError('%d kinds (%d different; at most %d)' % (
             len(kinds), len(set(kinds)), MAX_KINDS))
-    figures = dict(backlog=response.backlog, utilization=response.utilization,
-                   others_work=response.others_work)
+    figures = dict(backlog=response.backlog, utilization=response.utilization)
     figures.update(('work of %s' % k, v) for k, v in zip(kinds, response.service_time))
     figures.update(('error of %s' % k, v) for k, v in zip(kinds, response.service_error))
     for name, value in sorted(figures.items()):
@@ -29,5 +28,4 @@ def load_of(response):
             raise ValueError('%s is %r, not a finite number >= 0' % (name[:40], value))
     return Load(response.queued, response.in_service, max(1, response.workers),
                 response.backlog, dict(zip(kinds, response.service_time)),
-                response.utilization, dict(zip(kinds, response.service_error)),
-                response.others_work)
+                response.utilization, dict(zip(kinds, response.service_error)))

@@ -2,18 +2,22 @@
 
 A task's round trip is the network, the wait for a worker and the work itself. A probe,
 answered on its own thread, measures only the first; so every probe answer carries the
-server's :class:`Load`: tasks queued and in service, workers, the recent work per task of
-each kind, the *others' work* (seconds of the other robots' tasks queued and in service,
-each at its kind's work: what the fleet's rule takes as a task's wait), the *backlog*
-(seconds a task sent now would wait for a worker: what an attempt's deadline follows) and
-the *utilization* (the share of the workers' time the other robots' tasks take at the
-rates they announce). The utilization moves only when a robot comes, goes or changes its
-rate: a load-aware robot's probe says the rate at which it sends tasks to that server now
-(to the server its next task goes to, none to the others), so a robot that moves loads
-its new server in the others' eyes at its next probe, not after its tasks have arrived
-for a while (robots that all saw an idle server came up idle moved to it together). The
-tasks of a robot that announces nothing count at the rate they arrive
-(:mod:`server_select.core.load.demand`).
+server's :class:`Load` (tasks queued and in service, workers, the *backlog*: seconds a
+task sent now would wait for a worker, the *utilization*: the share of the workers' time
+the other robots' tasks take at the rates they announce, and the recent work per task of
+each kind), and a robot ranks servers by round trip + expected wait + work for the tasks it
+sends (C3's expected completion, NSDI '15; :mod:`server_select.core.load.board`).
+
+The backlog is what a task sent now waits for: what an attempt's deadline follows. It is
+also a poor forecast of the next task's wait: a server that does a frame in 0.7 s for two
+robots is idle half the time and 0.7 s behind the other half, so robots that ranked by it
+chased the phase of each other's frames. The utilization moves only when a robot comes,
+goes or changes its rate. It is what the robots *announce*: a load-aware robot's probe
+says the rate at which it sends tasks to that server now (its rate to the server its next
+task goes to, none to the others), so a robot that moves loads its new server in the
+others' eyes at its next probe, not after its tasks have arrived for a while (robots that
+all saw an idle server came up idle moved to it together). The tasks of a robot that
+announces nothing count at the rate they arrive (:mod:`server_select.core.load.demand`).
 
 Server side, :class:`WorkQueue` holds the tasks waiting for the workers. A task carries
 its *deadline* (when its robot stops waiting): one that cannot be finished by then is
@@ -26,7 +30,6 @@ flood of tasks takes no place another robot's task needs.
 """
 
 import collections
-import math
 import threading
 import time
 
@@ -35,13 +38,11 @@ from server_select.core.load.fair_queue import FairQueue, Job
 from server_select.core.load.service_times import SenderShares, ServiceTimes
 
 Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization '
-                              'service_error others_work')
-Load.__new__.__defaults__ = (0.0, None, 0.0)
+                              'service_error')
+Load.__new__.__defaults__ = (0.0, None)
 Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per task}``,
 ``utilization`` the share of the workers' time the others' tasks take (0: none),
-``service_error`` ``{kind: the standard error of that work}`` (None: not reported),
-``others_work`` the seconds of work of the others' tasks queued and in service, each at
-its kind's full work (what a task sent now waits for, whatever its own kind)."""
+``service_error`` ``{kind: the standard error of that work}`` (None: not reported)."""
 
 
 class WorkQueue(object):
@@ -223,22 +224,21 @@ class WorkQueue(object):
                    for kind, rate in self.demand.rates(now, excluding).items()) / self.workers
 
     def load(self, excluding=None):
-        """The :class:`Load` now; its others' work, backlog and utilization without the tasks
-        of owner ``excluding`` (a robot that keeps one task out would otherwise see its own
-        task as load on its server and none on the others, and move for nothing; leaving
-        its own out of its server's utilization is what keeps it there)."""
+        """The :class:`Load` now; its backlog and utilization without the tasks of owner
+        ``excluding`` (what a robot's next task waits for when the robot's own tasks are
+        done by then: a robot that keeps one task out would otherwise see its own task as
+        load on its server and none on the others, and move for nothing; leaving its own
+        out of its server's utilization is what keeps it there: moving would add them to
+        another's)."""
         with self._cond:
             now = self._clock()
             service = self.times.snapshot()
             for job in self._running:         # a kind not timed yet: its bound so far
                 if job.kind not in service:
                     service[job.kind] = self._work(job.kind, now)
-            others = [job for job in list(self._queue.jobs()) + list(self._running)
-                      if excluding is None or job.owner != excluding]
             return Load(len(self._queue), len(self._running), self.workers,
                         self._backlog(now, excluding), service,
-                        self._utilization(now, excluding), self.times.errors(),
-                        math.fsum(self._job_work(job, now) for job in others))
+                        self._utilization(now, excluding), self.times.errors())
 
     def close(self):
         """Wake every worker with None; what is still queued is dropped (returned)."""
