@@ -234,7 +234,7 @@ def run_scenario(name, out_dir, repeat, variants, options, log=print):
                 'owners': dict((str(k), v) for k, v in owners.items()), 't0': tb.t0,
                 'duration': scenario.duration,
                 'measure_from': float(suite.get('measure_from', MEASURE_FROM)),
-                'options': robot_params(vars(options), options, dict(   # as the robots ran
+                'options': dict(vars(options), **dict(     # as the robots ran them
                     (k, v) for k, v in (suite.get('robot_args') or {}).items()
                     if k in vars(options)))}
     with open(bag + '.json', 'w') as stream:
