@@ -38,10 +38,12 @@ def test_every_benchmark_runs_and_reports(tmp_path):
 
 
 def test_the_scale_benchmark_runs_and_reports(tmp_path):
-    """`make bench-scale` in a tiny configuration: flat per robot and grouped."""
+    """`make bench-scale` in a tiny configuration: flat per robot and grouped. (--limit is
+    how long a cell may wait to be ranked: about 2 s alone, over 6 s once beside the other
+    test streams; a cell ranked sooner goes on at once.)"""
     proc = subprocess.run([sys.executable, '-m', 'server_select.bench.scale', '--sizes', '3x4',
                            '--layouts', 'robot,pair,view', '--grouped-sizes', '4x4:2', '--limit',
-                           '6', '--measure', '2', '--signed', 'on', '--out', str(tmp_path)],
+                           '20', '--measure', '2', '--signed', 'on', '--out', str(tmp_path)],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                           universal_newlines=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:]
