@@ -59,6 +59,14 @@ def test_registry_merges_by_distance():
     assert [(f.robot_id, f.task_id) for f in registry.all()] == [(1, 5), (2, 10)]
 
 
+def test_registry_keeps_at_most_its_limit():
+    registry = TargetRegistry(radius=1, limit=2)
+    assert registry.add(Found(1, 1, 'face', 0, 0, 1.0)) and not registry.full()
+    assert registry.add(Found(2, 2, 'face', 10, 0, 2.0)) and registry.full()
+    assert not registry.add(Found(3, 3, 'face', 20, 0, 3.0))
+    assert [f.robot_id for f in registry.all()] == [1, 2]
+
+
 def test_sources(tmp_path, world):
     import cv2
     cv2.imwrite(str(tmp_path / 'b.png'), sample_image('coffee.png'))

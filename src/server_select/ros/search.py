@@ -11,7 +11,7 @@ from server_select.core.config import names
 from server_select.msg import Detections, FoundTarget
 from server_select.ros.graph import publisher_of
 from server_select.ros.node import fleet
-from server_select.ros.seal import SealedPublisher
+from server_select.ros.seal import SealedPublisher, seal
 from server_select.ros.senders import SenderGate
 from server_select.srv import KnownTargets, KnownTargetsResponse
 from server_select.vision.search import Found, TargetRegistry
@@ -39,7 +39,8 @@ class SearchParticipant(object):
 
     def start(self):
         found = fleet(names.FOUND_TARGETS_TOPIC)
-        self.found_pub = SealedPublisher(found, FoundTarget, queue_size=100)
+        self.found_pub = SealedPublisher(found, FoundTarget, queue_size=100,
+                                         subscriber_listener=_OwnFindsToNewcomers(self))
         self.found_sub = rospy.Subscriber(found, FoundTarget, self.on_found, queue_size=100,
                                           tcp_nodelay=True)
         self.detections_sub = rospy.Subscriber(fleet(names.DETECTIONS_TOPIC), Detections,
@@ -82,11 +83,32 @@ class SearchParticipant(object):
                                    'not a place' % (self.robot_id, publisher_of(msg), msg.x,
                                                     msg.y))
             return
-        self.registry.add(Found(msg.robot_id, msg.task_id, msg.label, msg.x, msg.y,
-                                msg.header.stamp.to_sec()))
+        if not self.registry.add(Found(msg.robot_id, msg.task_id, msg.label, msg.x, msg.y,
+                                       msg.header.stamp.to_sec())) and self.registry.full():
+            rospy.logwarn_throttle(5.0, 'robot %d: ignored a found target of %s: %d targets '
+                                   'are known, the most kept' % (self.robot_id,
+                                                                 publisher_of(msg),
+                                                                 self.registry.limit))
 
     def on_known_targets(self, _request):
         return KnownTargetsResponse(targets=[_message(f) for f in self.registry.all()])
+
+    def own_finds(self):
+        """The targets this robot found itself, oldest first."""
+        return [f for f in self.registry.all() if f.robot_id == self.robot_id]
+
+
+class _OwnFindsToNewcomers(rospy.SubscribeListener):
+    """A find is published once; a node that subscribes later (a robot started or
+    restarted mid-search) is sent this robot's own finds on its new connection alone."""
+
+    def __init__(self, participant):
+        super(_OwnFindsToNewcomers, self).__init__()
+        self.participant = participant
+
+    def peer_subscribe(self, topic_name, topic_publish, peer_publish):
+        for found in self.participant.own_finds():
+            peer_publish(seal(_message(found), topic_name))
 
 
 def _message(found):

@@ -145,24 +145,33 @@ class PathFollower(object):
 
 
 class TargetRegistry(object):
-    """The targets known to be found, merged by distance: who, where, when.
+    """The targets known to be found, merged by distance: who, where, when; at most
+    ``limit`` of them, so that no sender can grow it without a bound.
 
     Thread-safe: the robot's detection callback and its found_targets subscriber both add.
     """
 
-    def __init__(self, radius):
+    def __init__(self, radius, limit=1000):
         self.radius = float(radius)
+        self.limit = int(limit)
         self._lock = threading.Lock()
         self._found = []
 
     def add(self, found):
-        """Record ``found`` unless a target within ``radius`` is known; True if recorded."""
+        """Record ``found`` unless a target within ``radius`` is known or the registry
+        holds ``limit`` targets; True if recorded."""
         with self._lock:
+            if len(self._found) >= self.limit:
+                return False
             for f in self._found:
                 if math.hypot(f.x - found.x, f.y - found.y) <= self.radius:
                     return False
             self._found.append(found)
             return True
+
+    def full(self):
+        with self._lock:
+            return len(self._found) >= self.limit
 
     def all(self):
         with self._lock:
