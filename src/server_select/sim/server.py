@@ -5,16 +5,19 @@ Tasks are offered to the queue as the node offers them (a deadline from the robo
 budget, the robot as owner) and answered busy at once when refused; ``workers`` take them
 in order. A task's duration is its work (CPU seconds on one core, drawn per task, so that
 every variant of a seed meets the same task sizes) over the host's CPU share per busy
-worker, plus the scenario's extra ``work`` delay; a worker's first task of a kind is not
-timed, as the node's is not. While the host hangs (SIGSTOP) nothing runs and nothing is
-answered: work and answers resume when it goes on. A probe is answered after its CPU,
-which on a capped host with a busy worker waits for the next quota period
-(``cpu_period``), as a cgroup throttles it.
+worker, plus the scenario's extra ``work`` delay; on a host of less than a core, whose one
+worker the cgroup's quota stops when it is spent, the work runs at full speed within the
+quota of each ``cpu_period`` (:class:`~server_select.sim.quota.CpuQuota`). A worker's first
+task of a kind is not timed, as the node's is not. While the host hangs (SIGSTOP) nothing
+runs and nothing is answered: work and answers resume when it goes on. A probe is
+answered after its CPU (at full speed on a host of less than a core), which with a busy
+worker there waits for the next quota period (``cpu_period``), as a cgroup throttles it.
 """
 
 import math
 
 from server_select.core.load.work_queue import WorkQueue
+from server_select.sim.quota import CpuQuota
 
 
 class SimServer(object):
@@ -29,6 +32,9 @@ class SimServer(object):
         self.queue = WorkQueue(self.workers, max_queue, clock=loop.now,
                                on_pushed_out=self._pushed_out)
         self.rng = streams.rng('server', self.id)
+        period = host.cpu_period * 1e-3
+        self.quota = CpuQuota(self.cpu, period, streams.rng('quota', self.id).uniform(
+            0.0, period)) if self.cpu and self.cpu < 1.0 else None
         self.idle = self.workers
         self.waiting = 0          # accepted, not yet taken
         self.timed = set()        # kinds a worker has done once (the first is not timed)
@@ -67,8 +73,17 @@ class SimServer(object):
         extra = [delay for at, delay in self.host.work if at <= t]
         return extra[-1] if extra else 0.0
 
-    def _speed(self):
+    def _speed(self, quota=True):
+        """A busy worker's share of a core (1 where the quota model times its CPU)."""
+        if self.quota is not None and not quota:
+            return 1.0
         return min(1.0, self.cpu / self.workers) if self.cpu else 1.0
+
+    def _cpu(self, start, seconds):
+        """How long ``seconds`` of a worker's CPU take from ``start``."""
+        if self.quota is None:
+            return seconds / self._speed()
+        return self.quota.run(start, seconds) - start
 
     # -- probes ---------------------------------------------------------------------------
     def probe_done(self, t):
@@ -76,7 +91,7 @@ class SimServer(object):
         if not self.running(t):
             return None
         t = self.resumed(t)
-        seconds = self.model.probe_cpu * self.model.cpu_factor / (self.cpu if self.cpu else 1.0)
+        seconds = self.model.probe_cpu * self.model.cpu_factor / self._speed(quota=False)
         if self.cpu and self.cpu < 1.0 and self.idle < self.workers:
             # the worker used the quota: the probe waits for the next period's
             period = self.host.cpu_period * 1e-3
@@ -139,10 +154,11 @@ class SimServer(object):
                 continue
             self.idle -= 1
             now = self.loop.now()
-            seconds = task.work / self._speed() + self._extra_delay(now)
+            cpu = task.work
             if job.kind in self.unwarmed:      # nobody announced it: its first task loads
                 self.unwarmed.discard(job.kind)
-                seconds += self.model.warm[job.kind] * self.model.cpu_factor / self._speed()
+                cpu += self.model.warm[job.kind] * self.model.cpu_factor
+            seconds = self._cpu(now, cpu) + self._extra_delay(now)
             self.loop.at(self._after_hangs(now, seconds), self._finished, job, seconds)
 
     def _warmed(self):
@@ -151,8 +167,10 @@ class SimServer(object):
 
     def _finished(self, job, seconds):
         if self.stolen > 0:               # probes used some of the quota meanwhile
-            delay, self.stolen = self.stolen / self.cpu, 0.0
-            self.loop.at(self._after_hangs(self.loop.now(), delay), self._finished, job,
+            now = self.loop.now()
+            delay, self.stolen = self._cpu(now, self.stolen) if self.quota else \
+                self.stolen / self.cpu, 0.0
+            self.loop.at(self._after_hangs(now, delay), self._finished, job,
                          seconds + delay)
             return
         task, reply = job.item
