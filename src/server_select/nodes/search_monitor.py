@@ -41,6 +41,7 @@ class SearchMonitorNode(object):
         self._lock = threading.Lock()
         self.found = {}
         self.reports = []
+        self._heard = set()       # (robot, task, label, x, y) of each report heard
         self.false_alarms = []
         self.began = rospy.get_time()
         self.gate = SenderGate('search monitor', 'a node of the fleet')   # key: sealed only
@@ -54,7 +55,11 @@ class SearchMonitorNode(object):
             return
         name = self.world.target_at(msg.x, msg.y, self.radius)
         t = rospy.get_time() - self.began
+        report = (msg.robot_id, msg.task_id, msg.label, msg.x, msg.y)
         with self._lock:
+            if report in self._heard:
+                return      # a find sent again on a new connection: one report still
+            self._heard.add(report)
             self.reports.append((t, msg.robot_id, name, msg.x, msg.y))
             if name is None:
                 self.false_alarms.append((t, msg.robot_id, msg.x, msg.y))
