@@ -73,10 +73,7 @@ class SimServer(object):
         extra = [delay for at, delay in self.host.work if at <= t]
         return extra[-1] if extra else 0.0
 
-    def _speed(self, quota=True):
-        """A busy worker's share of a core (1 where the quota model times its CPU)."""
-        if self.quota is not None and not quota:
-            return 1.0
+    def _speed(self):
         return min(1.0, self.cpu / self.workers) if self.cpu else 1.0
 
     def _cpu(self, start, seconds):
@@ -91,11 +88,12 @@ class SimServer(object):
         if not self.running(t):
             return None
         t = self.resumed(t)
-        seconds = self.model.probe_cpu * self.model.cpu_factor / self._speed(quota=False)
-        if self.cpu and self.cpu < 1.0 and self.idle < self.workers:
+        seconds = self.model.probe_cpu * self.model.cpu_factor
+        if self.quota is None:
+            seconds /= self.cpu or 1.0
+        elif self.idle < self.workers:
             # the worker used the quota: the probe waits for the next period's
-            period = self.host.cpu_period * 1e-3
-            seconds += self.rng.uniform(0.0, period * (1.0 - self.cpu))
+            seconds += self.rng.uniform(0.0, self.quota.period * (1.0 - self.cpu))
         return self._after_hangs(t, seconds)
 
     def probe(self, robot, rates):
