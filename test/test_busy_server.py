@@ -3,7 +3,8 @@
 
 This node plays the manager (its flags send robot 1 to server 1 first, server 2 second) and
 keeps server 1's one worker busy with sort tasks of its own, which have no deadline and
-take 0.6 s each (``~work_delay``). Robot 1 (load-aware, task timeout 1 s) gives each task
+take 0.6 s each (``~work_delay``), once robot 1's status on /diagnostics has both servers
+usable. Robot 1 (load-aware, task timeout 1 s) gives each task
 the second it has: server 1, whose backlog is more than that, must answer it busy at once,
 without doing it, and the robot must send it to server 2, which answers it; no task fails
 (but at most one that server 1 took in time and whose work overran on a loaded host),
@@ -25,6 +26,7 @@ import unittest
 import numpy as np
 import rospy
 import rostest
+from diagnostic_msgs.msg import DiagnosticArray
 
 from server_select.core.util.procs import wait_until
 from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
@@ -43,7 +45,9 @@ class BusyServerTest(unittest.TestCase):
         cls.lock = threading.Lock()
         cls.sent = {}
         cls.topics = Topics({'results': ('/processed_data', SortResult),
-                             'reports': ('/task_report', TaskReport)}, tcp_nodelay=True)
+                             'reports': ('/task_report', TaskReport),
+                             'diagnostics': ('/diagnostics', DiagnosticArray)},
+                            tcp_nodelay=True)
         rospy.Subscriber('/data', SortTask, cls.on_task, queue_size=1000, tcp_nodelay=True)
         cls.flags = rospy.Publisher('/server_select_flag', SelectionFlag, queue_size=10)
         cls.tasks = rospy.Publisher('/data', SortTask, queue_size=10)
@@ -56,6 +60,15 @@ class BusyServerTest(unittest.TestCase):
 
     def of(self, key, test):
         return self.topics.received(key, test)
+
+    def both_usable(self):
+        """Whether robot 1's latest status on /diagnostics has every server usable (a
+        server whose first probes went unanswered on a loaded host is not yet one: a busy
+        answer from server 1 then has nowhere to go)."""
+        statuses = [s for m in self.topics.messages('diagnostics') for s in m.status
+                    if s.name == 'robot1: selection']
+        values = dict((v.key, v.value) for v in statuses[-1].values) if statuses else {}
+        return values.get('servers not in use') == 'none'
 
     def occupy(self, task_id):
         """One task of this node's own for server 1: 0.6 s of work, no deadline."""
@@ -73,6 +86,8 @@ class BusyServerTest(unittest.TestCase):
                                        timeout=30.0, period=2.0),
                         'server 1 did not answer this node')
         own = next(ids)
+        self.assertTrue(wait_until(self.both_usable, 30.0, period=0.2),
+                        'robot 1 never had both servers usable')
         # what is tested begins here, with this node playing the manager: tasks the robot
         # sent before (it probes at once and may start while server 1 warms up, with no
         # flag naming server 2 next) are counted apart
