@@ -8,6 +8,7 @@ import random
 import pytest
 
 from server_select.core.peers import balancers
+from server_select.core.util import stats
 from server_select.core.load.work_queue import Load
 
 from support.clock import Clock
@@ -356,6 +357,38 @@ def test_least_latency_a_trend_is_not_wander():
     cross, a robot on the move) stray from no trend: once 2 ms apart, the robot moves."""
     moved = wandering(levels=[0.0002 * k - 0.0016 for k in range(9)])
     assert moved.server == 2 and 'faster than 1' in moved.reason, moved
+
+
+def after_a_load(calm_windows, off=()):
+    """Server 1 (the robot's) steady at 6 ms; server 2 strayed by +-10 ms around 30 ms for
+    8 windows (other robots' frames queued there), then steady at 4 ms for
+    ``calm_windows`` windows. The decision then."""
+    clock = Clock()
+    rule = least_latency(clock, off=off)
+    rule.started(1, 'image')
+    for level in [0.030 + 0.010 * (-1) ** k for k in range(8)] + [0.004] * calm_windows:
+        for j in range(6):
+            jitter = 1e-5 * (j % 3 - 1)
+            rule.probed(1, 0.006 + jitter, load())
+            rule.probed(2, level - jitter, load())
+            clock.now += 0.25
+    return rule.choose([1, 2], 'image')
+
+
+def test_least_latency_the_wander_of_a_load_gone_is_forgotten():
+    """The robot moves to server 2 within four windows of the calm, not once the loaded
+    windows have left its levels; without ``steps`` it keeps its server then."""
+    moved = after_a_load(4)
+    assert moved.server == 2 and 'faster than 1' in moved.reason, moved
+    kept = after_a_load(4, off=('steps',))
+    assert kept.server == 1 and kept.reason.startswith('kept'), kept
+
+
+def test_least_latency_steps_of_a_load_cut_the_levels_at_its_end():
+    assert stats.since_step([25, 30, 10, 40, 20, 35, 4, 4.2, 3.9], 3.0) == [4, 4.2, 3.9]
+    noisy = [5.0, 5.5, 4.6, 5.2, 4.8, 5.4, 4.5, 5.1, 4.9, 5.3]
+    assert stats.since_step(noisy, 3.0) == noisy       # noise is no step
+    assert stats.spread_of([1.0, 2.0, 3.0, 4.0, 5.0]) == 0.0    # a trend
 
 
 def test_least_latency_sends_a_frame_where_it_comes_back_fresh_before_where_it_is_faster():

@@ -18,13 +18,13 @@ import statistics
 
 from server_select.core.rule.balancer import Balancer, Decision, Order
 from server_select.core.ranking.rank import by_estimate
-from server_select.core.util.stats import mean_error, median_error
+from server_select.core.util.stats import mean_error, median_error, since_step, spread_of
 
 Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
 LEVELS = 10              # a server's levels kept, one a window: 8 second differences
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'fresh', 'own_kinds')
+MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'steps', 'fresh', 'own_kinds')
 
 Estimate = collections.namedtuple('Estimate', 'latency error wait answers')
 
@@ -74,17 +74,16 @@ class LeastLatency(Balancer):
         """How far ``server``'s level for ``kind`` (its window's median round trip + work)
         strays, as a standard deviation: the median of its last second differences over
         0.6745 x sqrt 6. A trend (a robot moving, links crossing) has none, and one step
-        (a slowed server) makes two of eight, which the median passes over; 0.0 before
-        four levels."""
+        (a slowed server) makes two of eight, which the median passes over; a load that came
+        and went makes many: only the levels since count (``since_step``); 0.0 before four."""
         if 'wander' not in self.mechanisms:
             return 0.0
         known = self._wanders.setdefault(server, {})    # (asked per estimate: kept)
         if kind not in known:
             levels = [rtt + service.get(kind, 0.0)
                       for _, rtt, service in self.levels.get(server, ())]
-            known[kind] = 0.0 if len(levels) < 4 else statistics.median(
-                [abs(a - 2.0 * b + c) for a, b, c in zip(levels, levels[1:], levels[2:])]) \
-                / (0.6745 * math.sqrt(6.0))
+            known[kind] = spread_of(since_step(levels, Z) if 'steps' in self.mechanisms
+                                    else levels)
         return known[kind]
 
     def _draws(self):

@@ -1,5 +1,5 @@
 """Summary statistics used by reports and benchmarks, and the mean and its error on a
-robot's hot path."""
+robot's hot path; the spread of a series about its trend and where its last step began."""
 
 import math
 import statistics
@@ -64,3 +64,25 @@ def format_ms(summary, keys=('median', 'p95', 'p99', 'max')):
     if summary.get('n', 0) == 0:
         return 'no samples'
     return ', '.join('%s %.3f ms' % (k, summary[k] * 1e3) for k in keys)
+
+
+def spread_of(levels):
+    """The standard deviation of ``levels`` about their trend: the median of their second
+    differences over 0.6745 x sqrt 6 (0.0 for fewer than four)."""
+    return 0.0 if len(levels) < 4 else statistics.median(
+        [abs(a - 2.0 * b + c) for a, b, c in zip(levels, levels[1:], levels[2:])]) \
+        / (0.6745 * math.sqrt(6.0))
+
+
+def since_step(levels, z):
+    """``levels`` from the first of the last three or more that all lie beyond the range
+    of those before by more than ``z`` times their own range (all of them: none such). A
+    server's load that came and went (a burst of other robots' frames queued there) says
+    nothing of how its level strays now; noise makes such a gap about never: the newest
+    all beyond every earlier one, and far beyond their own spread."""
+    for first in range(4, len(levels) - 2):
+        before, after = levels[:first], levels[first:]
+        reach = z * (max(after) - min(after))
+        if max(after) + reach < min(before) or min(after) - reach > max(before):
+            return after
+    return levels
