@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
 """A busy server answers busy at once and the robot's task goes elsewhere (busy_server.test).
 
-This node plays the manager (its flags send robot 1 to server 1 first, server 2 second) and
-keeps server 1's one worker busy with sort tasks of its own, which have no deadline and
-take 0.6 s each (``~work_delay``), once robot 1's status on /diagnostics has both servers
-usable. Robot 1 (load-aware, task timeout 1 s) gives each task
-the second it has: server 1, whose backlog is more than that, must answer it busy at once,
-without doing it, and the robot must send it to server 2, which answers it; no task fails
+Once robot 1's status on /diagnostics has both servers usable, this node plays the manager
+(its flags send robot 1 to server 1 first, server 2 second) and keeps server 1's one worker
+busy with sort tasks of its own, which have no deadline and take 0.6 s each
+(``~work_delay``). Robot 1 (load-aware, task timeout 1 s) gives each task the second it
+has: server 1, whose backlog is more than that, must answer it busy at once, without
+doing it, and the robot must send it to server 2, which answers it; no task fails
 (but at most one that server 1 took in time and whose work overran on a loaded host),
 server 1 is not ejected for being busy, and it still does the work that has time.
 
