@@ -53,8 +53,7 @@ class LeastLatency(Balancer):
         # {kind: the work it reported then})
         self.levels = collections.defaultdict(lambda: collections.deque(maxlen=LEVELS))
         self._wanders = {}     # server -> {kind: its wander}, until its next level
-        self._parts = {}       # (server, kind) -> (the window's newest answer, its count,
-        #                         the kind's least work, the rate-free parts of them)
+        self._parts = {}       # (server, kind) -> (newest answer, count, least work, parts)
 
     def _probed(self, answer):
         others = max(0, answer.rif - self.attempts_out[answer.server])
@@ -101,33 +100,33 @@ class LeastLatency(Balancer):
     def estimate(self, server, kind, now, rate=None):
         """The :class:`Estimate` of a ``kind`` task at ``server`` from its answers of the
         window (None: none); ``rate``: the robot's ``kind`` tasks a second (:meth:`rate`).
-        The rate-free parts: once per window of answers (asked every probe round, per server)."""
-        answers = [(a, o) for a, o in self.answers.get(server, ()) if now - a.at <= self.window]
-        if not answers:
+        The rate-free parts: once per window of answers (asked every probe round, per server);
+        where no answer says its server is asked more than it can do, one try."""
+        kept = self.answers.get(server, ())     # (in the order heard: the window is a suffix)
+        count = sum(1 for a, _ in kept if now - a.at <= self.window)
+        if not count:
             return None
         rate = self.rate(kind, now) if rate is None else rate
-        newest, least = answers[-1][0], self.least_work.get(kind)
+        newest, least = kept[-1][0], self.least_work.get(kind)
         parts = self._parts.get((server, kind))
-        if parts is None or parts[0] is not newest or parts[1:3] != (len(answers), least):
-            parts = self._parts[(server, kind)] = (newest, len(answers), least,
-                                                   self._rate_free(server, kind, answers))
-        rtt, wait, work, workers, error, utilizations = parts[3]
+        if parts is None or parts[0] is not newest or parts[1:3] != (count, least):
+            parts = self._parts[(server, kind)] = (newest, count, least, self._rate_free(
+                server, kind, list(kept)[len(kept) - count:]))
+        rtt, wait, work, workers, error, utilizations, busiest = parts[3]
         wait += self._own_kinds(server, kind, now, newest) / workers
         mine = rate * work / workers
-        tries = math.fsum([max(1.0, u + mine) for u in utilizations]) / len(utilizations) \
-            if 'tries' in self.mechanisms else 1.0
-        return Estimate((rtt + wait + work) * tries, error * tries, wait, len(answers))
+        tries = 1.0 if 'tries' not in self.mechanisms or busiest + mine <= 1.0 else \
+            math.fsum([max(1.0, u + mine) for u in utilizations]) / len(utilizations)
+        return Estimate((rtt + wait + work) * tries, error * tries, wait, parts[1])
 
     def _own_kinds(self, server, kind, now, newest):
         """Worker-seconds a ``kind`` task at ``server`` waits for the robot's own tasks of other
         kinds there (no answer counts them): each in service rate x work of the time, half done."""
-        if 'own_kinds' not in self.mechanisms:
-            return 0.0
+        others = sorted(k for k, there in self.chosen_for.items() if k != kind and there == server)
         wait = 0.0
-        for other, there in sorted(self.chosen_for.items(), key=str):
-            if other != kind and there == server:
-                work = self._work(newest, other)
-                wait += self.sends.count(other, now) / self.sends.horizon * work * work / 2.0
+        for other in others if 'own_kinds' in self.mechanisms else ():
+            work = self._work(newest, other)
+            wait += self.sends.count(other, now) / self.sends.horizon * work * work / 2.0
         return wait
 
     def _work(self, answer, kind):
@@ -135,7 +134,8 @@ class LeastLatency(Balancer):
         return answer.service.get(kind, self.least_work.get(kind, 0.0))
 
     def _rate_free(self, server, kind, answers):
-        """``(round trip, wait, work, workers, error, utilizations)`` of ``answers``."""
+        """``(round trip, wait, work, workers, error, utilizations, the most of them)`` of
+        ``answers``."""
         newest = answers[-1][0]
         # the newest report (a step shows at once); a kind not done there yet: what it takes
         # where nothing slows it (one task there tells). The error: the server's, of a median
@@ -151,7 +151,8 @@ class LeastLatency(Balancer):
         wait, wait_error = mean_error(queued)
         error = max(math.sqrt(rtt_error ** 2 + wait_error ** 2 + work_error ** 2),
                     self.wander(server, kind))
-        return rtt, wait, work, workers, error, [a.utilization for a, _ in answers]
+        utilizations = [a.utilization for a, _ in answers]
+        return rtt, wait, work, workers, error, utilizations, max(utilizations)
 
     def choose(self, servers, kind=None):
         """The :class:`Decision` for the next ``kind`` task among the usable ``servers``

@@ -23,7 +23,7 @@ def mean_error(values, independent=None):
     mean = math.fsum(values) / count       # statistics.fmean's sum, without its checks
     if count < 2:
         return mean, 0.0
-    variance = math.fsum((v - mean) ** 2 for v in values) / (count - 1)
+    variance = math.fsum([(v - mean) ** 2 for v in values]) / (count - 1)
     n = count if independent is None else max(1.0, min(count, independent))
     return mean, math.sqrt(variance / n)
 
@@ -37,7 +37,7 @@ def median_error(values):
     median = percentile(ordered, 50)
     if len(ordered) < 2:
         return median, 0.0
-    mad = percentile(sorted(abs(v - median) for v in ordered), 50)
+    mad = percentile(sorted([abs(v - median) for v in ordered]), 50)
     return median, 1.2533 * 1.4826 * mad / math.sqrt(len(ordered))
 
 
