@@ -433,27 +433,3 @@ def test_least_latency_sends_sort_tasks_away_from_where_its_own_frames_wait():
     assert sort_server(off=('own_kinds',)) == (1, 0.0)
     server, own = sort_server(off=())
     assert server == 2 and own > 0.010, own
-
-
-def test_least_latency_a_server_started_again_is_no_faster_for_reporting_no_work():
-    """A server started again has done no frame yet and reports no work for them: it is
-    taken at what it reported before, not at the least any server reported (the soak: a
-    0.2-core server's restart drew a camera robot's frames to it, and they failed)."""
-    clock = Clock()
-    rule = least_latency(clock)
-    work = {1: {'image': 0.050}, 2: {'image': 0.250}}
-    for j in [0.0, 0.0002, -0.0002, 0.0001, -0.0001]:
-        for server, rtt in [(1, 0.010), (2, 0.010)]:
-            rule.probed(server, rtt + j, Load(0, 0, 1, 0.0, work[server], 0.0, None))
-        clock.now += 0.1
-    assert [send(rule, [1, 2]) for _ in range(3)] == [1, 1, 1]
-    clock.now += 5.0                        # server 2 killed, and started again
-    for j in [0.0, 0.0002, -0.0002, 0.0001, -0.0001]:
-        rule.probed(1, 0.010 + j, Load(0, 0, 1, 0.0, work[1], 0.0, None))
-        rule.probed(2, 0.008 + j, Load(0, 0, 1, 0.0, {}, 0.0, None))
-        clock.now += 0.1
-    decision = rule.choose([1, 2], 'image')
-    assert decision.server == 1 and decision.estimates[2].latency > 0.25, decision
-    # a server that never did one is taken at the least any server reported
-    rule.probed(3, 0.008, Load(0, 0, 1, 0.0, {}, 0.0, None))
-    assert abs(rule.choose([1, 2, 3], 'image').estimates[3].latency - 0.058) < 1e-9

@@ -49,7 +49,6 @@ class LeastLatency(Balancer):
         self.window, self.mechanisms = float(window), set(MECHANISMS) - set(off)
         self.answers = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
         self.least_work = {}                   # kind -> the least work any server reported
-        self.last_work = {}         # (server, kind) -> the work it last reported, kept
         # server -> its levels, a window apart: (when, the window's median round trip,
         # {kind: the work it reported then})
         self.levels = collections.defaultdict(lambda: collections.deque(maxlen=LEVELS))
@@ -64,7 +63,6 @@ class LeastLatency(Balancer):
             answers.popleft()
         for kind, work in answer.service.items():
             self.least_work[kind] = min(work, self.least_work.get(kind, work))
-            self.last_work[(answer.server, kind)] = work
         levels = self.levels[answer.server]
         if not levels or answer.at - levels[-1][0] >= self.window:
             rtt = statistics.median(a.rtt for a, _ in answers)
@@ -132,17 +130,15 @@ class LeastLatency(Balancer):
         return wait
 
     def _work(self, answer, kind):
-        """A ``kind`` task's work (s) by ``answer``; else what its server last reported (a
-        server started again reports none: it is no faster for that), else the least any
-        server reported (one task there tells)."""
-        return answer.service.get(kind, self.last_work.get(
-            (answer.server, kind), self.least_work.get(kind, 0.0)))
+        """A ``kind`` task's work (s) by ``answer``, else the least any server reported."""
+        return answer.service.get(kind, self.least_work.get(kind, 0.0))
 
     def _rate_free(self, server, kind, answers):
         """``(round trip, wait, work, workers, error, utilizations, the most of them)`` of
         ``answers``."""
         newest = answers[-1][0]
-        # the newest report (a step shows at once, :meth:`_work`); its error: of a median
+        # the newest report (a step shows at once); a kind not done there yet: what it takes
+        # where nothing slows it (one task there tells). The error: the server's, of a median
         work = self._work(newest, kind)
         work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.mechanisms else 0.0
         workers = float(newest.workers)
@@ -205,8 +201,12 @@ class LeastLatency(Balancer):
         if 'fresh' not in self.mechanisms:
             return []
         rate = self.rate(kind, now)
-        known = [(s, self.estimate(s, kind, now, rate), fresh(s)) for s in servers]
-        return [s for s, e, limit in known if e and limit is not None and e.latency > limit]
+        late = []
+        for server in servers:
+            estimate, limit = self.estimate(server, kind, now, rate), fresh(server)
+            if estimate is not None and limit is not None and estimate.latency > limit:
+                late.append(server)
+        return late
 
     @staticmethod
     def _pooled(estimates):
