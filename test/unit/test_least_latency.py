@@ -433,3 +433,31 @@ def test_least_latency_sends_sort_tasks_away_from_where_its_own_frames_wait():
     assert sort_server(off=('own_kinds',)) == (1, 0.0)
     server, own = sort_server(off=())
     assert server == 2 and own > 0.010, own
+
+
+def test_least_latency_leaves_a_kept_server_behind_the_best_for_four_windows():
+    """A server whose answers swing (another robot's frames queue there now and then) has
+    an error wide enough to keep a robot's sort tasks there at three times the best's
+    estimate; once its last four levels all lie above the best's, that is no noise, and
+    the robot moves (the soak: 15-20 ms against 4-5 for a minute after a restart)."""
+    def where(off):
+        clock = Clock()
+        rule = least_latency(clock, window=2.0, off=off)
+
+        def answer(rtts):
+            for server, rtt in rtts:
+                rule.probed(server, rtt, Load(0, 0, 1, 0.0, {'sort': 0.001}, 0.0, None))
+            clock.now += 0.25
+
+        for _ in range(8):
+            answer([(1, 0.005), (2, 0.004)])
+        assert send(rule, [1, 2], 'sort') == 2
+        chosen = []
+        for i in range(48):      # 12 s: server 2's answers swing between 3 and 30 ms
+            answer([(1, 0.005 + 1e-4 * (i % 2)), (2, 0.003 if i % 2 else 0.030)])
+            if i % 2:
+                chosen.append(send(rule, [1, 2], 'sort'))
+        return chosen
+    assert set(where(off=('behind',))) == {2}
+    moved = where(off=())
+    assert moved[-1] == 1 and moved[:4] == [2] * 4, moved

@@ -6,8 +6,9 @@ trip + the other robots' work in flight per worker (+ the robot's own tasks of i
 kinds there, :meth:`_own_kinds`) + the work per task, times the tries a server asked for
 more than it can do needs; its noise the errors of these, or, when larger, how far its
 level strays between windows (:meth:`wander`). ``choose`` keeps the robot's server while
-it is within 3 errors of the best; else moves to the best, or at random to one within 3
-errors of it whose estimate is lower than its server's. A camera frame goes first where
+it is within 3 errors of the best and not behind it for 4 windows (:meth:`_behind`); else
+moves to the best, or at random to one within 3 errors of it whose estimate is lower than
+its server's. A camera frame goes first where
 it would not come back stale (:meth:`_late`). ``choose`` changes nothing: the move is made
 at a task's first send (:meth:`started`). docs/selection.md has each mechanism and its worth.
 """
@@ -24,14 +25,15 @@ Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
 LEVELS = 10              # a server's levels kept, one a window: 8 second differences
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'steps', 'fresh', 'own_kinds')
+MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'steps', 'fresh', 'own_kinds',
+              'behind')
+BEHIND = 4               # levels of a kept server all above the best's: no noise (1 in 70)
 
 Estimate = collections.namedtuple('Estimate', 'latency error wait answers')
 
 
 def within(estimate, best):
-    """Whether ``estimate`` is within the noise of ``best``: 3 standard errors of their
-    difference."""
+    """Whether ``estimate`` is within the noise of ``best``: 3 errors of their difference."""
     return estimate.latency - best.latency <= Z * math.hypot(estimate.error, best.error)
 
 
@@ -49,8 +51,7 @@ class LeastLatency(Balancer):
         self.window, self.mechanisms = float(window), set(MECHANISMS) - set(off)
         self.answers = collections.defaultdict(lambda: collections.deque(maxlen=KEEP))
         self.least_work = {}                   # kind -> the least work any server reported
-        # server -> its levels, a window apart: (when, the window's median round trip,
-        # {kind: the work it reported then})
+        # server -> its levels, a window apart: (when, its median round trip, {kind: work})
         self.levels = collections.defaultdict(lambda: collections.deque(maxlen=LEVELS))
         self._wanders = {}     # server -> {kind: its wander}, until its next level
         self._parts = {}       # (server, kind) -> (newest answer, count, least work, parts)
@@ -100,8 +101,7 @@ class LeastLatency(Balancer):
     def estimate(self, server, kind, now, rate=None):
         """The :class:`Estimate` of a ``kind`` task at ``server`` from its answers of the
         window (None: none); ``rate``: the robot's ``kind`` tasks a second (:meth:`rate`).
-        The rate-free parts: once per window of answers (asked every probe round, per server);
-        where no answer says its server is asked more than it can do, one try."""
+        Its rate-free parts once per window of answers; one try where none is over capacity."""
         kept = self.answers.get(server, ())     # (in the order heard: the window is a suffix)
         count = sum(1 for a, _ in kept if now - a.at <= self.window)
         if not count:
@@ -134,8 +134,7 @@ class LeastLatency(Balancer):
         return answer.service.get(kind, self.least_work.get(kind, 0.0))
 
     def _rate_free(self, server, kind, answers):
-        """``(round trip, wait, work, workers, error, utilizations, the most of them)`` of
-        ``answers``."""
+        """``(round trip, wait, work, workers, error, utilizations, most)`` of ``answers``."""
         newest = answers[-1][0]
         # the newest report (a step shows at once); a kind not done there yet: what it takes
         # where nothing slows it (one task there tells). The error: the server's, of a median
@@ -155,8 +154,7 @@ class LeastLatency(Balancer):
         return rtt, wait, work, workers, error, utilizations, max(utilizations)
 
     def choose(self, servers, kind=None):
-        """The :class:`Decision` for the next ``kind`` task among the usable ``servers``
-        (a pure function of what the robot knows: asking changes nothing)."""
+        """The :class:`Decision` for the next ``kind`` task among ``servers`` (changes nothing)."""
         with self._lock:
             return self._decide(list(servers), kind, self._clock())
 
@@ -182,7 +180,8 @@ class LeastLatency(Balancer):
         best = min(known, key=lambda s: known[s].latency)
         near = sorted(s for s in known if within(known[s], known[best])) \
             if 'keep' in self.mechanisms else [best]
-        if here in known and (here == best or 'keep' in self.mechanisms and here in near):
+        if here in known and (here == best or 'keep' in self.mechanisms and here in near
+                              and not self._behind(here, best, kind)):
             return Decision(here, 'kept: within the noise of server %s' % best
                             if here != best else 'kept: the fastest', estimates)
         if here in known:    # a move's margin is positive
@@ -195,23 +194,26 @@ class LeastLatency(Balancer):
         return Decision(there, why + (' (%d within the noise: one at random)' % len(near)
                                       if len(near) > 1 else ''), estimates)
 
+    def _behind(self, here, best, kind):
+        """Whether ``here``'s last :data:`BEHIND` levels for ``kind`` all lie above ``best``'s:
+        no noise of a window's (servers alike: 1 time in 70), as frames queued beside tasks."""
+        mine, theirs = ([rtt + service.get(kind, 0.0) for _, rtt, service in
+                         list(self.levels.get(s, ()))[-BEHIND:]] for s in (here, best))
+        return 'behind' in self.mechanisms and len(mine) == len(theirs) == BEHIND and \
+            min(mine) > max(theirs)
+
     def _late(self, servers, kind, now, fresh):
         """The servers whose estimate for a ``kind`` task is past what ``fresh`` gives it
         there: a frame sent where it would come back stale is refused busy, or wasted."""
         if 'fresh' not in self.mechanisms:
             return []
         rate = self.rate(kind, now)
-        late = []
-        for server in servers:
-            estimate, limit = self.estimate(server, kind, now, rate), fresh(server)
-            if estimate is not None and limit is not None and estimate.latency > limit:
-                late.append(server)
-        return late
+        known = [(s, self.estimate(s, kind, now, rate), fresh(s)) for s in servers]
+        return [s for s, e, limit in known if e and limit is not None and e.latency > limit]
 
     @staticmethod
     def _pooled(estimates):
-        """``estimates`` with those of one answer (no spread of their own) given the
-        spread of one answer at the others (their median)."""
+        """``estimates``, those of one answer given the median spread of one at the others."""
         spreads = sorted(e.error * math.sqrt(e.answers) for e in estimates.values()
                          if e is not None and e.answers > 1)
         if not spreads:
@@ -227,9 +229,8 @@ class LeastLatency(Balancer):
         return self._pooled(dict((s, self.estimate(s, kind, now, rate)) for s in servers))
 
     def contenders(self, servers):
-        """The servers worth probing often, by the estimates the choice uses: where each
-        kind's tasks go, those within the noise of the best, and those with no answer in
-        the window (never heard from, or back from an outage)."""
+        """The servers worth probing often, by the choice's estimates: where each kind's tasks
+        go, those within the noise of the best, and those with no answer in the window."""
         with self._lock:
             estimates = self._estimates(servers, self._clock())
             chosen = set(self.chosen_for.values())
@@ -239,9 +240,8 @@ class LeastLatency(Balancer):
                    within(known[s], best))
 
     def view(self, servers):
-        """The robot's servers ranked by the estimates the choice uses (for its manager
-        and its views): where tasks go first, or, when that server is no longer usable,
-        where the next task will go and why."""
+        """The servers ranked by the choice's estimates (for the manager and views): where
+        tasks go first, or, that server no longer usable, where the next will go and why."""
         with self._lock:
             now = self._clock()
             if servers and self.chosen not in servers:    # (its estimates are the view's)
