@@ -8,9 +8,9 @@ more than it can do needs; its noise the errors of these, or, when larger, how f
 level strays between windows (:meth:`wander`). ``choose`` keeps the robot's server while
 it is within 3 errors of the best and not behind it for 4 windows (:meth:`_behind`); else
 moves to the best, or at random to one within 3 errors of it whose estimate is lower than
-its server's. A camera frame goes first where
-it would not come back stale (:meth:`_late`). ``choose`` changes nothing: the move is made
-at a task's first send (:meth:`started`). docs/selection.md has each mechanism and its worth.
+its server's. A camera frame goes first where it would not come back stale (:meth:`_late`).
+``choose`` changes nothing: the move is made at a task's first send (:meth:`started`).
+docs/selection.md has each mechanism and its worth.
 """
 
 import collections
