@@ -80,11 +80,13 @@ class LeastLatency(Balancer):
             return 0.0
         known = self._wanders.setdefault(server, {})    # (asked per estimate: kept)
         if kind not in known:
-            levels = [rtt + service.get(kind, 0.0)
-                      for _, rtt, service in self.levels.get(server, ())]
-            known[kind] = spread_of(since_step(levels, Z) if 'steps' in self.mechanisms
-                                    else levels)
+            levels = self._levels(server, kind)
+            known[kind] = spread_of(since_step(levels, Z) if 'steps' in self.mechanisms else levels)
         return known[kind]
+
+    def _levels(self, server, kind):
+        """``server``'s levels for ``kind``: each window's median round trip + work."""
+        return [rtt + service.get(kind, 0.0) for _, rtt, service in self.levels.get(server, ())]
 
     def _draws(self):
         return self.rng.random()     # the next decision's random number
@@ -195,10 +197,8 @@ class LeastLatency(Balancer):
                                       if len(near) > 1 else ''), estimates)
 
     def _behind(self, here, best, kind):
-        """Whether ``here``'s last :data:`BEHIND` levels for ``kind`` all lie above ``best``'s:
-        no noise of a window's (servers alike: 1 time in 70), as frames queued beside tasks."""
-        mine, theirs = ([rtt + service.get(kind, 0.0) for _, rtt, service in
-                         list(self.levels.get(s, ()))[-BEHIND:]] for s in (here, best))
+        """Whether ``here``'s last :data:`BEHIND` levels all lie above ``best``'s (alike: 1/70)."""
+        mine, theirs = (self._levels(s, kind)[-BEHIND:] for s in (here, best))
         return 'behind' in self.mechanisms and len(mine) == len(theirs) == BEHIND and \
             min(mine) > max(theirs)
 
