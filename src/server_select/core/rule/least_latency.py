@@ -7,8 +7,8 @@ kinds there, :meth:`_own_kinds`) + the work per task, times the tries a server a
 more than it can do needs; its noise the errors of these, or, when larger, how far its
 level strays between windows (:meth:`wander`). ``choose`` keeps the robot's server while
 it is within 3 errors of the best and not behind it for 4 windows (:meth:`_behind`); else
-moves to the best, or at random to one within 3 errors of it whose estimate is lower than
-its server's. A camera frame goes first where it would not come back stale (:meth:`_late`).
+moves to the best or at random to one within 3 errors of it, lower than its server, not
+behind the best; a frame first where it would not come back stale (:meth:`_late`).
 ``choose`` changes nothing: the move is made at a task's first send (:meth:`started`).
 docs/selection.md has each mechanism and its worth.
 """
@@ -145,10 +145,8 @@ class LeastLatency(Balancer):
         workers = float(newest.workers)
         rtts = [a.rtt for a, _ in answers]
         queued = [others * work / workers for _, others in answers]
-        if 'robust' in self.mechanisms:     # a late answer or two (a retransmission, a hang ending)
-            rtt, rtt_error = median_error(rtts)   # must not hold the mean up for a window
-        else:
-            rtt, rtt_error = mean_error(rtts)
+        # robust: a late answer or two (a retransmission, a hang ending) must not hold the mean up
+        rtt, rtt_error = (median_error if 'robust' in self.mechanisms else mean_error)(rtts)
         wait, wait_error = mean_error(queued)
         error = max(math.sqrt(rtt_error ** 2 + wait_error ** 2 + work_error ** 2),
                     self.wander(server, kind))
@@ -186,8 +184,9 @@ class LeastLatency(Balancer):
                               and not self._behind(here, best, kind)):
             return Decision(here, 'kept: within the noise of server %s' % best
                             if here != best else 'kept: the fastest', estimates)
-        if here in known:    # a move's margin is positive
-            near = [s for s in near if s == best or known[s].latency < known[here].latency]
+        if here in known:    # a move's margin is positive, and to none behind the best
+            near = [s for s in near if s == best or known[s].latency < known[here].latency
+                    and not self._behind(s, best, kind)]
         there = near[int(self.next_draw * len(near))]
         why = 'server %s faster than %s by %.3g ms' % (
             there, here, 1e3 * (known[here].latency - known[there].latency)) \
