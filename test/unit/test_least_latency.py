@@ -31,6 +31,14 @@ def feed(rule, clock, answers, rounds=5):
         clock.now += 0.1
 
 
+def sort_answers(rule, clock, rtts):
+    """One probe answer of each ``(server, rtt)`` in ``rtts`` (idle, 1 ms a sort task), then
+    0.25 s on."""
+    for server, rtt in rtts:
+        rule.probed(server, rtt, Load(0, 0, 1, 0.0, {'sort': 0.001}, 0.0, None))
+    clock.now += 0.25
+
+
 def send(rule, servers, kind='image', answered=True):
     """Ask where a task goes and send it there (the move is made at the send); ``answered``:
     its answer is in at once (it is no longer in flight there)."""
@@ -443,18 +451,13 @@ def test_least_latency_leaves_a_kept_server_behind_the_best_for_four_windows():
     def where(off):
         clock = Clock()
         rule = least_latency(clock, window=2.0, off=off)
-
-        def answer(rtts):
-            for server, rtt in rtts:
-                rule.probed(server, rtt, Load(0, 0, 1, 0.0, {'sort': 0.001}, 0.0, None))
-            clock.now += 0.25
-
         for _ in range(8):
-            answer([(1, 0.005), (2, 0.004)])
+            sort_answers(rule, clock, [(1, 0.005), (2, 0.004)])
         assert send(rule, [1, 2], 'sort') == 2
         chosen = []
         for i in range(48):      # 12 s: server 2's answers swing between 3 and 30 ms
-            answer([(1, 0.005 + 1e-4 * (i % 2)), (2, 0.003 if i % 2 else 0.030)])
+            sort_answers(rule, clock, [(1, 0.005 + 1e-4 * (i % 2)),
+                                       (2, 0.003 if i % 2 else 0.030)])
             if i % 2:
                 chosen.append(send(rule, [1, 2], 'sort'))
         return chosen
@@ -471,18 +474,13 @@ def test_least_latency_leaving_a_server_behind_goes_to_none_behind_the_best():
     def first_move(seed, off=()):
         clock = Clock()
         rule = least_latency(clock, seed=seed, window=2.0, off=off)
-
-        def answer(levels, jitter):
-            for server, level in levels:
-                rule.probed(server, level + jitter, Load(0, 0, 1, 0.0, {'sort': 0.001}, 0.0,
-                                                         None))
-            clock.now += 0.25
-
-        for i in range(8):
-            answer([(1, 0.005), (2, 0.005), (3, 0.004)], 0.0)
+        for _ in range(8):
+            sort_answers(rule, clock, [(1, 0.005), (2, 0.005), (3, 0.004)])
         assert send(rule, [1, 2, 3], 'sort') == 3
         for i in range(64):      # 16 s: server 1 at 4.0 ms, 2 at 4.2, 3 at 4.4, +-1 ms each
-            answer([(1, 0.0040), (2, 0.0042), (3, 0.0044)], 0.001 * (-1) ** i)
+            jitter = 0.001 * (-1) ** i
+            sort_answers(rule, clock, [(1, 0.0040 + jitter), (2, 0.0042 + jitter),
+                                       (3, 0.0044 + jitter)])
             if i % 2:
                 server = send(rule, [1, 2, 3], 'sort')
                 if server != 3:
