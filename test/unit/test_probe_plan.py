@@ -55,15 +55,18 @@ def test_contenders_at_their_rate_the_others_at_the_background_rate():
     assert counts[1] >= 185 and counts[3] >= 10   # at first every server is learnt, at 2 Hz
 
 
-def test_contenders_are_probed_at_most_twice_per_task_the_robot_sends():
-    plan = ProbePlan(contender_rate=4.0, background_rate=1.0, budget=20.0, hold=2.0)
+def test_contenders_are_probed_together_at_most_four_times_per_task_the_robot_sends():
+    plan = ProbePlan(contender_rate=4.0, background_rate=0.5, budget=20.0, hold=2.0)
     for server in range(1, 5):
         plan.add(server, 0.0)
     run(plan, 10.0, contenders={1}, task_rate=2.0)
     assert run(plan, 20.0, start=10.0, contenders={1}, task_rate=2.0)[1] == 80   # 4 Hz
-    slow = run(plan, 20.0, start=30.0, contenders={1}, task_rate=0.5)   # a frame each 2 s
-    assert slow[1] == pytest.approx(20, abs=1) and slow[2] == pytest.approx(20, abs=1)
-    assert run(plan, 20.0, start=50.0, contenders={1}, task_rate=None)[1] == 80   # unknown
+    every = run(plan, 20.0, start=30.0, contenders={1, 2, 3, 4}, task_rate=2.0)
+    steady = run(plan, 20.0, start=50.0, contenders={1, 2, 3, 4}, task_rate=2.0)
+    assert sum(every.values()) < 4 * 80 and steady == {1: 40, 2: 40, 3: 40, 4: 40}   # 2 Hz
+    slow = run(plan, 20.0, start=70.0, contenders={1}, task_rate=0.1)   # a frame each 10 s
+    assert slow[1] == pytest.approx(10, abs=1) and slow[2] == pytest.approx(10, abs=1)
+    assert run(plan, 20.0, start=90.0, contenders={1}, task_rate=None)[1] == 80   # unknown
 
 
 def test_many_contenders_share_the_budget_but_never_fall_below_the_background_rate():

@@ -7,7 +7,9 @@ then only to notice that it came near.
 
 :class:`ProbePlan` gives each server's next probe time. Contenders are probed at
 ``contender_rate`` each, together at most ``budget`` probes a second (a near-equal fleet
-has many contenders), never below ``background_rate``, all of them in one round: their
+has many contenders) and ``per_task`` probes per task the robot sends (four equally near
+servers are all contenders; a robot sending 2 tasks a second probes them at 2 Hz each,
+not 4), never below ``background_rate``, all of them in one round: their
 round trips are compared under one load of the robot's host and network, and a round
 costs the robot one batch whatever its size; the others at ``background_rate``, their
 phases spread over the period so that they do not come in one burst. A server stays a
@@ -24,7 +26,7 @@ import threading
 
 
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0     # phases i x GOLDEN mod 1 spread evenly
-PROBES_PER_TASK = 2.0    # a contender's probes per task of the robot, at most
+PROBES_PER_TASK = 4.0    # the contenders' probes per task of the robot, together, at most
 
 
 class ProbePlan(object):
@@ -82,7 +84,7 @@ class ProbePlan(object):
         if server in self._until:
             share = min(self.contender_rate, self.budget / max(1, len(self._until)))
             if self.per_task and self._task_rate is not None:
-                share = min(share, self.per_task * self._task_rate)
+                share = min(share, self.per_task * self._task_rate / len(self._until))
             return 1.0 / max(self.background_rate, share)
         return 1.0 / self.background_rate
 
@@ -95,7 +97,7 @@ class ProbePlan(object):
         s; those whose hold has ended are demoted to the background, their next probe
         within one background period, at a phase of their own (servers demoted together
         are not probed together). ``task_rate``: the robot's tasks a second, which the
-        contenders' probes follow (``per_task`` each; None: not known)."""
+        contenders' probes follow (``per_task`` in all; None: not known)."""
         if not self.adaptive:
             return
         self._task_rate = task_rate
