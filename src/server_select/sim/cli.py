@@ -37,7 +37,8 @@ def parse(argv):
     parser.add_argument('--together', action='store_true', help='the variants side by side '
                         'on shared servers, as the testbed runs them (one run per seed)')
     cells.add_arguments(parser)
-    parser.add_argument('--out', default='simulation')
+    parser.add_argument('--out', default='simulation',
+                        help='folder for the tables (default: simulation, here)')
     args = parser.parse_args(argv)
     if bool(args.scenario) == bool(args.from_bag):
         parser.error('give a scenario or --from-bag, one of them')
