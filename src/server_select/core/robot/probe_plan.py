@@ -81,10 +81,11 @@ class ProbePlan(object):
         """Seconds between two probes of ``server`` now."""
         if not self.adaptive:
             return self.tick
-        if server in self._until:
-            share = min(self.contender_rate, self.budget / max(1, len(self._until)))
+        if server in self._until:       # the contenders share what they may take together
+            together = self.budget
             if self.per_task and self._task_rate is not None:
-                share = min(share, self.per_task * self._task_rate / len(self._until))
+                together = min(together, self.per_task * self._task_rate)
+            share = min(self.contender_rate, together / len(self._until))
             return 1.0 / max(self.background_rate, share)
         return 1.0 / self.background_rate
 
