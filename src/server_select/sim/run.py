@@ -9,7 +9,9 @@ side by side on shared servers, as the testbed's suite does (its calibration).
 
 A scenario file's ``suite: robot_args`` say what the robots send (``task_rate``,
 ``task_size``, ``sort_tasks``, ``frame_rate`` with ``image_source`` or ``image_topic``,
-``task_timeout``, ``start_delay``), as they do on the testbed; ``suite: measure_from``
+``task_timeout``, ``start_delay``), as they do on the testbed, and ``suite: host_args``
+what one robot sends otherwise (``{robot7: {frame_rate: 4}}``: a burst robot's own rate,
+beside a ``stop``); ``suite: measure_from``
 where the measured part starts (35 s, the suite's, by default); ``suite: hop_ms`` the
 middleware's delay per message where it is not the model's (a bag's run on one host).
 """
@@ -115,7 +117,7 @@ class Simulation(object):
         args = dict(suite.get('robot_args') or {})
         self.measure_from = measured_window(scenario)[0]
         self.timeout = float(args.get('task_timeout', default('task_timeout')))
-        kinds = kinds_of(args)
+        by_host = suite.get('host_args') or {}
         self.records, self.robots = [], []
         self.answers = collections.defaultdict(collections.Counter)   # variant -> wanted?
         self.variant_of = {}
@@ -129,6 +131,7 @@ class Simulation(object):
                 rid = REPLICA * index + host.id if together else host.id
                 self.variant_of[rid] = name
                 servers = groups[host.id] if groups else sorted(self.servers)
+                kinds = kinds_of(dict(args, **by_host.get(host.name, {})))
                 robot = SimRobot(self, host._replace(id=rid), servers, get,
                                  kinds, fixed=(fixed or {}).get(host.id),
                                  oracle=spec.mode == 'oracle', scenario_id=host.id,

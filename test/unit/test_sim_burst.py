@@ -1,0 +1,50 @@
+"""A burst in the simulator: robots that stop, robots that send their own kinds
+(``suite: host_args``), and how soon the others are back (sim/recovery.py)."""
+
+import collections
+
+import pytest
+
+from server_select.sim import recovery
+from server_select.sim.model import Model
+from server_select.sim.run import simulate
+from server_select.testbed.scenario import Scenario
+
+
+def burst(stop=20.0):
+    """Robot 1 sends sort tasks throughout; robot 2, from 10 s to ``stop``, frames only."""
+    hosts = {'manager': {'role': 'manager'}, 'server1': {'role': 'server', 'id': 1},
+             'robot1': {'role': 'robot', 'id': 1},
+             'robot2': {'role': 'robot', 'id': 2, 'start': 10.0, 'stop': stop}}
+    return Scenario({'name': 'burst', 'duration': 40.0, 'hosts': hosts, 'links': {},
+                     'default': {'delay': 2},
+                     'suite': {'measure_from': 5.0, 'robot_args': {'task_rate': 5},
+                               'host_args': {'robot2': {'sort_tasks': False,
+                                                        'image_source': 'frames',
+                                                        'frame_rate': 2}}}})
+
+
+def test_a_robot_sends_its_own_kinds_and_nothing_after_it_stops():
+    sim = simulate(burst(), Model.load(), 1, ['fleet'])
+    kinds = collections.defaultdict(set)
+    last = collections.defaultdict(float)
+    for record in sim.records:
+        kinds[record.robot].add(record.outcome.kind)
+        last[record.robot] = max(last[record.robot], record.outcome.stamp)
+    assert kinds == {1: {'sort'}, 2: {'image'}}
+    assert 19.0 < last[2] <= 20.0 and last[1] > 39.0
+
+
+def test_the_burst_is_its_robots_that_stop_and_the_fleet_those_up_throughout():
+    event, fleet = recovery.burst_of(burst())
+    assert (event['start'], event['end'], fleet) == (10.0, 20.0, [1])
+    with pytest.raises(ValueError, match='no robot stops'):
+        recovery.burst_of(Scenario.load('config/sim/mixed_kinds.yaml'))
+
+
+def test_the_fleet_is_back_at_once_after_a_burst_it_was_not_slowed_by_and_never_without_server():
+    # one robot's frames beside another's sort tasks on a whole core: robot 1 is back at once
+    assert recovery.recovery(burst(), Model.load(), 1, 'fleet') == 0.0
+    gone = burst()      # its only server stops with the burst: every later task fails
+    gone.hosts['server1'] = gone.hosts['server1']._replace(stop=20.0)
+    assert recovery.recovery(gone, Model.load(), 1, 'fleet') is None
