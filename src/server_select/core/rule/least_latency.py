@@ -25,8 +25,8 @@ Z = 3.0                  # standard errors a challenger must win by
 KEEP = 64                # answers kept per server at most
 LEVELS = 10              # a server's levels kept, one a window: 8 second differences
 # what each can be switched off for (the league's ablation: docs/selection.md)
-MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'steps', 'calm', 'fresh',
-              'own_kinds', 'behind')
+MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'steps', 'fresh', 'own_kinds',
+              'behind')
 BEHIND = 4               # levels of a kept server all above the best's: no noise (1 in 70)
 
 Estimate = collections.namedtuple('Estimate', 'latency error wait answers')
@@ -65,9 +65,7 @@ class LeastLatency(Balancer):
         for kind, work in answer.service.items():
             self.least_work[kind] = min(work, self.least_work.get(kind, work))
         levels = self.levels[answer.server]
-        # calm: a window over capacity for the others is no level (a burst's levels held robots 9 s)
-        if (not levels or answer.at - levels[-1][0] >= self.window) and (
-                'calm' not in self.mechanisms or max(a.utilization for a, _ in answers) < 1.0):
+        if not levels or answer.at - levels[-1][0] >= self.window:
             rtt = statistics.median(a.rtt for a, _ in answers)
             levels.append((answer.at, rtt, answer.service))
             self._wanders.pop(answer.server, None)
@@ -140,7 +138,8 @@ class LeastLatency(Balancer):
     def _rate_free(self, server, kind, answers):
         """``(round trip, wait, work, workers, error, utilizations, most)`` of ``answers``."""
         newest = answers[-1][0]
-        # the newest report (a step shows at once), else the least any server reported
+        # the newest report (a step shows at once); a kind not done there yet: what it takes
+        # where nothing slows it (one task there tells). The error: the server's, of a median
         work = self._work(newest, kind)
         work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.mechanisms else 0.0
         workers = float(newest.workers)
