@@ -120,6 +120,36 @@ def test_a_server_left_after_a_long_burst_reports_what_its_tasks_took_alone():
     assert q.load().service == {'image': pytest.approx(0.25)}
 
 
+def test_a_one_worker_server_left_after_a_queue_reports_its_alone_work_a_second_on():
+    """One worker, a burst that kept tasks waiting (their data received and decoded on the
+    same CPU made each slower): those did not run alone, so a second after the last one
+    the server reports what a frame took alone, not the burst's for 10 s; a kind whose
+    last tasks ran alone keeps saying what they took."""
+    clock = Clock()
+    q = WorkQueue(1, 10, clock=clock)
+    for _ in range(10):                       # one frame at a time
+        q.offer('image', 'x')
+        q.done(q.take(), 0.25)
+        clock.now += 0.5
+    q.offer('image', 'a')
+    for _ in range(20):                       # a queue: each taken with another waiting
+        q.offer('image', 'b')
+        q.done(q.take(), 0.6)
+        clock.now += 0.5
+    q.done(q.take(), 0.6)                     # the last, alone
+    assert q.load().service == {'image': pytest.approx(0.6)}
+    clock.now += 0.6
+    assert q.load().service == {'image': pytest.approx(0.6)}     # not yet a second
+    clock.now += 0.5
+    assert q.load().service == {'image': pytest.approx(0.25)}
+    for _ in range(4):                        # slow frames, each alone: a slowed server
+        q.offer('image', 'x')
+        q.done(q.take(), 0.6)
+        clock.now += 0.5
+    clock.now += 5.0
+    assert q.load().service == {'image': pytest.approx(0.6)}
+
+
 def test_a_queue_admits_by_what_an_idle_kind_typically_took():
     clock = Clock()
     q = WorkQueue(1, 10, clock=clock)

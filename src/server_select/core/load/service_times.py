@@ -23,7 +23,7 @@ class ServiceTimes(object):
 
     A kind none of whose tasks was done in the last ``idle`` s says what the server was,
     not what it is: it reports what its tasks took when each ran alone (no other task of
-    the server beside it, as the next one will), the median of the last ``history`` such
+    the server beside it or waiting, as the next one will), the median of the last ``history`` such
     and that median's error, and its next task is measured alone. Not its least median:
     the luck of its best second out of many made a server that robots had just left look
     faster than identical ones still in use, and robots moved to it for nothing. Not what
@@ -31,7 +31,9 @@ class ServiceTimes(object):
     the burst until it restarted (nothing sent it a task to learn otherwise); a slowed
     server's few slow tasks before its robots fled move a median of ``history`` little.
     (Tasks that never ran alone: what it last did.) 10 s is the decay time of tower's and
-    Finagle's peak-EWMA, which forget a left server alike.
+    Finagle's peak-EWMA, which forget a left server alike. A kind whose recent tasks did
+    not run alone (a burst) reports the same once none was done for ``horizon`` s: what
+    slowed them is gone with it, and the next runs alone.
     """
 
     def __init__(self, keep=20, horizon=1.0, least=3, idle=10.0, history=60,
@@ -50,9 +52,10 @@ class ServiceTimes(object):
         self._errors = {}
         self._history = {}    # {kind: its last `history` tasks' seconds, run alone}
         self._typical = {}    # {kind: (median, its error) of its history}, until its next task
+        self._beside = {}     # {kind: whether a task of its median did not run alone}
 
     def add(self, kind, seconds, alone=True):
-        """A ``kind`` task took ``seconds``; ``alone``: no other task ran beside it."""
+        """A ``kind`` task took ``seconds``; ``alone``: none ran beside it or waited."""
         now = self._clock()
         with self._lock:
             times = self._times.get(kind)
@@ -60,7 +63,7 @@ class ServiceTimes(object):
                 times = self._times[kind] = collections.deque(maxlen=self.keep)
             elif now - times[-1][0] > self.idle:
                 times.clear()
-            times.append((now, float(seconds)))
+            times.append((now, float(seconds), alone))
             if alone:
                 history = self._history.get(kind)
                 if history is None:
@@ -69,13 +72,15 @@ class ServiceTimes(object):
                 self._typical.pop(kind, None)
             while len(times) > self.least and now - times[0][0] > self.horizon:
                 times.popleft()
-            values = [value for _, value in times]
+            values = [value for _, value, _ in times]
+            self._beside[kind] = not all(ran_alone for _, _, ran_alone in times)
             self._medians[kind] = statistics.median(values)
             self._errors[kind] = MEDIAN_ERROR * mean_error(values)[1]
 
     def _work(self, kind, now):
         """``(seconds, error)`` of ``kind``'s work now (lock held; it was done before)."""
-        if now - self._times[kind][-1][0] > self.idle:
+        since = now - self._times[kind][-1][0]
+        if since > self.idle or since > self.horizon and self._beside[kind]:
             typical = self._typical.get(kind)
             if typical is None and kind in self._history:
                 typical = self._typical[kind] = median_error(self._history[kind])

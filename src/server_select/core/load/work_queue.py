@@ -182,7 +182,8 @@ class WorkQueue(object):
             now = self._clock()
             job = self._queue.pop(lambda queued: self._job_work(queued, now))
             job.started = now
-            job.alone = not self._running     # no other job beside it: so far
+            # alone: none beside it so far, nor waiting (received on the CPU it shares)
+            job.alone = not self._running and not len(self._queue)
             for other in self._running:       # nor, from now on, beside these
                 other.alone = False
             self._running.add(job)
