@@ -98,16 +98,21 @@ def test_a_server_left_idle_looks_no_faster_than_one_still_in_use():
     assert abs(times.get('sort') - statistics.median(draws)) < 3 * error
 
 
+def frames_alone(q, clock, seconds, count):
+    """``count`` frames of ``seconds`` each, one at a time, 0.5 s apart."""
+    for _ in range(count):
+        q.offer('image', 'x')
+        q.done(q.take(), seconds)
+        clock.now += 0.5
+
+
 def test_a_server_left_after_a_long_burst_reports_what_its_tasks_took_alone():
     """Robots fled a server whose frames ran side by side for long (more of them than
     its history holds) and slowly: left idle, it says what a frame took alone, as its
     next one will run, not what the burst's took."""
     clock = Clock()
     q = WorkQueue(2, 10, clock=clock)
-    for _ in range(10):                       # one frame at a time
-        q.offer('image', 'x')
-        q.done(q.take(), 0.25)
-        clock.now += 0.5
+    frames_alone(q, clock, 0.25, 10)
     for _ in range(40):                       # two at a time, each twice as slow
         q.offer('image', 'a')
         q.offer('image', 'b')
@@ -127,10 +132,7 @@ def test_a_one_worker_server_left_after_a_queue_reports_its_alone_work_a_second_
     last tasks ran alone keeps saying what they took."""
     clock = Clock()
     q = WorkQueue(1, 10, clock=clock)
-    for _ in range(10):                       # one frame at a time
-        q.offer('image', 'x')
-        q.done(q.take(), 0.25)
-        clock.now += 0.5
+    frames_alone(q, clock, 0.25, 10)
     q.offer('image', 'a')
     for _ in range(20):                       # a queue: each taken with another waiting
         q.offer('image', 'b')
@@ -142,10 +144,7 @@ def test_a_one_worker_server_left_after_a_queue_reports_its_alone_work_a_second_
     assert q.load().service == {'image': pytest.approx(0.6)}     # not yet a second
     clock.now += 0.5
     assert q.load().service == {'image': pytest.approx(0.25)}
-    for _ in range(4):                        # slow frames, each alone: a slowed server
-        q.offer('image', 'x')
-        q.done(q.take(), 0.6)
-        clock.now += 0.5
+    frames_alone(q, clock, 0.6, 4)            # slow frames, each alone: a slowed server
     clock.now += 5.0
     assert q.load().service == {'image': pytest.approx(0.6)}
 
