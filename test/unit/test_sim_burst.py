@@ -33,6 +33,10 @@ def test_a_robot_sends_its_own_kinds_and_nothing_after_it_stops():
         last[record.robot] = max(last[record.robot], record.outcome.stamp)
     assert kinds == {1: {'sort'}, 2: {'image'}}
     assert 19.0 < last[2] <= 20.0 and last[1] > 39.0
+    stray = burst()
+    stray.suite['host_args']['robot9'] = {'frame_rate': 4}
+    with pytest.raises(ValueError, match='host_args names no robot of it: robot9'):
+        simulate(stray, Model.load(), 1, ['fleet'])
 
 
 def test_the_burst_is_its_robots_that_stop_and_the_fleet_those_up_throughout():

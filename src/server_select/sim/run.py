@@ -118,6 +118,10 @@ class Simulation(object):
         self.measure_from = measured_window(scenario)[0]
         self.timeout = float(args.get('task_timeout', default('task_timeout')))
         by_host = suite.get('host_args') or {}
+        strays = sorted(set(by_host) - set(h.name for h in scenario.of_role('robot')))
+        if strays:
+            raise ValueError('%s: suite: host_args names no robot of it: %s'
+                             % (scenario.source, ', '.join(strays)))
         self.records, self.robots = [], []
         self.answers = collections.defaultdict(collections.Counter)   # variant -> wanted?
         self.variant_of = {}
