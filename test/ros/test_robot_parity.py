@@ -219,7 +219,7 @@ class _SimServer(object):
 def simulated(log):
     script = Script(EventLoop())
     world = _SimWorld(script)
-    host = mock.Mock(id=ROBOT)
+    host = mock.Mock(id=ROBOT, stop=None)
     host.name = 'robot'
     with mock.patch('server_select.sim.robot.Robot', functools.partial(_tapped_robot, log)):
         robot = SimRobot(world, host, [1, 2, 3], params, [Kind('sort', RATE, False, 80,
