@@ -21,19 +21,19 @@ class ServiceTimes(object):
     s: loaded_server's reaction); fewer tasks make a wider error, which the robots count
     as noise.
 
-    A kind none of whose tasks was done in the last ``idle`` s says what the server was,
-    not what it is: it reports what its tasks took when each ran alone (no other task of
-    the server beside it or waiting, as the next one will), the median of the last ``history`` such
-    and that median's error, and its next task is measured alone. Not its least median:
+    A kind none of whose tasks was done in the last ``idle`` s says what the server was, not
+    what it is: it reports what its tasks took when each ran alone (no other task of the
+    server beside it or waiting, as the next one will), the median of the last ``history``
+    such and that median's error, and its next task is measured alone. Not its least median:
     the luck of its best second out of many made a server that robots had just left look
-    faster than identical ones still in use, and robots moved to it for nothing. Not what
-    it last did: a server left after a burst, whose tasks ran side by side, would report
-    the burst until it restarted (nothing sent it a task to learn otherwise); a slowed
-    server's few slow tasks before its robots fled move a median of ``history`` little.
-    (Tasks that never ran alone: what it last did.) 10 s is the decay time of tower's and
-    Finagle's peak-EWMA, which forget a left server alike. A kind whose recent tasks did
-    not run alone (a burst) reports the same once none was done for ``horizon`` s: what
-    slowed them is gone with it, and the next runs alone.
+    faster than identical ones still in use, and robots moved to it for nothing. Not what it
+    last did: a server left after a burst, whose tasks ran side by side, would report the
+    burst until it restarted (nothing sent it a task to learn otherwise); a slowed server's
+    few slow tasks before its robots fled move a median of ``history`` little. (Tasks that
+    never ran alone: what it last did.) 10 s is the decay time of tower's and Finagle's
+    peak-EWMA, which forget a left server alike. A kind whose recent tasks did not run alone
+    (a burst) reports the same once none was done for ``horizon`` s: what slowed them is
+    gone with it, and the next runs alone.
     """
 
     def __init__(self, keep=20, horizon=1.0, least=3, idle=10.0, history=60,
