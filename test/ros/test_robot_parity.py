@@ -30,6 +30,7 @@ from server_select.sim.robot import SimRobot
 from server_select.sim.tasks import Kind
 from server_select.srv import LatencyProbeResponse
 from server_select.tasks.sort import Sort
+from server_select.testbed.scenario import Host
 
 ROBOT = 1
 HALF_TRIP = {1: 0.0012, 2: 0.0004, 3: 0.0008, 4: 0.0003}     # one way, s
@@ -219,8 +220,7 @@ class _SimServer(object):
 def simulated(log):
     script = Script(EventLoop())
     world = _SimWorld(script)
-    host = mock.Mock(id=ROBOT, stop=None)
-    host.name = 'robot'
+    host = Host('robot', 'robot', ROBOT, 0.0, None)     # a scenario's robot, up throughout
     with mock.patch('server_select.sim.robot.Robot', functools.partial(_tapped_robot, log)):
         robot = SimRobot(world, host, [1, 2, 3], params, [Kind('sort', RATE, False, 80,
                                                                SORT_SIZE)])
