@@ -35,7 +35,6 @@ class SimRobot(Transport, Events):
         self._round = Wakeup(self.loop, self._probe_round)
         self._wakes = [Wakeup(self.loop, functools.partial(self._act, s)) for s in self.streams]
         self._to, self._from = {}, {}  # server -> connection for tasks, for results
-        self.stopped = False           # past its host's stop: no probe, no task sent
 
     def _random(self, purpose):
         """The run's seeded stream for the rule's draws, or a kind's tasks."""
@@ -50,8 +49,6 @@ class SimRobot(Transport, Events):
             wake.request(stream.next_time())
         if self.oracle:
             OracleFlags(self.loop, self.sim.scenario, self.scenario_id, self.robot).start()
-        if self.host.stop is not None:
-            self.loop.at(self.host.stop, setattr, self, 'stopped', True)
 
     def join(self, server_id):
         """Server ``server_id`` joined the fleet (as membership tells the node)."""
@@ -63,14 +60,18 @@ class SimRobot(Transport, Events):
         self.robot.remove_server(server_id)
 
     # -- the robot's wake-ups -------------------------------------------------------------
+    def _stopped(self):
+        """Past its host's stop: no probe, no task sent."""
+        return self.host.stop is not None and self.loop.now() >= self.host.stop
+
     def _probe_round(self):
-        if self.stopped:
+        if self._stopped():
             return
         self.robot.probe_round()
         self._round.request(self.robot.next_probe_time())
 
     def _act(self, stream):
-        if self.stopped:
+        if self._stopped():
             return
         stream.act()
         self._schedule(stream)
