@@ -75,14 +75,12 @@ def spread_of(levels):
 
 
 def since_step(levels, z):
-    """``levels`` from the first of the last two or more that all lie beyond the range of
-    the four or more before by more than ``z`` times their own range (all of them: none
-    such). A server's load that came and went (a burst of other robots' frames queued
-    there) says nothing of how its level strays now. Noise makes such a gap rare: of ten
-    independent levels, about 1 in 100 (1 in 10,000 with three after), and the cut lasts
-    until a level breaks the gap. Two, not three: a burst's levels held robots a window
-    longer, and the soak's overload bound is 5 s."""
-    for first in range(4, len(levels) - 1):
+    """``levels`` from the first of the last three or more that all lie beyond the range
+    of those before by more than ``z`` times their own range (all of them: none such). A
+    server's load that came and went (a burst of other robots' frames queued there) says
+    nothing of how its level strays now; noise makes such a gap about never: the newest
+    all beyond every earlier one, and far beyond their own spread."""
+    for first in range(4, len(levels) - 2):
         before, after = levels[:first], levels[first:]
         reach = z * (max(after) - min(after))
         if max(after) + reach < min(before) or min(after) - reach > max(before):
