@@ -52,3 +52,16 @@ def test_the_fleet_is_back_at_once_after_a_burst_it_was_not_slowed_by_and_never_
     gone = burst()      # its only server stops with the burst: every later task fails
     gone.hosts['server1'] = gone.hosts['server1']._replace(stop=20.0)
     assert recovery.recovery(gone, Model.load(), 1, 'fleet') is None
+
+
+def test_each_variant_is_paired_seed_by_seed_with_the_first_and_with_a_kept_run():
+    found = {'fleet': [1.0, 2.0, None], 'fleet~steps': [0.5, 2.0, 3.0]}
+    lines = recovery.table(found, against={'fleet': [1.0, 1.0, 1.0]}).splitlines()
+    assert lines[2].startswith('| fleet | 2.0 |') and lines[2].endswith('| | |'), lines
+    # the kept run: 0, +1, +29 s (not back counts at LIMIT): 0 sooner, 2 later
+    assert lines[3].startswith('| fleet minus the kept run |') and \
+        lines[3].endswith('| 0 / 2 |') and '+10.00 [' in lines[3], lines[3]
+    # against the first: -0.5, 0, -27: 2 sooner, 0 later; its max was never "not back"
+    assert lines[4].startswith('| fleet~steps | 2.0 | ') and '| 3.0 | 0 of 3 |' in lines[4] \
+        and '-9.17 [' in lines[4] and lines[4].endswith('| 2 / 0 |'), lines[4]
+    assert '| 30.0+ | 1 of 3 |' in lines[2]
