@@ -123,7 +123,8 @@ def test_the_loopback_demo_benchmark_counts_switches_and_work_reports(tmp_path):
                           universal_newlines=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:]
     (run,) = json.loads((tmp_path / 'loopback_demo.json').read_text())['runs']
-    assert len(run['switches_per_min']) == 2 and run['tasks'] > 0, run
+    # both robots heard by the demo's report (one of three runs had lost robot 2's reports)
+    assert run['unheard'] == [] and len(run['switches_per_min']) == 2 and run['tasks'] > 0, run
     # the robots send sort tasks from the start: some server did some and reported them
     assert any(finite(w) and w > 0 for w in run['work_ms'].values()), run['work_ms']
     assert 'switches a minute per robot' in proc.stdout

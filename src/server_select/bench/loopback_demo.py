@@ -102,7 +102,9 @@ def run_once(out, index, seconds, servers=3, robots=2):
         observer.close()
     with open(summary_path) as stream:
         summary = json.load(stream)
-    per_minute = [60.0 * r['switches'] / seconds for r in summary]
+    # a robot the report never heard (0 tasks) would count as 0 switches: left out, named
+    per_minute = [60.0 * r['switches'] / seconds for r in summary if r['tasks']]
+    unheard = [r['robot'] for r in summary if not r['tasks']]
     margins = [float(m.group(1)) for _, _, why in observer.moves
                for m in [MARGIN.search(why)] if m]
     spreads = dict((s, log_spread(w)) for s, w in observer.work.items())
@@ -110,7 +112,7 @@ def run_once(out, index, seconds, servers=3, robots=2):
             'work_ms': dict((s, 1e3 * sorted(w)[len(w) // 2] if w else None)
                             for s, w in observer.work.items()),
             'work_sigma': spreads, 'tasks': sum(r['tasks'] for r in summary),
-            'failed': sum(r['failed'] for r in summary)}
+            'failed': sum(r['failed'] for r in summary), 'unheard': unheard}
 
 
 def main(argv=None):
@@ -134,6 +136,9 @@ def main(argv=None):
                       len(run['moves']), '%.3g' % min(run['margins_ms'])
                       if run['margins_ms'] else '-',
                       ' '.join('%.3f' % v for v in sigmas), run['tasks'], run['failed']))
+            if run['unheard']:
+                print('  the report heard no task of robot %s: left out of the switches'
+                      % ', '.join(map(str, run['unheard'])))
             sys.stdout.flush()
     per_minute = [v for r in runs for v in r['switches_per_min']]
     sigmas = [v for r in runs for v in r['work_sigma'].values() if v is not None]
