@@ -73,7 +73,8 @@ def times_of(scenario, model, variants, seeds):
 
 def row(name, found, base=None):
     """A table row of one variant's per-seed times (None: not back within LIMIT s, counted
-    at LIMIT), and its paired difference from ``base`` (the same seeds) when given."""
+    at LIMIT), and its paired difference from ``base`` (over the seeds both have) when
+    given."""
     times = [LIMIT if t is None else t for t in found]
     ninth = statistics.quantiles(times, n=10)[-1] if len(times) > 1 else times[0]
     cells = ['%.1f' % statistics.median(times), '%.1f' % ninth,
