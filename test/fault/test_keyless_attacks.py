@@ -29,7 +29,7 @@ from server_select.srv import LatencyProbe, LatencyProbeRequest
 from server_select.testbed.cpu import CpuLimit
 
 from support.fleet import NODES, Fleet
-from test_exhaustion import MAX_RSS, rss
+from test_exhaustion import MAX_RSS, cpu_seconds, rss
 from test_faults import show, warm_up
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -151,6 +151,8 @@ def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None, sourc
     t_base = calm_since(rec)
     pids = dict((node, Fleet.pid(node)) for node in NODES)
     memory = [most_rss(pids)]
+    servers = ['/server%d' % s for s in (1, 2, 3)]
+    cpu = [cpu_seconds(pids[n]) for n in servers]
     t_start = time.monotonic()
     busy = []
     with capped(pids, server_cpu):
@@ -161,6 +163,8 @@ def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None, sourc
             time.sleep(0.5)
     sent = json.loads(proc.stdout.read().strip().splitlines()[-1])
     t_end = time.monotonic()
+    # what the host gave each server meanwhile: a quota caps it, a busy host may give less
+    got = [(cpu_seconds(pids[n]) - c) / (t_end - t_start) for n, c in zip(servers, cpu)]
     # after: once no server is saturated any more (a flood leaves queued work behind that
     # the servers finish first), then for SECONDS
     drained = wait_until(lambda: max(utilization(s) for s in (1, 2, 3)) < 1.0, 10.0,
@@ -180,6 +184,7 @@ def attack(ros, fleet_key, mode, role=None, namespace=None, tmp_path=None, sourc
                                          round_trip_ms(rec, t_start, t_end)),
         'failed': len(failed(rec, t_base)),
         'most utilization a server reported': round(max(busy), 3),
+        'share of a core each server got meanwhile': [round(g, 3) for g in got],
         'flags of robot 2 naming the forged choice': sum(
             1 for r in rec.of(rec.flags, 2, t_start) if r.msg.reason == 'forged'),
         'warnings naming the attacker': sum(1 for r in rec.of(rec.logs, None, t_start)
@@ -216,7 +221,9 @@ def test_a_robot_flooding_every_server_takes_only_its_share_of_their_queues(
     their names at the master, which the ``results`` and ``announce`` attackers take and
     leave.) The servers' memory peaks at 146-150 MiB here while they work at 1.3x their
     capacity, at the edge of a Pi's 150 (test_exhaustion floods one server: under 100),
-    so 180 is its bound."""
+    so 180 is its bound. The share of a core each server got is printed: a quota caps it,
+    and a host busy with other work may give less (one run had a robot's task answered
+    busy, 2.05 s of work ahead of it against its 2 s deadline, and sent nowhere else)."""
     attack(ros, keyed_fleet, 'flood', role='robot', tmp_path=tmp_path, source='robot 9',
            reported=(1.0, float('inf')), kept=0.5, name='robot9', most_mib=180,
            server_cpu=0.2)
