@@ -124,8 +124,10 @@ def test_when_every_candidate_was_tried_the_task_fails_at_its_timeout():
 
 
 def test_a_task_the_retry_budget_keeps_from_another_server_says_so_when_it_fails():
-    budget = RetryBudget(ratio=0.1, window=10.0, reserve=0, clock=Clock())
-    assert all(budget.spend(stranded=3) for _ in range(3))   # a server failed earlier
+    budget = RetryBudget(ratio=0.1, window=10.0, reserve=2, clock=Clock())
+    for _ in range(9):
+        budget.sent()
+    assert all(budget.spend() for _ in range(3))             # tasks were late earlier
     w = World(candidates=(3, 1), timeout=2.0, first=0.5, budget=budget)
     w.flow.send_next('s1')
     for _ in range(30):
@@ -134,7 +136,7 @@ def test_a_task_the_retry_budget_keeps_from_another_server_says_so_when_it_fails
     (outcome,) = w.reports
     assert [server for _, server in w.published] == [3]
     assert outcome.error.endswith('(1 attempts: servers 3; not sent again: the retry budget '
-                                  '(10 % of tasks + 0 per 10 s) is spent)'), outcome.error
+                                  '(10 % of tasks + 2 per 10 s) is spent)'), outcome.error
     assert w.flow.unfunded == 1
 
 
@@ -348,4 +350,44 @@ def test_every_task_out_on_a_server_that_stops_goes_elsewhere_past_the_fixed_res
     assert (w.flow.resent, w.flow.unfunded, len(w.flow)) == (5, 0, 5)
     for task in range(6, 11):
         assert w.answer(task, 1).status == 'ended'
+    assert not any(r.ok is False for r in w.reports)
+
+
+def test_re_sends_of_tasks_stranded_on_a_stopped_server_leave_the_budget_to_others():
+    # A fault test failed so: tasks stranded on a server that had stopped hearing them were
+    # re-sent from the budget's window, and a task late once on the next server 2 s later
+    # found it spent and failed.
+    budget = RetryBudget(ratio=0.1, window=10.0, reserve=2, clock=Clock())
+    w = World(candidates=(3, 1, 2), timeout=2.0, first=1.0, budget=budget)
+    budget._clock = w.clock
+    for task in range(1, 11):                      # 2 s at 5 tasks/s; server 3 answers
+        w.flow.send_next('s%d' % task)
+        w.clock.now += 0.05
+        w.answer(task, 3)
+        w.clock.now += 0.15
+
+    def answer_re_sends():                          # server 1 answers at once
+        for (_, task, _), server in w.published:
+            if server == 1 and task in range(11, 21) and task not in answered:
+                answered.add(task)
+                w.answer(task, 1)
+    answered = set()
+    for task in range(11, 21):                     # server 3 stopped: 10 tasks stranded
+        w.flow.send_next('s%d' % task)
+        w.clock.now += 0.2
+        w.flow.tick()
+        answer_re_sends()
+    w.candidates = [1, 2]                          # it is left
+    w.clock.now += 1.0
+    w.flow.tick()
+    answer_re_sends()
+    assert (w.flow.resent, w.flow.unfunded, len(answered)) == (10, 0, 10)
+    for task in range(21, 26):                     # server 1 is slow once
+        w.flow.send_next('s%d' % task)
+        if task != 21:
+            w.answer(task, 1)
+        w.clock.now += 0.2
+        w.flow.tick()
+    assert [s for (_, task, _), s in w.published if task == 21] == [1, 2]
+    assert (w.flow.resent, w.flow.unfunded) == (11, 0)
     assert not any(r.ok is False for r in w.reports)

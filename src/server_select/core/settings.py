@@ -127,8 +127,9 @@ PARAMS = {
                           'the round trip + work of the server it goes to; one that server '
                           'cannot start in time is refused busy (0: the task timeout)'),
     'retry_budget': Param(0.1, parse_non_negative, 're-sends and hedges: at most this share '
-                          'of the tasks sent in the last 10 s, plus 2 or the tasks out on a '
-                          'server that stopped answering (0: no limit)'),
+                          'of the tasks sent in the last 10 s, plus 2; a task stranded on a '
+                          'server that stopped answering goes elsewhere without it '
+                          '(0: no limit)'),
     'max_image_pixels': Param(MAX_IMAGE_PIXELS, parse_positive_int, 'larger frames are '
                               'refused (a raw one from its length, unread); 1920x1080 fits'),
     'image_topic': Param('', parse_text, 'camera frames from this sensor_msgs/Image or '

@@ -3,12 +3,14 @@
 Under overload a re-send or a hedge is one more task for servers that have no time to
 spare. As Finagle's ``RetryBudget`` and gRPC's retry throttling do, extra sends are paid
 from a budget: at most ``ratio`` of the tasks first sent in the last ``window`` s, plus a
-``reserve`` so that the tasks in flight when a server dies can always go elsewhere: 2, or
-as many as were sent to the dead server since it last answered, when more (a robot at 5
+``reserve`` of 2. A task stranded on a server that has stopped (more than ``reserve``
+attempts sent there since it last answered anything) goes elsewhere without drawing on it:
+none of those attempts is being worked on, so their re-sends add no work. A robot at 5
 tasks/s with 1 s attempt deadlines has 5 out on a server that stops, and a fixed 2 failed
-the last of them). A hedge (a copy of a task nobody has failed) never draws on the
-reserve: in a scenario with a link outage, hedges had spent what the re-sends after it
-needed, and a task failed.
+the last of them; when those re-sends were paid from the window, a task late once on the
+next server 2 s later found it spent and failed. A hedge (a copy of a task nobody has
+failed) never draws on the reserve: in a scenario with a link outage, hedges had spent
+what the re-sends after it needed, and a task failed.
 """
 
 import collections
@@ -28,6 +30,7 @@ class RetryBudget(object):
         self._lock = threading.Lock()
         self._sent, self._spent = collections.deque(), collections.deque()
         self.refused = 0
+        self.stranded = 0           # re-sends of tasks stranded on a stopped server (free)
 
     def _prune(self, now):
         for times in (self._sent, self._spent):
@@ -47,15 +50,17 @@ class RetryBudget(object):
         """Whether one extra send may go now (and it is counted when it may); ``reserve``
         False (a hedge): only within the ratio; ``stranded``: the attempts sent since it
         last answered anything to the server this task is re-sent from, which did not
-        answer it in time (the reserve covers them all: none of them is being worked on,
-        so their re-sends add no work; a server that answers late resets the count)."""
+        answer it in time (more than ``reserve``: the server has stopped, and the re-send
+        is free; a server that answers, even late, resets the count)."""
         if not self.ratio:
+            return True
+        if reserve and stranded > self.reserve:
+            self.stranded += 1
             return True
         with self._lock:
             now = self._clock()
             self._prune(now)
-            allowed = self.ratio * len(self._sent) + (max(self.reserve, stranded)
-                                                      if reserve else 0)
+            allowed = self.ratio * len(self._sent) + (self.reserve if reserve else 0)
             if len(self._spent) >= allowed:
                 self.refused += 1
                 return False
