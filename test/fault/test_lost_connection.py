@@ -47,6 +47,15 @@ def hearers(topic, node='/robot%d' % ROBOT, direction='o'):
     return set(c[1] for c in connections if c[4] == topic and c[2] == direction)
 
 
+def started(nodes):
+    """Whether each of ``nodes`` has started all it makes: its last topic, the master
+    watch's subscription to ``master_pid``, is made after the node's own start (which, under
+    load, can end after its first tasks were answered)."""
+    pubs, subs, _ = rosgraph.Master(rospy.get_name()).getSystemState()
+    listeners = next((ns for topic, ns in subs if topic == '/' + names.MASTER_PID_TOPIC), [])
+    return set(nodes) <= set(listeners)
+
+
 def heard_again(node, topic, cut, connected=10.0, hears=None):
     """Once ``node`` hears robot ROBOT's ``topic``, ``cut()`` its connections (returns how
     many); then ``(how many, whether the robot saw them drop, seconds until ``node`` heard
@@ -95,6 +104,9 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
         node = '/server%d' % server
         topic = '/' + (names.server_topic(server, 'data') if profile == 'fleet' else 'data')
         pids = [fleet.pid(n) for n in ('/robot%d' % ROBOT, node)]
+        # counted once both have made every topic (before: once in 3 runs under load, the
+        # robot's master watch subscribed after this count: 12 -> 13)
+        assert wait_until(lambda: started(['/robot%d' % ROBOT, node]), 20.0)
         epolls_before = [epolls(pid) for pid in pids]
         # this node records the server's task topic too, as `rosbag record` would: the
         # robot must still see that the server itself does not hear it (before: a
