@@ -128,3 +128,4 @@ def test_the_loopback_demo_benchmark_counts_switches_and_work_reports(tmp_path):
     # the robots send sort tasks from the start: some server did some and reported them
     assert any(finite(w) and w > 0 for w in run['work_ms'].values()), run['work_ms']
     assert 'switches a minute per robot' in proc.stdout
+    assert run['settled_per_min'] == [] and 'settled (from 15 s)' in proc.stdout  # 15 s: none

@@ -34,3 +34,14 @@ def test_the_simulated_loopback_demo_reports_work_as_varied_as_the_real_one(fitt
 
 def test_without_the_shared_noise_the_reports_vary_far_less_than_measured(fitted):
     assert simulated(with_shared(Model.load(), 0.0)) < 0.5 * fitted['measured_spread']
+
+
+def test_the_demo_s_settled_switches_count_what_the_simulator_measures():
+    # the simulator's loopback demo measures from 15 s; the demo's robots move most as they
+    # start (5 of 7 moves in one run), which calibration must not compare with nothing
+    from server_select.bench.loopback_demo import settle_time, settled
+    assert settle_time() == 15.0
+    moves = [(1, 2, 'why', 1.0), (1, 3, 'why', 4.0), (1, 2, 'why', 15.0), (2, 1, 'why', 80.0),
+             (2, 3, 'why', 14.9)]
+    assert settled(moves, [1, 2, 3], 90.0) == [0.8, 0.8, 0.0]      # 1 move in 75 s
+    assert settled(moves, [1, 2], 15.0) == []

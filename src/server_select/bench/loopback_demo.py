@@ -1,9 +1,12 @@
 """The fleet demo on one host, measured: 3 identical servers and 2 robots under one
 roscore (``demo.launch profile:=fleet``), ``--runs`` times. Per run: switches a minute
-per robot (the demo's own summary), the margin each move's reason gives, and the work
-per sort task each server reports to an observer's probes (robot 0, 2 a second): its
-spread from answer to answer is the noise of the work term on a shared CPU, which the
-simulator's ``shared_sigma`` is fitted to (``python3 -m server_select.sim.model --fit``).
+per robot over the whole run (the demo's own summary) and once settled (the moves the
+robots' rankings show from ``measure_from`` of ``config/sim/loopback.yaml`` on, the part
+the simulator measures: what calibration compares), the margin each move's reason gives,
+and the work per sort task each server reports to an observer's probes (robot 0, 2 a
+second): its spread from answer to answer is the noise of the work term on a shared CPU,
+which the simulator's ``shared_sigma`` is fitted to (``python3 -m server_select.sim.model
+--fit``).
 
 ``python3 -m server_select.bench.loopback_demo --runs 3 --seconds 90`` writes
 ``loopback_demo.json`` and prints a line per run and the median (min-max) over runs.
@@ -13,6 +16,7 @@ import json
 import math
 import os
 import re
+import statistics
 import subprocess
 import sys
 import threading
@@ -48,7 +52,8 @@ class Observer(object):
         self.rospy, self.servers = rospy, servers
         self.lock = threading.Lock()
         self.selected = {}      # robot -> server its tasks go to now
-        self.moves = []         # (robot, server, reason)
+        self.first = {}         # robot -> when its first ranking came (time.monotonic)
+        self.moves = []         # (robot, server, reason, s since its first ranking)
         self.work = dict((s, []) for s in servers)   # server -> reported sort work, s
         self.sub = rospy.Subscriber('/' + names.RANKINGS_TOPIC, RobotRanking, self.on_ranking,
                                     queue_size=100)
@@ -58,9 +63,10 @@ class Observer(object):
 
     def on_ranking(self, msg):
         with self.lock:
+            since = time.monotonic() - self.first.setdefault(msg.robot_id, time.monotonic())
             before = self.selected.get(msg.robot_id)
             if msg.selected and before is not None and msg.selected != before:
-                self.moves.append((msg.robot_id, msg.selected, msg.reason))
+                self.moves.append((msg.robot_id, msg.selected, msg.reason, since))
             if msg.selected:
                 self.selected[msg.robot_id] = msg.selected
 
@@ -85,6 +91,25 @@ class Observer(object):
         self.thread.join(5.0)
 
 
+def settle_time():
+    """When the simulator's loopback demo starts to measure (s): what is before it is the
+    robots' start, which the calibration leaves out on both sides."""
+    from server_select.ros.paths import package_file
+    from server_select.sim.run import measured_window
+    from server_select.testbed.scenario import Scenario
+    return measured_window(Scenario.load(package_file('config', 'sim', 'loopback.yaml')))[0]
+
+
+def settled(moves, robots, seconds, settle=None):
+    """Switches a minute of each of ``robots`` from ``settle`` s after its first ranking
+    to the end of a run of ``seconds`` (``moves``: the Observer's; [] for a shorter run)."""
+    settle = settle_time() if settle is None else settle
+    if seconds <= settle:
+        return []
+    return [60.0 * sum(1 for r, _, _, since in moves if r == robot and since >= settle)
+            / (seconds - settle) for robot in robots]
+
+
 def run_once(out, index, seconds, servers=3, robots=2):
     """One demo run of ``seconds``: its figures (a dict)."""
     summary_path = os.path.join(out, 'summary_%d.json' % index)
@@ -105,10 +130,12 @@ def run_once(out, index, seconds, servers=3, robots=2):
     # a robot the report never heard (0 tasks) would count as 0 switches: left out, named
     per_minute = [60.0 * r['switches'] / seconds for r in summary if r['tasks']]
     unheard = [r['robot'] for r in summary if not r['tasks']]
-    margins = [float(m.group(1)) for _, _, why in observer.moves
+    margins = [float(m.group(1)) for _, _, why, _ in observer.moves
                for m in [MARGIN.search(why)] if m]
     spreads = dict((s, log_spread(w)) for s, w in observer.work.items())
     return {'switches_per_min': per_minute, 'moves': observer.moves, 'margins_ms': margins,
+            'settled_per_min': settled(observer.moves, [r['robot'] for r in summary
+                                                        if r['tasks']], seconds),
             'work_ms': dict((s, 1e3 * sorted(w)[len(w) // 2] if w else None)
                             for s, w in observer.work.items()),
             'work_sigma': spreads, 'tasks': sum(r['tasks'] for r in summary),
@@ -130,9 +157,10 @@ def main(argv=None):
             run = run_once(out, index, args.seconds)
             runs.append(run)
             sigmas = [v for v in run['work_sigma'].values() if v is not None]
-            print('run %d: switches a minute per robot %s; %d moves, least margin %s ms; '
-                  'work sigma per server %s; %d tasks, %d failed' % (
+            print('run %d: switches a minute per robot %s (settled %s); %d moves, least margin '
+                  '%s ms; work sigma per server %s; %d tasks, %d failed' % (
                       index + 1, ' '.join('%.1f' % v for v in run['switches_per_min']),
+                      ' '.join('%.1f' % v for v in run['settled_per_min']),
                       len(run['moves']), '%.3g' % min(run['margins_ms'])
                       if run['margins_ms'] else '-',
                       ' '.join('%.3f' % v for v in sigmas), run['tasks'], run['failed']))
@@ -141,10 +169,14 @@ def main(argv=None):
                       % ', '.join(map(str, run['unheard'])))
             sys.stdout.flush()
     per_minute = [v for r in runs for v in r['switches_per_min']]
+    settled_runs = [statistics.mean(r['settled_per_min']) for r in runs if r['settled_per_min']]
     sigmas = [v for r in runs for v in r['work_sigma'].values() if v is not None]
-    print('switches a minute per robot: %s; work sigma: %s; moves with a margin <= 0: %d' % (
-        median_range(per_minute, '%.2f'), median_range(sigmas, '%.3f') if sigmas else '-',
-        sum(1 for r in runs for m in r['margins_ms'] if m <= 0)))
+    print('switches a minute per robot: %s; settled (from %g s), mean over robots per run: %s; '
+          'work sigma: %s; moves with a margin <= 0: %d' % (
+              median_range(per_minute, '%.2f'), settle_time(),
+              median_range(settled_runs, '%.2f') if settled_runs else '-',
+              median_range(sigmas, '%.3f') if sigmas else '-',
+              sum(1 for r in runs for m in r['margins_ms'] if m <= 0)))
     cli.write(out, 'loopback_demo.json', {'runs': runs, 'seconds': args.seconds,
                                           'time': time.time()})
     return 0
