@@ -4,7 +4,7 @@ import statistics
 
 import pytest
 
-from server_select.core.util.stats import mean_error, median_error
+from server_select.core.util.stats import mean_error, median_deviation, median_error
 
 
 def test_mean_error_is_statistics_mean_and_stdev_over_the_root_of_n_in_floats():
@@ -34,3 +34,9 @@ def test_median_error_is_the_median_with_an_error_from_the_absolute_deviations()
     assert abs(median_error(spoiled)[0] - statistics.median(values[:9])) < 2.0
     assert median_error(spoiled)[1] < mean_error(spoiled)[1] / 10
     assert median_error([3.0]) == (3.0, 0.0)
+
+
+def test_median_deviation_is_the_median_over_series_of_each_one_s_spread():
+    assert median_deviation([[1.0, 2.0, 3.0, 100.0], [5.0, 5.0, 5.0], [0.0, 4.0, 8.0],
+                             [7.0, 9.0]]) == 1.0      # 1, 0 and 4 (too short: left out)
+    assert median_deviation([[1.0, 2.0]]) is None

@@ -45,3 +45,12 @@ def test_the_demo_s_settled_switches_count_what_the_simulator_measures():
              (2, 3, 'why', 14.9)]
     assert settled(moves, [1, 2, 3], 90.0) == [0.8, 0.8, 0.0]      # 1 move in 75 s
     assert settled(moves, [1, 2], 15.0) == []
+
+
+def test_the_simulated_loopback_demo_s_probe_round_trips_stray_as_the_real_ones():
+    # fitted: config/sim/loopback.yaml's link jitter; measured: config/sim/testbed.yaml
+    from server_select.sim.calibration import _loopback
+    with open(package_file('config', 'sim', 'testbed.yaml')) as stream:
+        measured = yaml.safe_load(stream)['loopback']['loopback']['fleet']['probe_mad'][0]
+    _, _, _, figures = _loopback(('loopback', 'fleet', 0, (None, None, None)))
+    assert figures['fleet']['probe_mad'] == pytest.approx(measured, rel=0.10)

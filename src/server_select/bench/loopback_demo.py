@@ -3,6 +3,8 @@ roscore (``demo.launch profile:=fleet``), ``--runs`` times. Per run: switches a 
 per robot over the whole run (the demo's own summary) and once settled (the moves the
 robots' rankings show from ``measure_from`` of ``config/sim/loopback.yaml`` on, the part
 the simulator measures: what calibration compares), the margin each move's reason gives,
+the spread of the robots' probe round trips (the median over robot-server pairs of their
+median absolute deviation, which ``config/sim/loopback.yaml``'s link jitter is fitted to),
 and the work per sort task each server reports to an observer's probes (robot 0, 2 a
 second): its spread from answer to answer is the noise of the work term on a shared CPU,
 which the simulator's ``shared_sigma`` is fitted to (``python3 -m server_select.sim.model
@@ -26,6 +28,7 @@ from server_select.bench import cli
 from server_select.bench.harness import Roscore
 from server_select.core.config import names
 from server_select.core.util.procs import stop_group
+from server_select.core.util.stats import median_deviation
 from server_select.core.util.tables import median_range
 
 MARGIN = re.compile(r'faster than \d+ by (-?[0-9.e+-]+) ms')
@@ -48,15 +51,18 @@ class Observer(object):
 
     def __init__(self, servers):
         import rospy
-        from server_select.msg import RobotRanking
+        from server_select.msg import LatencySamples, RobotRanking
         self.rospy, self.servers = rospy, servers
         self.lock = threading.Lock()
         self.selected = {}      # robot -> server its tasks go to now
         self.first = {}         # robot -> when its first ranking came (time.monotonic)
         self.moves = []         # (robot, server, reason, s since its first ranking)
         self.work = dict((s, []) for s in servers)   # server -> reported sort work, s
-        self.sub = rospy.Subscriber('/' + names.RANKINGS_TOPIC, RobotRanking, self.on_ranking,
-                                    queue_size=100)
+        self.rtts = {}          # (robot, server) -> the robot's probe round trips, s
+        self.subs = [rospy.Subscriber('/' + names.RANKINGS_TOPIC, RobotRanking,
+                                      self.on_ranking, queue_size=100),
+                     rospy.Subscriber('/' + names.SAMPLES_TOPIC, LatencySamples,
+                                      self.on_samples, queue_size=100)]
         self.stopped = threading.Event()
         self.thread = threading.Thread(target=self.probe_loop, daemon=True)
         self.thread.start()
@@ -69,6 +75,12 @@ class Observer(object):
                 self.moves.append((msg.robot_id, msg.selected, msg.reason, since))
             if msg.selected:
                 self.selected[msg.robot_id] = msg.selected
+
+    def on_samples(self, msg):
+        with self.lock:
+            for server, ok, rtt in zip(msg.server_id, msg.ok, msg.rtt):
+                if ok:
+                    self.rtts.setdefault((msg.robot_id, server), []).append(rtt)
 
     def probe_loop(self):
         from server_select.srv import LatencyProbe, LatencyProbeRequest
@@ -87,8 +99,17 @@ class Observer(object):
 
     def close(self):
         self.stopped.set()
-        self.sub.unregister()
+        for sub in self.subs:
+            sub.unregister()
         self.thread.join(5.0)
+
+
+def probe_spread(series):
+    """How far a probe's round trip strays (ms; None: too few): the median over robot-server
+    pairs of their round trips' (``series``, s) median absolute deviation, the spread the
+    simulator's loopback link jitter is fitted to (``sim.calibration``'s ``probe_mad``)."""
+    deviation = median_deviation(series)
+    return None if deviation is None else 1e3 * deviation
 
 
 def settle_time():
@@ -136,6 +157,7 @@ def run_once(out, index, seconds, servers=3, robots=2):
     return {'switches_per_min': per_minute, 'moves': observer.moves, 'margins_ms': margins,
             'settled_per_min': settled(observer.moves, [r['robot'] for r in summary
                                                         if r['tasks']], seconds),
+            'probe_mad_ms': probe_spread(observer.rtts.values()),
             'work_ms': dict((s, 1e3 * sorted(w)[len(w) // 2] if w else None)
                             for s, w in observer.work.items()),
             'work_sigma': spreads, 'tasks': sum(r['tasks'] for r in summary),
@@ -158,11 +180,13 @@ def main(argv=None):
             runs.append(run)
             sigmas = [v for v in run['work_sigma'].values() if v is not None]
             print('run %d: switches a minute per robot %s (settled %s); %d moves, least margin '
-                  '%s ms; work sigma per server %s; %d tasks, %d failed' % (
+                  '%s ms; probe round trips\' spread %s ms; work sigma per server %s; %d '
+                  'tasks, %d failed' % (
                       index + 1, ' '.join('%.1f' % v for v in run['switches_per_min']),
                       ' '.join('%.1f' % v for v in run['settled_per_min']),
                       len(run['moves']), '%.3g' % min(run['margins_ms'])
-                      if run['margins_ms'] else '-',
+                      if run['margins_ms'] else '-', '%.3f' % run['probe_mad_ms']
+                      if run['probe_mad_ms'] is not None else '-',
                       ' '.join('%.3f' % v for v in sigmas), run['tasks'], run['failed']))
             if run['unheard']:
                 print('  the report heard no task of robot %s: left out of the switches'
@@ -171,10 +195,12 @@ def main(argv=None):
     per_minute = [v for r in runs for v in r['switches_per_min']]
     settled_runs = [statistics.mean(r['settled_per_min']) for r in runs if r['settled_per_min']]
     sigmas = [v for r in runs for v in r['work_sigma'].values() if v is not None]
+    mads = [r['probe_mad_ms'] for r in runs if r['probe_mad_ms'] is not None]
     print('switches a minute per robot: %s; settled (from %g s), mean over robots per run: %s; '
-          'work sigma: %s; moves with a margin <= 0: %d' % (
+          'probe round trips\' spread: %s ms; work sigma: %s; moves with a margin <= 0: %d' % (
               median_range(per_minute, '%.2f'), settle_time(),
               median_range(settled_runs, '%.2f') if settled_runs else '-',
+              median_range(mads, '%.3f') if mads else '-',
               median_range(sigmas, '%.3f') if sigmas else '-',
               sum(1 for r in runs for m in r['margins_ms'] if m <= 0)))
     cli.write(out, 'loopback_demo.json', {'runs': runs, 'seconds': args.seconds,

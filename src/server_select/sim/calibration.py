@@ -5,10 +5,11 @@ Network scenarios run as the testbed ran them: every league variant side by side
 shared servers (``together``); capacity cases as the league runs them (each variant
 alone: mean, goodput share, switches a minute per robot and the share of the servers'
 work a robot still wanted); the loopback demo (``config/sim/loopback.yaml``: switches a
-minute per robot among identical servers on one host). Targets: each simulated median
-within 10 % of the testbed's or inside the testbed's min-max, and every ordering of two
-variants that the testbed shows beyond its spread (their min-max ranges apart) kept by
-the simulator's medians. ``--hop-ms``, ``--probe-ms`` and ``--cpu-factor`` try
+minute per robot among identical servers on one host once settled, and how far a probe's
+round trip strays there, ``probe_mad``: the median absolute deviation, ms). Targets: each
+simulated median within 10 % of the testbed's or inside the testbed's min-max, and every
+ordering of two variants that the testbed shows beyond its spread (their min-max ranges
+apart) kept by the simulator's medians. ``--hop-ms``, ``--probe-ms`` and ``--cpu-factor`` try
 other model constants (``config/sim/model.yaml`` keeps the chosen ones).
 """
 
@@ -21,6 +22,7 @@ import sys
 
 import yaml
 
+from server_select.bench.loopback_demo import probe_spread
 from server_select.core.util.tables import markdown_table
 from server_select.ros.paths import package_file
 from server_select.sim import cells, league
@@ -32,7 +34,7 @@ from server_select.testbed.scenario import Scenario
 
 TARGET = 0.10
 PARTS = ('network', 'capacity', 'loopback')
-FIGURES = ('mean', 'share', 'switches', 'wanted')
+FIGURES = ('mean', 'share', 'switches', 'wanted', 'probe_mad')
 SIDE_BY_SIDE = league.NETWORK_VARIANTS      # the testbed's league, less its old rule
 
 
@@ -57,7 +59,9 @@ def _loopback(job):
     _, variant, seed, constants = job
     scenario = Scenario.load(package_file('config', 'sim', 'loopback.yaml'))
     sim = simulate(scenario, _model(constants), seed, [variant])
-    return ('loopback', 'loopback', seed, {variant: {'switches': figures(sim, variant).switches}})
+    spread = probe_spread(r for robot in sim.robots for r in robot.rtts.values())
+    return ('loopback', 'loopback', seed, {variant: {
+        'switches': figures(sim, variant).switches, 'probe_mad': spread}})
 
 
 @functools.lru_cache(maxsize=None)

@@ -4,6 +4,7 @@ robot's transport over the modelled network (probes, tasks and results as transf
 TCP's stalled connections renewed as the node renews them) and its wake-ups, as the
 node's threads are (one for probe rounds, one per task stream)."""
 
+import collections
 import functools
 
 from server_select.core.flow.task_flow import ENDED
@@ -12,6 +13,8 @@ from server_select.core.robot.world import Events, Transport
 from server_select.sim.events import Wakeup
 from server_select.sim.oracle import OracleFlags
 from server_select.sim.tasks import PROBE_BYTES, TaskKind
+
+KEPT_RTTS = 256          # round trips kept per server (90 s of the loopback demo's probes)
 
 
 class SimRobot(Transport, Events):
@@ -35,6 +38,8 @@ class SimRobot(Transport, Events):
         self._round = Wakeup(self.loop, self._probe_round)
         self._wakes = [Wakeup(self.loop, functools.partial(self._act, s)) for s in self.streams]
         self._to, self._from = {}, {}  # server -> connection for tasks, for results
+        # server -> its answered probes' round trips, the newest (the samples a node publishes)
+        self.rtts = collections.defaultdict(lambda: collections.deque(maxlen=KEPT_RTTS))
 
     def _random(self, purpose):
         """The run's seeded stream for the rule's draws, or a kind's tasks."""
@@ -81,6 +86,10 @@ class SimRobot(Transport, Events):
 
     def report(self, outcome):
         self.sim.report(self.id, outcome)
+
+    def sample(self, server, seq, rtt, error, wait, round_number):
+        if rtt is not None and not error:
+            self.rtts[server].append(rtt)
 
     # -- the transport: probes ------------------------------------------------------------
     def probe(self, server_id, seq, kinds, rates):

@@ -41,6 +41,18 @@ def median_error(values):
     return median, 1.2533 * 1.4826 * mad / math.sqrt(len(ordered))
 
 
+def median_deviation(series):
+    """The median over ``series`` (lists of numbers) of each one's median absolute
+    deviation from its median (None: no list of 3 or more): how far a value strays, robust
+    to a list's own level and to a few far ones."""
+    deviations = []
+    for values in series:
+        if len(values) >= 3:
+            middle = statistics.median(values)
+            deviations.append(statistics.median(abs(v - middle) for v in values))
+    return statistics.median(deviations) if deviations else None
+
+
 def summarize(values):
     """n, mean, sd, min, median, p95, p99, max of the finite ``values`` (``{'n': 0}``
     when there are none)."""
