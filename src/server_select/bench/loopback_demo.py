@@ -7,8 +7,8 @@ the spread of the robots' probe round trips (the median over robot-server pairs 
 median absolute deviation, which ``config/sim/loopback.yaml``'s link jitter is fitted to),
 and the work per sort task each server reports to an observer's probes (robot 0, 2 a
 second): its spread from answer to answer is the noise of the work term on a shared CPU,
-which the simulator's ``shared_sigma`` is fitted to (``python3 -m server_select.sim.model
---fit``).
+which the simulator's ``shared_ms`` is fitted to (``python3 -m server_select.sim.work_noise
+loopback_demo.json``).
 
 ``python3 -m server_select.bench.loopback_demo --runs 3 --seconds 90`` writes
 ``loopback_demo.json`` and prints a line per run and the median (min-max) over runs.

@@ -30,7 +30,6 @@ class RetryBudget(object):
         self._lock = threading.Lock()
         self._sent, self._spent = collections.deque(), collections.deque()
         self.refused = 0
-        self.stranded = 0           # re-sends of tasks stranded on a stopped server (free)
 
     def _prune(self, now):
         for times in (self._sent, self._spent):
@@ -55,7 +54,6 @@ class RetryBudget(object):
         if not self.ratio:
             return True
         if reserve and stranded > self.reserve:
-            self.stranded += 1
             return True
         with self._lock:
             now = self._clock()
