@@ -29,7 +29,7 @@ import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 
 from server_select.core.util.procs import wait_until
-from server_select.msg import SelectionFlag, SortResult, SortTask, TaskReport
+from server_select.msg import LatencySample, SelectionFlag, SortResult, SortTask, TaskReport
 from server_select.srv import LatencyProbe
 
 from support.record import Topics, until_answered
@@ -46,7 +46,9 @@ class BusyServerTest(unittest.TestCase):
         cls.sent = {}
         cls.topics = Topics({'results': ('/processed_data', SortResult),
                              'reports': ('/task_report', TaskReport),
-                             'diagnostics': ('/diagnostics', DiagnosticArray)},
+                             'diagnostics': ('/diagnostics', DiagnosticArray),
+                             'samples 1': ('/latency_R1S1', LatencySample),
+                             'samples 2': ('/latency_R1S2', LatencySample)},
                             tcp_nodelay=True)
         rospy.Subscriber('/data', SortTask, cls.on_task, queue_size=1000, tcp_nodelay=True)
         cls.flags = rospy.Publisher('/server_select_flag', SelectionFlag, queue_size=10)
@@ -62,11 +64,18 @@ class BusyServerTest(unittest.TestCase):
         return self.topics.received(key, test)
 
     def both_usable(self):
-        """Whether robot 1's latest status on /diagnostics has every server usable (a
-        server whose first probes went unanswered on a loaded host is not yet one: a busy
-        answer from server 1 then has nowhere to go)."""
-        statuses = [s for m in self.topics.messages('diagnostics') for s in m.status
-                    if s.name == 'robot1: selection']
+        """Whether robot 1's latest status on /diagnostics, made after it heard both servers
+        answer a probe, has every server usable (a server whose first probes went
+        unanswered on a loaded host is not yet one: a busy answer from server 1 then has
+        nowhere to go; and a status from before its first probe says nothing of it: once
+        in CI one said both usable, server 2's first probe then failed, and the robot's
+        first 3 tasks, answered busy, failed)."""
+        heard = [self.topics.received('samples %d' % s, lambda m: m.ok) for s in (1, 2)]
+        if not all(heard):
+            return False
+        since = max(answers[0].time for answers in heard)
+        statuses = [s for r in self.topics.received('diagnostics') if r.time > since
+                    for s in r.msg.status if s.name == 'robot1: selection']
         values = dict((v.key, v.value) for v in statuses[-1].values) if statuses else {}
         return values.get('servers not in use') == 'none'
 
