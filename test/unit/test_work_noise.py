@@ -38,7 +38,7 @@ def test_without_the_shared_noise_the_reports_vary_far_less_than_measured(fitted
 
 def test_the_demo_s_settled_switches_count_what_the_simulator_measures():
     # the simulator's loopback demo measures from 15 s; the demo's robots move most as they
-    # start (5 of 7 moves in one run), which calibration must not compare with nothing
+    # start (5 of 7 moves in one run): calibration leaves that out on both sides
     from server_select.bench.loopback_demo import settle_time, settled
     assert settle_time() == 15.0
     moves = [(1, 2, 'why', 1.0), (1, 3, 'why', 4.0), (1, 2, 'why', 15.0), (2, 1, 'why', 80.0),

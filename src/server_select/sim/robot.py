@@ -14,7 +14,7 @@ from server_select.sim.events import Wakeup
 from server_select.sim.oracle import OracleFlags
 from server_select.sim.tasks import PROBE_BYTES, TaskKind
 
-KEPT_RTTS = 256          # round trips kept per server (90 s of the loopback demo's probes)
+KEPT_RTTS = 256          # round trips kept per server (a minute of a contender's, at 4 Hz)
 
 
 class SimRobot(Transport, Events):
