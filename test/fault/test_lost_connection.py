@@ -24,6 +24,7 @@ import rospy
 from server_select.core.config import names
 from server_select.core.util.procs import epoll_descriptors as epolls, wait_until
 from server_select.msg import SortTask
+from server_select.ros.graph import subscribers
 from server_select.ros.routing import DEAF_GRACE
 
 from support.fleet import Fleet
@@ -51,9 +52,7 @@ def started(nodes):
     """Whether each of ``nodes`` has started all it makes: its last topic, the master
     watch's subscription to ``master_pid``, is made after the node's own start (which, under
     load, can end after its first tasks were answered)."""
-    pubs, subs, _ = rosgraph.Master(rospy.get_name()).getSystemState()
-    listeners = next((ns for topic, ns in subs if topic == '/' + names.MASTER_PID_TOPIC), [])
-    return set(nodes) <= set(listeners)
+    return set(nodes) <= subscribers('/' + names.MASTER_PID_TOPIC, rospy.get_name())
 
 
 def heard_again(node, topic, cut, connected=10.0, hears=None):

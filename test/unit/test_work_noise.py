@@ -43,8 +43,8 @@ def test_the_demo_s_settled_switches_count_what_the_simulator_measures():
     assert settle_time() == 15.0
     moves = [(1, 2, 'why', 1.0), (1, 3, 'why', 4.0), (1, 2, 'why', 15.0), (2, 1, 'why', 80.0),
              (2, 3, 'why', 14.9)]
-    assert settled(moves, [1, 2, 3], 90.0) == [0.8, 0.8, 0.0]      # 1 move in 75 s
-    assert settled(moves, [1, 2], 15.0) == []
+    assert settled(moves, [1, 2, 3], 90.0, 15.0) == [0.8, 0.8, 0.0]      # 1 move in 75 s
+    assert settled(moves, [1, 2], 15.0, 15.0) == []
 
 
 def test_the_simulated_loopback_demo_s_probe_round_trips_stray_as_the_real_ones():

@@ -121,18 +121,17 @@ def settle_time():
     return measured_window(Scenario.load(package_file('config', 'sim', 'loopback.yaml')))[0]
 
 
-def settled(moves, robots, seconds, settle=None):
+def settled(moves, robots, seconds, settle):
     """Switches a minute of each of ``robots`` from ``settle`` s after its first ranking
     to the end of a run of ``seconds`` (``moves``: the Observer's; [] for a shorter run)."""
-    settle = settle_time() if settle is None else settle
     if seconds <= settle:
         return []
     return [60.0 * sum(1 for r, _, _, since in moves if r == robot and since >= settle)
             / (seconds - settle) for robot in robots]
 
 
-def run_once(out, index, seconds, servers=3, robots=2):
-    """One demo run of ``seconds``: its figures (a dict)."""
+def run_once(out, index, seconds, settle, servers=3, robots=2):
+    """One demo run of ``seconds``: its figures (a dict; ``settle``: :func:`settle_time`)."""
     summary_path = os.path.join(out, 'summary_%d.json' % index)
     cmd = ['roslaunch', 'server_select', 'demo.launch', 'profile:=fleet', 'output:=log',
            'n_servers:=%d' % servers, 'n_robots:=%d' % robots, 'duration:=%g' % seconds,
@@ -156,7 +155,7 @@ def run_once(out, index, seconds, servers=3, robots=2):
     spreads = dict((s, log_spread(w)) for s, w in observer.work.items())
     return {'switches_per_min': per_minute, 'moves': observer.moves, 'margins_ms': margins,
             'settled_per_min': settled(observer.moves, [r['robot'] for r in summary
-                                                        if r['tasks']], seconds),
+                                                        if r['tasks']], seconds, settle),
             'probe_mad_ms': probe_spread(observer.rtts.values()),
             'work_ms': dict((s, 1e3 * sorted(w)[len(w) // 2] if w else None)
                             for s, w in observer.work.items()),
@@ -171,12 +170,12 @@ def main(argv=None):
     args = parser.parse_args(argv)
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
-    runs = []
+    runs, settle = [], settle_time()
     with Roscore(out):
         import rospy
         rospy.init_node('loopback_demo_bench', anonymous=True, disable_signals=True)
         for index in range(args.runs):
-            run = run_once(out, index, args.seconds)
+            run = run_once(out, index, args.seconds, settle)
             runs.append(run)
             sigmas = [v for v in run['work_sigma'].values() if v is not None]
             print('run %d: switches a minute per robot %s (settled %s); %d moves, least margin '
@@ -198,7 +197,7 @@ def main(argv=None):
     mads = [r['probe_mad_ms'] for r in runs if r['probe_mad_ms'] is not None]
     print('switches a minute per robot: %s; settled (from %g s), mean over robots per run: %s; '
           'probe round trips\' spread: %s ms; work sigma: %s; moves with a margin <= 0: %d' % (
-              median_range(per_minute, '%.2f'), settle_time(),
+              median_range(per_minute, '%.2f'), settle,
               median_range(settled_runs, '%.2f') if settled_runs else '-',
               median_range(mads, '%.3f') if mads else '-',
               median_range(sigmas, '%.3f') if sigmas else '-',
