@@ -45,8 +45,16 @@ def flags_of(run, robot):
 
 def test_step_change_moves_selection_within_window_plus_one_probe(runs):
     flags = flags_of(runs['select'], 1)
-    before = [f for f in flags if STEP_AT - 8.0 < f.t < STEP_AT]
-    assert before and all(f.server == 1 for f in before), before
+    # Before the step, robot 1 is on server 1 once its window holds no probe of the nodes'
+    # start: on a loaded host the first answers, given while the servers load what the
+    # robots' kinds need, took 43-45 ms over links of 4 and 12 ms, and once tipped a flag
+    # at 6.2 s to server 2 (means 49 and 24 ms).
+    settled = [f for f in flags if STEP_AT - WINDOW < f.t < STEP_AT]
+    early = [f for f in flags if f.t <= STEP_AT - WINDOW and f.server != 1]
+    print('\nrobot 1 before the step: %d flags on server 1 once settled; at the start, %d '
+          'elsewhere %s' % (len(settled), len(early), [(round(f.t, 1), f.server) for f in early]))
+    assert len(settled) >= WINDOW / PROBE_PERIOD - 1 and all(f.server == 1 for f in settled), \
+        settled
     moved = next(f for f in flags if f.t >= STEP_AT and f.server == 2)
     assert moved.t - STEP_AT <= WINDOW + PROBE_PERIOD, moved
     assert all(f.server == 2 for f in flags if f.t > moved.t)
