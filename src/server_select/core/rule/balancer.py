@@ -14,12 +14,11 @@ from server_select.core.load.demand import SendRate
 
 ProbeAnswer = collections.namedtuple('ProbeAnswer',
                                      'server rtt rif service workers at utilization '
-                                     'service_error backlog')
+                                     'service_error')
 ProbeAnswer.__doc__ = """One probe answer as a balancer keeps it: round trip (s), requests
 in flight (queued + in service), ``{kind: work s}``, workers, when it arrived, the
-share of the workers' time the other robots' tasks take, ``{kind: the standard error
-of the work}``, and the seconds until a worker is free for one more task, the other
-robots' tasks of every kind counted."""
+share of the workers' time the other robots' tasks take, and ``{kind: the standard error
+of the work}``."""
 
 
 class Order(list):
@@ -76,8 +75,7 @@ class Balancer(object):
                              dict(load.service) if load else {},
                              max(1, load.workers) if load else 1, self._clock(),
                              load.utilization if load else 0.0,
-                             dict(load.service_error or {}) if load else {},
-                             load.backlog if load else 0.0)
+                             dict(load.service_error or {}) if load else {})
         with self._lock:
             self.probes[server] = answer
             self._probed(answer)

@@ -2,9 +2,8 @@
 be answered soonest by, kept while nothing beats it beyond the noise.
 
 A server's estimate, from its probe answers of the last ``window`` s: the median round
-trip + the other robots' work ahead of it, of every kind (the backlog the server reports:
-seconds until a worker is free; + the robot's own tasks of its other kinds there,
-:meth:`_own_kinds`) + the work per task, times the tries a server asked for
+trip + the other robots' work in flight per worker (+ the robot's own tasks of its other
+kinds there, :meth:`_own_kinds`) + the work per task, times the tries a server asked for
 more than it can do needs; its noise the errors of these, or, when larger, how far its
 level strays between windows (:meth:`wander`). ``choose`` keeps the robot's server while
 it is within 3 errors of the best and not behind it for 4 windows (:meth:`_behind`); else
@@ -58,15 +57,16 @@ class LeastLatency(Balancer):
         self._parts = {}       # (server, kind) -> (newest answer, count, least work, parts)
 
     def _probed(self, answer):
+        others = max(0, answer.rif - self.attempts_out[answer.server])
         answers = self.answers[answer.server]
-        answers.append(answer)     # (in the order heard: a window is a suffix)
-        while answer.at - answers[0].at > self.window:   # out of every later window
+        answers.append((answer, others))     # (in the order heard: a window is a suffix)
+        while answer.at - answers[0][0].at > self.window:   # out of every later window
             answers.popleft()
         for kind, work in answer.service.items():
             self.least_work[kind] = min(work, self.least_work.get(kind, work))
         levels = self.levels[answer.server]
         if not levels or answer.at - levels[-1][0] >= self.window:
-            rtt = statistics.median(a.rtt for a in answers)
+            rtt = statistics.median(a.rtt for a, _ in answers)
             levels.append((answer.at, rtt, answer.service))
             self._wanders.pop(answer.server, None)
 
@@ -105,11 +105,11 @@ class LeastLatency(Balancer):
         window (None: none); ``rate``: the robot's ``kind`` tasks a second (:meth:`rate`).
         Its rate-free parts once per window of answers; one try where none is over capacity."""
         kept = self.answers.get(server, ())     # (in the order heard: the window is a suffix)
-        count = sum(1 for a in kept if now - a.at <= self.window)
+        count = sum(1 for a, _ in kept if now - a.at <= self.window)
         if not count:
             return None
         rate = self.rate(kind, now) if rate is None else rate
-        newest, least = kept[-1], self.least_work.get(kind)
+        newest, least = kept[-1][0], self.least_work.get(kind)
         parts = self._parts.get((server, kind))
         if parts is None or parts[0] is not newest or parts[1:3] != (count, least):
             parts = self._parts[(server, kind)] = (newest, count, least, self._rate_free(
@@ -137,20 +137,20 @@ class LeastLatency(Balancer):
 
     def _rate_free(self, server, kind, answers):
         """``(round trip, wait, work, workers, error, utilizations, most)`` of ``answers``."""
-        newest = answers[-1]
+        newest = answers[-1][0]
         # the newest report (a step shows at once); a kind not done there yet: what it takes
         # where nothing slows it (one task there tells). The error: the server's, of a median
         work = self._work(newest, kind)
         work_error = newest.service_error.get(kind, 0.0) if 'work_error' in self.mechanisms else 0.0
         workers = float(newest.workers)
-        rtts = [a.rtt for a in answers]
-        queued = [a.backlog for a in answers]
+        rtts = [a.rtt for a, _ in answers]
+        queued = [others * work / workers for _, others in answers]
         # robust: a late answer or two (a retransmission, a hang ending) must not hold the mean up
         rtt, rtt_error = (median_error if 'robust' in self.mechanisms else mean_error)(rtts)
         wait, wait_error = mean_error(queued)
         error = max(math.sqrt(rtt_error ** 2 + wait_error ** 2 + work_error ** 2),
                     self.wander(server, kind))
-        utilizations = [a.utilization for a in answers]
+        utilizations = [a.utilization for a, _ in answers]
         return rtt, wait, work, workers, error, utilizations, max(utilizations)
 
     def choose(self, servers, kind=None):
