@@ -105,20 +105,20 @@ class FleetTest(unittest.TestCase):
             return
         listeners = {}
         for robot, topic in zip(self.robots, own):
-            got, subs = [], []
+            got, handles = [], []
 
             def listen():
                 # latched: at once; but a subscriber whose connection is lost as it is made
                 # never connects again (rospy; once in CI under load: no flag in 20 s), so
                 # it is made anew every 5 s (its old topic closed first: a second handle
                 # would share the unconnected one)
-                for sub in subs:
-                    sub.unregister()
-                subs[:] = [rospy.Subscriber(topic, SelectionFlag, got.append)]
+                for handle in handles:
+                    handle.unregister()
+                handles[:] = [rospy.Subscriber(topic, SelectionFlag, got.append)]
             self.assertTrue(until_answered(listen, lambda: got, timeout=20.0, period=5.0),
                             'no flag on %s' % topic)
-            for sub in subs:
-                sub.unregister()
+            for handle in handles:
+                handle.unregister()
             self.assertEqual(set(f.robot_id for f in got), {robot}, topic)
             pubs, subs, _ = master.getSystemState()
             self.assertEqual(dict(pubs).get(topic), ['/manager'], topic)

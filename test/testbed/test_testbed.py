@@ -51,8 +51,8 @@ def test_step_change_moves_selection_within_window_plus_one_probe(runs):
     # at 6.2 s to server 2 (means 49 and 24 ms).
     settled = [f for f in flags if STEP_AT - WINDOW < f.t < STEP_AT]
     early = [f for f in flags if f.t <= STEP_AT - WINDOW and f.server != 1]
-    print('\nrobot 1 before the step: %d flags on server 1 once settled; at the start, %d '
-          'elsewhere %s' % (len(settled), len(early), [(round(f.t, 1), f.server) for f in early]))
+    print('\nrobot 1 before the step: %d flags in the last %g s; at the start, %d elsewhere '
+          '%s' % (len(settled), WINDOW, len(early), [(round(f.t, 1), f.server) for f in early]))
     assert len(settled) >= WINDOW / PROBE_PERIOD - 1 and all(f.server == 1 for f in settled), \
         settled
     moved = next(f for f in flags if f.t >= STEP_AT and f.server == 2)
