@@ -11,8 +11,8 @@ from server_select.core.config import names
 from server_select.core.util import interrupts
 from server_select.core.config.params import ParamError
 from server_select.core.settings import PARAMS
-from server_select.ros import (bounded_read, diagnostics, handshake, key_reload, launch_args,
-                               launch_run, params_in_force, seal, xmlrpc_bound)
+from server_select.ros import (bounded_read, diagnostics, given_up, handshake, key_reload,
+                               launch_args, launch_run, params_in_force, seal, xmlrpc_bound)
 from server_select.ros.master_watch import MasterWatch
 from server_select.ros.node import _LIVE, end_parent_launch, fleet, param, quiet_logging
 
@@ -46,6 +46,7 @@ def run(node_name, node_class, argv=None):
     bounded_read.install()      # every connection header this node reads is bounded,
     handshake.install()         # and an inbound one read off the accept thread, in time
     xmlrpc_bound.install()      # XML-RPC connections: a bounded number, each in time
+    given_up.install()          # a subscriber connection rospy gives up on is closed
     # rospy's signal handler would deadlock on a master call of the starting node
     with interrupts.deferred():
         rospy.init_node(node_name, argv=argv, disable_signals=True)
