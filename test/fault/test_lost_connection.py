@@ -30,6 +30,11 @@ from server_select.ros.routing import DEAF_GRACE
 from support.fleet import Fleet
 from test_faults import STABLE, TASK_TIMEOUT, current_server, show, warm_up
 
+# s after a cut by which the robot has made a deaf connection anew: it sees the deafness at
+# a probe answer of that server (1 s apart at most, in either profile), and acts at the
+# first answer once DEAF_GRACE s of it have passed
+ROBOT_ACTS_BY = DEAF_GRACE + 2.0
+
 ROBOT = 1
 
 
@@ -134,8 +139,8 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
     assert destroyed >= 1 and dropped
     assert again, 'server %d never heard robot %d\'s tasks again' % (server, ROBOT)
     # the robot's line when it made the connection anew; none when rospy's own reconnection
-    # of the server's subscriber came first (before DEAF_GRACE, once in CI: after 4.2 s)
-    assert said or t_again < DEAF_GRACE, t_again
+    # of the server's subscriber came first (in CI: after 4.2 s, and once 5.35 s)
+    assert said or t_again < ROBOT_ACTS_BY, t_again
     assert (outcomes['never answered'], outcomes['duplicates']) == (0, 0), outcomes
     # before the renewals closed the old topic's poller, one more for each: robot 15 -> 17
     kept = all(a <= b for a, b in zip(epolls_after, epolls_before))
@@ -144,7 +149,7 @@ def test_a_server_whose_task_connection_was_destroyed_hears_the_robot_again(ros,
         show('the manager\'s connections to robot %d destroyed:' % ROBOT, [rankings])
         assert rankings['connections reset'] >= 1 and rankings['robot saw it drop']
         assert rankings['manager hears the robot again after s'] != 'never', rankings
-        assert rankings['line'] != 'none' or rankings['again'] < DEAF_GRACE, rankings
+        assert rankings['line'] != 'none' or rankings['again'] < ROBOT_ACTS_BY, rankings
         show('robot %d\'s connections to server %d reset:' % (ROBOT, results['server']),
              [results])
         assert results['connections reset'] >= 1 and results['robot saw it drop']
