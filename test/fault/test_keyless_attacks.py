@@ -220,13 +220,14 @@ def test_a_robot_flooding_every_server_takes_only_its_share_of_their_queues(
     second asked; 40-47 on this host) to servers held to 0.2 of a core each meanwhile
     (unheld, an idle host does them at 0.3 of its servers' capacity, a busy one beyond
     it: the flood must overload them, whatever the host). No task of the other robots
-    fails, and they go on at a third of their rate or more: the queue is shared, but the
-    servers' CPU is not (a sort's work holds the server's interpreter). Measured: 0.42-0.51
-    of their rate in 8 runs, idle host or beside the other tests (a robot keeps one task
-    out, and its task waits for a worker while flood sorts hold both; the longest round
-    trips, printed, are about 1 s; one worker per server, its quota's, gave 0.39-0.42).
-    (Before the share: 2 of the robots' tasks failed, 3.8 of 10 answered a second; in the
-    issue's run, robots at 2 a second fell to 1.0-1.6, all answered busy.) A server reporting a
+    fails, and they go on at 0.8 of their rate or more: the queue is shared, and while they
+    send, the flood holds one of a server's two workers at most, so their tasks start at
+    once beside its sorts (0.96-1.02 of their rate in 6 runs, 3 of them beside 4 busy
+    processes; longest round trips, printed, 0.15-0.39 s). (Before: with both workers held, their tasks waited up to 1 s for one,
+    and a robot keeps one task out: 0.42-0.51 of their rate in 8 runs; one worker per
+    server, its quota's, gave 0.39-0.42. Before the share: 2 of the robots' tasks failed,
+    3.8 of 10 answered a second; in the issue's run, robots at 2 a second fell to 1.0-1.6,
+    all answered busy.) A server reporting a
     utilization of 1 or more shows that the flood reached it, a warning naming robot 9
     that they said so. (First of the attacks: the flooder finds the probe services by
     their names at the master, which the ``results`` and ``announce`` attackers take and
@@ -236,7 +237,7 @@ def test_a_robot_flooding_every_server_takes_only_its_share_of_their_queues(
     and a host busy with other work may give less (one run had a robot's task answered
     busy, 2.05 s of work ahead of it against its 2 s deadline, and sent nowhere else)."""
     attack(ros, keyed_fleet, 'flood', role='robot', tmp_path=tmp_path, source='robot 9',
-           reported=(1.0, float('inf')), kept=1 / 3.0, name='robot9', most_mib=180,
+           reported=(1.0, float('inf')), kept=0.8, name='robot9', most_mib=180,
            server_cpu=0.2)
 
 

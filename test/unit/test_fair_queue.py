@@ -3,6 +3,7 @@ longest queue giving room to the others, the wait a task is admitted by, every t
 once."""
 
 import random
+import threading
 
 from hypothesis import given, settings, strategies as st
 
@@ -40,6 +41,47 @@ def test_a_robot_queued_behind_a_flood_is_served_at_the_next_turn():
     order = taken(q, 8)
     assert [item for item in order if item[0] == 'robot1'] == [('robot1', n) for n in range(3)]
     assert order.index(('robot1', 2)) <= 4, order     # FIFO: after all 50 of the flood
+
+
+def take_in_thread(q):
+    """A worker taking from ``q`` in a thread of its own; what it took (a list)."""
+    got = []
+    worker = threading.Thread(target=lambda: got.append(q.take()), daemon=True)
+    worker.start()
+    return worker, got
+
+
+def test_while_another_robot_sends_a_flood_holds_one_worker_of_two_and_alone_both():
+    q, _ = queue({'big': 0.2, 'small': 0.001}, workers=2)
+    assert q.offer('small', 'r0', owner=1) is None     # robot 1 sends here
+    q.done(q.take())
+    for n in range(4):
+        assert q.offer('big', ('flood', n), owner=9) is None
+    assert q.take().item == ('flood', 0)
+    worker, got = take_in_thread(q)
+    worker.join(0.3)
+    assert worker.is_alive() and got == []     # the flood's next waits: one worker is kept
+    assert q.offer('small', 'r1', owner=1) is None
+    worker.join(5.0)
+    assert [job.item for job in got] == ['r1']
+    q.done(got[0])
+    q._clock.now += 11.0                       # robot 1 silent past the horizon: alone
+    assert q.take().item == ('flood', 1)
+
+
+def test_a_flood_waiting_for_a_worker_takes_it_when_one_of_its_jobs_ends():
+    q, _ = queue({'big': 0.2, 'small': 0.001}, workers=2)
+    assert q.offer('small', 'r0', owner=1) is None
+    q.done(q.take())
+    for n in range(2):
+        assert q.offer('big', ('flood', n), owner=9) is None
+    first = q.take()
+    worker, got = take_in_thread(q)
+    worker.join(0.3)
+    assert worker.is_alive()
+    q.done(first, 0.2)
+    worker.join(5.0)
+    assert [job.item for job in got] == [('flood', 1)]
 
 
 def test_each_robot_waiting_gets_an_equal_share_of_the_work_whatever_its_tasks_sizes():

@@ -274,6 +274,19 @@ def test_the_utilization_is_the_others_tasks_at_their_rates_over_the_workers():
     assert q.load(excluding=2).utilization == pytest.approx(0.5 * 0.6 / 2)
 
 
+def test_others_send_while_another_robot_announces_a_rate_or_its_tasks_still_arrive():
+    demand = Demand(horizon=10.0, announce_age=3.0)
+    demand.arrived(None, 'sort', 0.0)
+    assert not demand.others(0.1, None)             # alone (a sender of no id too)
+    assert demand.others(0.1, 1)
+    demand.arrived(1, 'sort', 0.2)
+    assert demand.others(0.3, None)
+    demand.announce(2, [('image', 0.0)], 0.4)       # robot 2 announces nothing here
+    assert not demand.others(11.0, 1) and not demand.others(11.0, None)   # past the horizon
+    demand.announce(2, [('image', 4.0)], 11.0)
+    assert demand.others(11.5, 1) and not demand.others(14.5, 1)   # expired after 3 s
+
+
 def test_announced_rates_count_at_once_and_replace_the_announcers_arrivals():
     q, clock = queue_with(0.5)
     for t in (0.0, 2.0, 4.0):                    # robot 1 sent a frame every 2 s, robot 2

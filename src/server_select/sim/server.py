@@ -143,7 +143,9 @@ class SimServer(object):
                 self.loop.at(self.warm_until, self._warmed)
             return
         while self.idle and self.waiting:
-            job = self.queue.take()
+            job = self.queue.take(wait=False)
+            if job is None:     # a robot holding all workers but one, while others send
+                return
             self.waiting -= 1
             task, reply = job.item
             why = self.queue.stale(job)

@@ -135,6 +135,14 @@ class Demand(object):
                 rates[kind] = rates.get(kind, 0.0) + rate
         return rates
 
+    def others(self, now, owner):
+        """Whether a robot other than ``owner`` (None too) sends here now (it announces a
+        rate, or its tasks still arrive)."""
+        self._expire(now)
+        return any(other != owner and rates for other, (_, rates) in self._announced.items()) \
+            or any(other != owner and other not in self._announced
+                   for other, _ in self.arrivals.rates(now))
+
     def _drop(self, owner):
         entry = self._announced.pop(owner, None)
         if entry is not None:

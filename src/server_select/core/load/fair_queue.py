@@ -59,21 +59,24 @@ class FairQueue(object):
         self._count += 1
         self.bytes += job.size
 
-    def pop(self, cost):
-        """The next job by deficit round robin, ``cost(job)`` its seconds of work (None:
-        empty). The owner in turn takes jobs while its deficit covers them; one that cannot
-        gets a quantum (the largest next job's cost, so that every owner takes one within
-        a round) and waits for its next turn."""
-        if not self._count:
+    def pop(self, cost, allowed=None):
+        """The next job by deficit round robin, ``cost(job)`` its seconds of work, of an
+        owner that ``allowed(owner)`` (None: any) (None: no such job). The owner in turn
+        takes jobs while its deficit covers them; one that cannot gets a quantum (the
+        largest next job's cost, so that every owner takes one within a round) and waits
+        for its next turn; an owner not allowed is passed over, its deficit kept."""
+        owners = set(o for o in self._queues if allowed is None or allowed(o))
+        if not owners:
             return None
-        quantum = max(max(cost(jobs[0]), MIN_COST) for jobs in self._queues.values())
+        quantum = max(max(cost(self._queues[o][0]), MIN_COST) for o in owners)
         while True:
             owner, jobs = next(iter(self._queues.items()))
-            price = max(cost(jobs[0]), MIN_COST)
-            if self._deficit.get(owner, 0.0) >= price:
+            price = max(cost(jobs[0]), MIN_COST) if owner in owners else None
+            if price is not None and self._deficit.get(owner, 0.0) >= price:
                 self._deficit[owner] -= price
                 return self._remove(owner, jobs.popleft())
-            self._deficit[owner] = self._deficit.get(owner, 0.0) + quantum
+            if price is not None:
+                self._deficit[owner] = self._deficit.get(owner, 0.0) + quantum
             self._queues.move_to_end(owner)
 
     def room_for(self, owner, size, max_count, max_bytes=None):

@@ -1,32 +1,27 @@
 """A server's load: its bounded work queue, and what a robot makes of its reports (no rospy).
 
-A task's round trip is the network, the wait for a worker and the work itself. A probe,
-answered on its own thread, measures only the first; so every probe answer carries the
-server's :class:`Load` (tasks queued and in service, workers, the *backlog*: seconds a
-task sent now would wait for a worker, the *utilization*: the share of the workers' time
-the other robots' tasks take at the rates they announce, and the recent work per task of
-each kind), and a robot ranks servers by round trip + expected wait + work for the tasks it
-sends (C3's expected completion, NSDI '15; :mod:`server_select.core.load.board`).
-
-The backlog is what a task sent now waits for: what an attempt's deadline follows. It is
-also a poor forecast of the next task's wait: a server that does a frame in 0.7 s for two
-robots is idle half the time and 0.7 s behind the other half, so robots that ranked by it
-chased the phase of each other's frames. The utilization moves only when a robot comes,
-goes or changes its rate. It is what the robots *announce*: a load-aware robot's probe
-says the rate at which it sends tasks to that server now (its rate to the server its next
-task goes to, none to the others), so a robot that moves loads its new server in the
-others' eyes at its next probe, not after its tasks have arrived for a while (robots that
-all saw an idle server came up idle moved to it together). The tasks of a robot that
-announces nothing count at the rate they arrive (:mod:`server_select.core.load.demand`).
+A task's round trip is the network, the wait for a worker and the work itself; a probe,
+answered on its own thread, measures only the first. So every probe answer carries the
+server's :class:`Load` (tasks queued and in service, workers, the *backlog*: seconds a task
+sent now would wait for a worker, the *utilization*: the share of the workers' time the
+other robots' tasks take, and the recent work per task of each kind), and a robot ranks
+servers by round trip + expected wait + work (C3's expected completion, NSDI '15;
+:mod:`server_select.core.load.board`). The backlog is what an attempt's deadline follows,
+and a poor forecast of the next task's wait: robots that ranked by it chased the phase of
+each other's frames. The utilization moves only when a robot comes, goes or changes its
+rate: it is what robots *announce* (a load-aware robot's probe says its rate to the server
+its next task goes to, none to the others), so a robot that moves loads its new server in
+the others' eyes at its next probe; a robot that announces nothing counts at the rate its
+tasks arrive (:mod:`server_select.core.load.demand`).
 
 Server side, :class:`WorkQueue` holds the tasks waiting for the workers. A task carries
 its *deadline* (when its robot stops waiting): one that cannot be finished by then is
-refused at once (the robot hears "busy" and sends it elsewhere, or drops it for a newer
-frame) instead of waiting in the queue for an answer nobody wants; one whose deadline
-passes while it waits is shed when a worker takes it. The queue is shared fairly between
-the robots (:class:`~server_select.core.load.fair_queue.FairQueue`): a task waits behind
-about as much of each other robot's work as its own robot has queued, and one robot's
-flood of tasks takes no place another robot's task needs.
+refused at once as busy (its robot sends it elsewhere, or drops it for a newer frame); one
+whose deadline passes while it waits is shed when a worker takes it. The queue is shared
+fairly between the robots (:class:`~server_select.core.load.fair_queue.FairQueue`): a
+task waits behind about as much of each other robot's work as its own robot has queued,
+one robot's flood of tasks takes no place another robot's task needs, and while others
+send no robot holds every worker.
 """
 
 import collections
@@ -47,18 +42,16 @@ Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per t
 
 class WorkQueue(object):
     """Tasks waiting for ``workers`` workers, at most ``max_queue`` of them holding at most
-``max_bytes`` (None: any; a task alone in the queue is taken whatever its size)
-(thread-safe).
+    ``max_bytes`` (None: any; a task alone in the queue is taken whatever its size)
+    (thread-safe).
 
-    :meth:`offer` queues a task or says at once why not (full, or it cannot be done by its
-    deadline: busy); a task that a newer one of a robot holding less of the queue pushes
-    out is handed to ``on_pushed_out(job, why)`` (to be answered busy). Workers
-    :meth:`take` the next by the round robin of the robots (None once closed), ask
-    :meth:`stale` whether its deadline has passed meanwhile, and call :meth:`done` with the
-    seconds it took, which teach :class:`ServiceTimes`. :meth:`announce` hears what a
-    robot's probe says it sends here (:class:`~server_select.core.load.demand.Demand`: kept
-    ``announce_age`` s; a robot that announces nothing counts by its arrivals over
-    ``horizon`` s). Deadlines and times are those of ``clock``.
+    :meth:`offer` queues a task or says at once why not (full, or not done by its deadline:
+    busy); one pushed out by a newer task of a robot holding less of the queue goes to
+    ``on_pushed_out(job, why)`` (answered busy). Workers :meth:`take` the next by the
+    robots' round robin (None once closed), ask :meth:`stale` whether its deadline passed
+    meanwhile, and call :meth:`done` with the seconds it took (:class:`ServiceTimes`).
+    :meth:`announce` hears the rates a robot's probe says it sends here (:class:`Demand`:
+    kept ``announce_age`` s; else its arrivals over ``horizon`` s). Times are ``clock``'s.
     """
 
     def __init__(self, workers, max_queue, times=None, clock=time.monotonic, horizon=10.0,
@@ -67,16 +60,13 @@ class WorkQueue(object):
             raise ValueError('workers and max_queue must be >= 1, got %r, %r'
                              % (workers, max_queue))
         self.workers, self.max_queue = int(workers), int(max_queue)
-        self.max_bytes = max_bytes
-        self.on_pushed_out = on_pushed_out
+        self.max_bytes, self.on_pushed_out = max_bytes, on_pushed_out
         self.times = times or ServiceTimes(clock=clock)
         self.demand = Demand(horizon, announce_age)
-        self._clock = clock
-        self._cond = threading.Condition()
+        self._clock, self._cond = clock, threading.Condition()
         self._queue = FairQueue()
         self._shares = SenderShares()     # each robot's share of its kind's usual work
-        self._running = set()
-        self._closed = False
+        self._running, self._closed = set(), False
         self.refused = self.shed = self.finished = self.pushed_out = 0
 
     @property
@@ -109,10 +99,8 @@ class WorkQueue(object):
 
     def _work(self, kind, now):
         """Seconds of work per ``kind`` task (lock held): the recent median; while none is
-        known, as long as the longest-running task of the kind has taken so far. (A
-        server's first frames, which also load what the kind needs, were taken for no
-        work: every robot sent its frames to the first idle server, and gave them up
-        there together.)"""
+        known, as long as its longest-running task has taken so far (a server's first
+        frames, which load what the kind needs, once counted as none drew every robot)."""
         known = self.times.get(kind, None)
         if known is not None:
             return known
@@ -120,8 +108,7 @@ class WorkQueue(object):
 
     def offer(self, kind, item, deadline=None, owner=None, size=0):
         """Queue ``item`` (a task of ``kind`` wanted by ``deadline``, None: whenever, sent
-        by ``owner``, holding ``size`` bytes). Returns None when queued, else why it is
-        refused (it was not queued)."""
+        by ``owner``, holding ``size`` bytes): None when queued, else why it was refused."""
         with self._cond:
             now = self._clock()
             room = None if self._closed else self._queue.room_for(
@@ -171,23 +158,34 @@ class WorkQueue(object):
         return (self._left(self._running, now)
                 + self._queue.wait_work(owner, cost, work)) / self.workers
 
-    def take(self):
-        """The next queued job by the robots' round robin, once there is one (blocks);
-        None once closed."""
+    def take(self, wait=True):
+        """The next job by the robots' round robin that a worker may take (:meth:`_may_take`),
+        once there is one (``wait`` False: None at once if none); None once closed."""
         with self._cond:
-            while not len(self._queue) and not self._closed:
+            while not self._closed:
+                now = self._clock()
+                job = self._queue.pop(lambda queued: self._job_work(queued, now),
+                                      self._may_take(now)) if len(self._queue) else None
+                if job is not None:
+                    job.started = now
+                    # alone: none beside it so far, nor waiting (received on the CPU it shares)
+                    job.alone = not self._running and not len(self._queue)
+                    for other in self._running:       # nor, from now on, beside these
+                        other.alone = False
+                    self._running.add(job)
+                    return job
+                if not wait:
+                    return None
                 self._cond.wait()
-            if self._closed:
-                return None
-            now = self._clock()
-            job = self._queue.pop(lambda queued: self._job_work(queued, now))
-            job.started = now
-            # alone: none beside it so far, nor waiting (received on the CPU it shares)
-            job.alone = not self._running and not len(self._queue)
-            for other in self._running:       # nor, from now on, beside these
-                other.alone = False
-            self._running.add(job)
-            return job
+            return None
+
+    def _may_take(self, now):
+        """Whose job a worker may take (None: anyone's; lock held): while others send here,
+        no robot holds every worker (their tasks start at once, beside its long ones)."""
+        if self.workers < 2:
+            return None
+        held = collections.Counter(job.owner for job in self._running)
+        return lambda owner: held[owner] < self.workers - 1 or not self.demand.others(now, owner)
 
     def stale(self, job):
         """Why ``job`` (just taken) is not worth doing any more (its deadline would pass
@@ -200,6 +198,7 @@ class WorkQueue(object):
                 return None
             self._running.discard(job)
             self.shed += 1
+            self._cond.notify_all()     # (a worker held back by :meth:`_may_take`)
         return 'busy: waited %.3g s in the queue; its deadline passed' % (
             job.started - job.queued_at)
 
@@ -209,6 +208,7 @@ class WorkQueue(object):
         with self._cond:
             self._running.discard(job)
             self.finished += 1
+            self._cond.notify_all()
             if seconds is not None:
                 self._shares.add(job.owner, job.kind, seconds)
         if seconds is not None:
