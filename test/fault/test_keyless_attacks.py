@@ -223,11 +223,11 @@ def test_a_robot_flooding_every_server_takes_only_its_share_of_their_queues(
     fails, and they go on at 0.8 of their rate or more: the queue is shared, and while they
     send, the flood holds one of a server's two workers at most, so their tasks start at
     once beside its sorts (0.96-1.02 of their rate in 6 runs, 3 of them beside 4 busy
-    processes; longest round trips, printed, 0.15-0.39 s). (Before: with both workers held, their tasks waited up to 1 s for one,
-    and a robot keeps one task out: 0.42-0.51 of their rate in 8 runs; one worker per
-    server, its quota's, gave 0.39-0.42. Before the share: 2 of the robots' tasks failed,
-    3.8 of 10 answered a second; in the issue's run, robots at 2 a second fell to 1.0-1.6,
-    all answered busy.) A server reporting a
+    processes; longest round trips, printed, 0.15-0.39 s). (Before: with both workers
+    held, their tasks waited up to 1 s for one, and a robot keeps one task out: 0.42-0.51
+    of their rate in 8 runs; one worker per server, its quota's, gave 0.39-0.42. Before
+    the share: 2 of the robots' tasks failed, 3.8 of 10 answered a second; in the issue's
+    run, robots at 2 a second fell to 1.0-1.6, all answered busy.) A server reporting a
     utilization of 1 or more shows that the flood reached it, a warning naming robot 9
     that they said so. (First of the attacks: the flooder finds the probe services by
     their names at the master, which the ``results`` and ``announce`` attackers take and
