@@ -9,7 +9,7 @@ stand-in that does just that: it registers as a publisher of the server's task t
 the real master, answers the server's handshake with that error and says it publishes
 nothing. Printed: how many connections the server made, closed, and still lists, and its
 sockets to them it holds, and its descriptors before and after. Asserted: every connection
-closed, none listed, no socket held, within 20 s of the robots' leaving.
+closed, none listed, no socket held, for 3 s on end within 30 s of the robots' leaving.
 """
 
 import io
@@ -17,6 +17,7 @@ import os
 import socket
 import subprocess
 import threading
+import time
 import xmlrpc.client
 import xmlrpc.server
 
@@ -35,6 +36,7 @@ from test_faults import show
 SERVER = 7
 TOPIC = '/' + names.server_topic(SERVER, names.SORT_TASK_TOPIC)
 ROBOTS = 5
+QUIET = 3.0     # s: longer than rospy's 1 s wait after a refused handshake, under load
 
 
 class StoppingRobot(object):
@@ -93,6 +95,20 @@ class StoppingRobot(object):
         self.tcpros.close()
 
 
+def held_for(condition, seconds, timeout):
+    """Whether ``condition()`` came to hold, and went on holding for ``seconds``, within
+    ``timeout`` s."""
+    since = []
+
+    def holding():
+        if not condition():
+            del since[:]
+            return False
+        since[:] = since or [time.monotonic()]
+        return time.monotonic() - since[0] >= seconds
+    return wait_until(holding, timeout, period=0.2)
+
+
 def descriptors(pid):
     return len(os.listdir('/proc/%d/fd' % pid))
 
@@ -139,12 +155,14 @@ def test_a_server_keeps_nothing_of_robots_that_stopped_while_it_connected(ros):
         closed = wait_until(lambda: all(r.all_closed() for r in robots), 20.0)
         for robot in robots:
             robot.master.unregisterPublisher(TOPIC, robot.uri)
-        # each registration's publisher update lists every robot registered by then: one
-        # given up on is connected to again (in CI, 12 connections to the 5, 4 of them
-        # made after the first were closed), so the server is judged once all have ended
+        # each registration's publisher update lists every robot registered by then, and the
+        # server connects again to one it has given up on (in CI: 10-12 connections to the
+        # 5, the later ones made after the first were all closed): the server is judged
+        # once nothing to them has been listed, open or unclosed for longer than rospy's
+        # wait before it gives up
         ports, uris = set(r.tcpros.getsockname()[1] for r in robots), set(r.uri for r in robots)
-        released = wait_until(lambda: all(r.all_closed() for r in robots) and not (
-            listed(name) & uris) and sockets_to(pid, ports) == 0, 20.0)
+        released = held_for(lambda: all(r.all_closed() for r in robots) and not (
+            listed(name) & uris) and sockets_to(pid, ports) == 0, QUIET, 30.0)
         counts = {'robots': ROBOTS,
                   'connections made': sum(r.made for r in robots),
                   'closed by the server': sum(r.closed for r in robots),
