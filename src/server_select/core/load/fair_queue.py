@@ -71,11 +71,11 @@ class FairQueue(object):
         quantum = max(max(cost(self._queues[o][0]), MIN_COST) for o in owners)
         while True:
             owner, jobs = next(iter(self._queues.items()))
-            price = max(cost(jobs[0]), MIN_COST) if owner in owners else None
-            if price is not None and self._deficit.get(owner, 0.0) >= price:
-                self._deficit[owner] -= price
-                return self._remove(owner, jobs.popleft())
-            if price is not None:
+            if owner in owners:
+                price = max(cost(jobs[0]), MIN_COST)
+                if self._deficit.get(owner, 0.0) >= price:
+                    self._deficit[owner] -= price
+                    return self._remove(owner, jobs.popleft())
                 self._deficit[owner] = self._deficit.get(owner, 0.0) + quantum
             self._queues.move_to_end(owner)
 
