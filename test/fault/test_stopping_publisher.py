@@ -17,7 +17,6 @@ import os
 import socket
 import subprocess
 import threading
-import time
 import xmlrpc.client
 import xmlrpc.server
 
@@ -27,6 +26,7 @@ from rosgraph.network import (ROSHandshakeException, encode_ros_handshake_header
                               read_ros_handshake_header)
 
 from server_select.core.config import names
+from server_select.core.util.lasting import Lasting
 from server_select.core.util.procs import stop_group, wait_until
 from server_select.ros.graph import subscribers
 
@@ -95,20 +95,6 @@ class StoppingRobot(object):
         self.tcpros.close()
 
 
-def held_for(condition, seconds, timeout):
-    """Whether ``condition()`` came to hold, and went on holding for ``seconds``, within
-    ``timeout`` s."""
-    since = []
-
-    def holding():
-        if not condition():
-            del since[:]
-            return False
-        since[:] = since or [time.monotonic()]
-        return time.monotonic() - since[0] >= seconds
-    return wait_until(holding, timeout, period=0.2)
-
-
 def descriptors(pid):
     return len(os.listdir('/proc/%d/fd' % pid))
 
@@ -119,11 +105,11 @@ def sockets_to(pid, ports):
     with open('/proc/%d/net/tcp' % pid) as table:
         inodes = set(row.split()[9] for row in list(table)[1:]
                      if int(row.split()[2].split(':')[1], 16) in ports)
+    sockets = set('socket:[%s]' % inode for inode in inodes)
     held = 0
     for fd in os.listdir('/proc/%d/fd' % pid):
         try:
-            held += os.readlink('/proc/%d/fd/%s' % (pid, fd)) in set(
-                'socket:[%s]' % inode for inode in inodes)
+            held += os.readlink('/proc/%d/fd/%s' % (pid, fd)) in sockets
         except OSError:          # closed meanwhile
             pass
     return held
@@ -161,8 +147,10 @@ def test_a_server_keeps_nothing_of_robots_that_stopped_while_it_connected(ros):
         # once nothing to them has been listed, open or unclosed for longer than rospy's
         # wait before it gives up
         ports, uris = set(r.tcpros.getsockname()[1] for r in robots), set(r.uri for r in robots)
-        released = held_for(lambda: all(r.all_closed() for r in robots) and not (
-            listed(name) & uris) and sockets_to(pid, ports) == 0, QUIET, 30.0)
+        quiet = Lasting(QUIET)
+        released = wait_until(lambda: quiet.held('clean', all(
+            r.all_closed() for r in robots) and not (listed(name) & uris)
+            and sockets_to(pid, ports) == 0), 30.0, period=0.2)
         counts = {'robots': ROBOTS,
                   'connections made': sum(r.made for r in robots),
                   'closed by the server': sum(r.closed for r in robots),
