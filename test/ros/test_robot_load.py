@@ -3,7 +3,7 @@
 import pytest
 
 from server_select.srv import LatencyProbeResponse
-from server_select.core.load.robot_load import RobotLoad
+from server_select.core.robot.robot_load import RobotLoad
 from server_select.core.load.work_queue import Load
 from server_select.ros.load import load_of
 
@@ -23,7 +23,6 @@ def test_a_probe_announces_the_robots_send_rate_only_to_where_its_tasks_go():
     for t in (0.0, 4.0, 8.0):          # frames go out every 4 s (slower than asked)
         clock.now = t
         load.sends.started(2, 'image')
-        load.sent(2, 'image')
     clock.now = 9.0
     kinds, rates = load.announcement(2)
     assert rates == [pytest.approx(2 / 5.0), 4.0]    # no sort task sent yet: as asked
@@ -45,12 +44,15 @@ def test_each_kind_is_announced_to_where_that_kind_goes():
     assert load.announcement(3) == (['image', 'sort'], [0.0, 0.0])
 
 
-def test_the_wait_comes_from_the_answers_utilization():
+def test_the_wait_and_the_deadlines_come_from_the_answers_tasks_in_flight():
+    """An answer's tasks in flight (the other robots') and work per task: the samples' wait
+    and what the deadlines follow are the rule's one estimate, not its backlog."""
     load = RobotLoad({'image': 1.0}, lambda kind: 1)
-    answer = LatencyProbeResponse(server_id=1, workers=1, backlog=3.0, utilization=0.5,
-                                  kinds=['image'], service_time=[0.6], service_error=[0.0])
-    assert load.on_answer(1, load_of(answer)) == pytest.approx(0.6 + 0.5 * 0.6 / 2 / 0.5)
-    assert load.expected('image')(1) == pytest.approx(3.0 + 0.6)   # deadlines: backlog
+    answer = LatencyProbeResponse(server_id=1, queued=2, in_service=1, workers=1, backlog=3.0,
+                                  utilization=0.5, kinds=['image'], service_time=[0.6],
+                                  service_error=[0.0])
+    assert load.on_answer(1, load_of(answer), 0.05) == pytest.approx(3 * 0.6 + 0.6)
+    assert load.expected('image')(1) == pytest.approx(0.05 + 3 * 0.6 + 0.6)
 
 
 def test_a_frame_is_fresh_until_the_next_one_is_due_and_for_twice_its_best_answer():

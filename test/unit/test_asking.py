@@ -105,8 +105,9 @@ class Forgetting(object):
         self.rule = rule
 
     def __getattr__(self, name):
-        for memo in self.rule.memos:
-            getattr(self.rule, memo).clear()
+        estimates = self.rule.estimates
+        for memo in estimates.memos:
+            getattr(estimates, memo).clear()
         return getattr(self.rule, name)
 
 
@@ -122,19 +123,20 @@ def lived(rule, clock):
             rule.started(rule.order(SERVERS, 'sort')[0], 'sort')
         if step % 3 == 0:
             answers.append(asks(rule)[:3])
-    assert any(rule.wander(s, 'sort') > 0 for s in SERVERS)
+    assert any(rule.estimates.wander(s, 'sort') > 0 for s in SERVERS)
     return answers
 
 
 @pytest.mark.parametrize('seed', [1, 2, 3])
 def test_a_rules_memos_change_no_answer(seed):
-    """What a rule keeps to answer faster (its ``memos``, left out of the state compared
-    above) gives the answers it would give without: asked with them emptied before every
-    ask, a rule fed alike answers alike, while answers arrive and age out."""
+    """What a rule keeps to answer faster (its estimates' ``memos``, left out of the state
+    compared above) gives the answers it would give without: asked with them emptied
+    before every ask, a rule fed alike answers alike, while answers arrive and age out."""
     rule, clock = fed('least_latency', seed)
-    assert rule.memos
+    memos = rule.estimates.memos
+    assert memos
     kept = lived(rule, clock)
-    assert all(getattr(rule, memo) for memo in rule.memos)     # (they were used)
+    assert all(getattr(rule.estimates, memo) for memo in memos)     # (they were used)
     twin, clock = fed('least_latency', seed)
     assert repr(lived(Forgetting(twin), clock)) == repr(kept)
 

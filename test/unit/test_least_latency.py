@@ -101,15 +101,15 @@ def test_least_latency_asking_changes_nothing_and_the_send_moves():
 
     def sends():
         return [(k, rule.sends.count(k, clock.now)) for k in rule.sends.kinds()]
-    state = copy.deepcopy((dict(rule.answers), rule.attempts_out, rule.chosen, sends(),
+    state = copy.deepcopy((dict(rule.estimates.answers), rule.attempts_out, rule.chosen, sends(),
                            rule.next_draw, rule.rng.getstate()))
     decisions = [rule.choose([1, 2], 'image') for _ in range(50)]
     orders = [rule.order([1, 2], 'image') for _ in range(50)]
     rule.choose([1, 2, 3], 'sort')          # a server and a kind it never heard of
-    assert state == (dict(rule.answers), rule.attempts_out, rule.chosen, sends(),
+    assert state == (dict(rule.estimates.answers), rule.attempts_out, rule.chosen, sends(),
                      rule.next_draw, rule.rng.getstate())
     assert set(d.server for d in decisions) == {2} and orders == [[2, 1]] * 50
-    assert set(rule.answers) == {1, 2} and sends() == [('image', 1)]
+    assert set(rule.estimates.answers) == {1, 2} and sends() == [('image', 1)]
     assert 'faster than 1' in decisions[0].reason
     assert set(decisions[0].estimates) == {1, 2}
     rule.started(2, 'image', first=False)    # a re-send or hedge there is no move

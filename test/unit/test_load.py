@@ -1,5 +1,5 @@
-"""A server's work queue (admission by deadline, shedding, backlog), the robot's load board
-and the retry budget, without a master."""
+"""A server's work queue (admission by deadline, shedding, backlog), what a load-aware
+robot's deadlines read of its rule's estimates, and the retry budget, without a master."""
 
 import math
 import random
@@ -12,7 +12,8 @@ from server_select.core.flow.budget import RetryBudget
 from server_select.core.load.demand import Arrivals, Demand
 from server_select.core.load.service_times import ServiceTimes
 from server_select.core.load.work_queue import Load, WorkQueue
-from server_select.core.load.board import LoadBoard, queueing
+from server_select.core.robot.robot_load import RobotLoad
+from server_select.core.rule.least_latency import LeastLatency
 from server_select.core.util.stats import median_error
 
 from support.clock import Clock
@@ -325,74 +326,69 @@ def test_a_sender_that_stopped_counts_as_none_after_two_of_its_gaps():
         Arrivals(horizon=0.0)
 
 
-def test_the_mean_wait_is_m_d_c_queueing_at_the_utilization():
-    assert queueing(0.0, 0.7) == 0.0 and queueing(0.5, 0.0) == 0.0
-    assert queueing(0.5, 0.7) == pytest.approx(0.5 * 0.7 / 2 / 0.5)     # M/D/1, exact
-    assert queueing(0.8, 1.0) == pytest.approx(2.0)
-    assert queueing(2.0, 1.0) == queueing(0.95, 1.0) == pytest.approx(9.5)   # saturated
-    # more workers at the same utilization: a shorter wait
-    assert 0 < queueing(0.5, 0.7, workers=4) < queueing(0.5, 0.7, workers=2) \
-        < queueing(0.5, 0.7)
-    # the robot that leaves its own tasks out of its server's utilization sees its server
-    # ahead of an equal one that would carry its tasks too
-    one, two = 0.275 * 0.667, 2 * 0.275 * 0.667
-    assert queueing(two, 0.667) - queueing(one, 0.667) > 0.1
-
-
-def test_the_wait_is_the_mean_queueing_plus_the_robots_mix_of_work():
+def test_attempt_deadlines_read_the_rules_own_estimate():
+    """One load model: what an attempt's deadline follows is the estimate the rule ranks
+    by (round trip + the others' work in flight per worker + the work), not a figure of
+    its own, for one attempt; an answer older than the window counts as none."""
     clock = Clock()
-    board = LoadBoard({'image': 1.0, 'sort': 3.0}, max_age=2.0, clock=clock)
-    assert board.wait(1) is None
-    board.update(1, Load(2, 1, 1, 0.8, {'image': 0.4, 'sort': 0.02}, 0.5))
-    work = 0.25 * 0.4 + 0.75 * 0.02
-    assert board.wait(1) == pytest.approx(queueing(0.5, work) + work)
-    # the backlog at the moment of the probe is not the forecast: the same utilization,
-    # the same wait
-    board.update(1, Load(0, 0, 1, 0.0, {'image': 0.4, 'sort': 0.02}, 0.5))
-    assert board.wait(1) == pytest.approx(queueing(0.5, work) + work)
-    clock.now += 2.5                                  # the report is stale
-    assert board.wait(1) is None and board.expected(1, 'image') is None
-
-
-def test_a_server_new_to_a_kind_is_taken_to_need_what_the_others_need():
-    clock = Clock()
-    board = LoadBoard({'image': 1.0}, clock=clock)
-    board.update(1, Load(0, 1, 1, 0.0, {'image': 0.3}))
-    board.update(2, Load(0, 1, 1, 0.0, {'image': 0.5}))
-    board.update(3, Load(0, 0, 1, 0.0, {}))           # just came up: nothing done yet
-    assert board.wait(3) == pytest.approx(0.4)       # not 0: no rush of every robot to it
-
-
-def test_expected_completion_counts_the_robots_own_tasks_sent_since_the_report():
-    clock = Clock()
-    board = LoadBoard({'image': 1.0}, clock=clock)
-    board.update(1, Load(0, 0, 2, 0.0, {'image': 0.4}))
-    assert board.expected(1, 'image') == pytest.approx(0.4)
-    board.sent(1, 'image')
-    board.sent(1, 'image')
-    assert board.expected(1, 'image') == pytest.approx(0.4 + 2 * 0.4 / 2)
-    board.update(1, Load(2, 0, 2, 0.4, {'image': 0.4}))   # the report now has them
-    assert board.expected(1, 'image') == pytest.approx(0.8)
-    board.forget(1)
-    assert board.expected(1, 'image') is None
-
-
-def test_a_task_with_no_queue_takes_the_median_probe_round_trip_plus_the_work():
-    clock = Clock()
-    board = LoadBoard({'image': 1.0}, clock=clock)
-    board.update(1, Load(3, 1, 1, 2.4, {}), rtt=0.002)
-    assert board.unqueued(1, 'image') is None        # nobody has done a frame yet
-    board.update(2, Load(0, 0, 1, 0.0, {'image': 0.7}))
-    assert board.unqueued(2, 'image') is None        # no round trip yet
-    for rtt in (0.002, 0.090, 0.004):                # a probe waited for a quota period
-        board.update(1, Load(3, 1, 1, 2.4, {'image': 0.6}), rtt=rtt)
-    # the queue (2.4 s of backlog) is left out: what an answer takes at best
-    assert board.unqueued(1, 'image') == pytest.approx(0.003 + 0.6)   # median of 4
+    rule = LeastLatency(window=2.0, clock=clock)
+    load = RobotLoad({'image': 1.0}, balancer=rule, clock=clock)
+    assert load.expected('image')(1) is None
+    for rtt in (0.002, 0.004, 0.003):
+        load.on_answer(1, Load(1, 1, 2, 0.9, {'image': 0.4}, 0.5), rtt)
+    estimate = rule.estimate(1, 'image', clock())
+    assert load.expected('image')(1) == pytest.approx(estimate.latency)
+    assert estimate.latency == pytest.approx(0.003 + 2 * 0.4 / 2 + 0.4)
+    # asked for more than it can do, a server is ranked by the tries a task needs there;
+    # one attempt still takes the round trip + the wait + the work
+    load.on_answer(2, Load(1, 1, 2, 0.9, {'image': 0.4}, 1.5), 0.003)
+    overloaded = rule.estimate(2, 'image', clock())
+    assert overloaded.latency > 1.4 * load.expected('image')(2)
+    assert load.expected('image')(2) == pytest.approx(0.003 + 2 * 0.4 / 2 + 0.4)
     clock.now += 2.5
-    assert board.unqueued(1, 'image') is None        # the report is stale
-    board.forget(1)
-    board.update(1, Load(0, 0, 1, 0.0, {'image': 0.6}))
-    assert board.unqueued(1, 'image') is None        # forgotten with its round trips
+    assert load.expected('image')(1) is None
+
+
+def test_a_robot_ranking_its_samples_keeps_a_rules_estimates_for_its_deadlines():
+    """A load-aware robot with no rule per task (its ranking chooses) has the same
+    estimates: its samples' wait is their queue + work for its mix of kinds."""
+    clock = Clock()
+    load = RobotLoad({'image': 1.0, 'sort': 3.0}, clock=clock)
+    wait = load.on_answer(1, Load(2, 1, 1, 0.8, {'image': 0.4, 'sort': 0.02}, 0.5), 0.002)
+    mix = 0.25 * (3 * 0.4 + 0.4) + 0.75 * (3 * 0.02 + 0.02)
+    assert wait == pytest.approx(mix)
+    assert load.expected('sort')(1) == pytest.approx(0.002 + 3 * 0.02 + 0.02)
+
+
+def test_a_server_new_to_a_kind_needs_the_least_work_any_server_reported():
+    """One default for a kind a server has not done: the least any server reported, for
+    the rule and the deadlines alike (not nothing: no rush of every robot to a new
+    server)."""
+    clock = Clock()
+    rule = LeastLatency(window=2.0, clock=clock)
+    load = RobotLoad({'image': 1.0}, balancer=rule, clock=clock)
+    load.on_answer(1, Load(0, 0, 1, 0.0, {'image': 0.3}), 0.001)
+    load.on_answer(2, Load(0, 0, 1, 0.0, {'image': 0.5}), 0.001)
+    load.on_answer(3, Load(0, 0, 1, 0.0, {}), 0.001)        # just came up
+    assert load.expected('image')(3) == pytest.approx(0.001 + 0.3)
+    assert rule.estimate(3, 'image', clock()).latency == load.expected('image')(3)
+
+
+def test_a_frame_is_fresh_for_its_round_trip_and_work_with_no_queue():
+    """A frame is worth waiting for until the next is due, and at least ``factor`` x
+    what it takes there with no queue: the median round trip + the work."""
+    clock = Clock()
+    load = RobotLoad({'image': 1.0}, clock=clock)
+    fresh = load.fresh_for('image', 2.0, lambda: 0.25)
+    load.on_answer(1, Load(3, 1, 1, 2.4, {}), 0.002)
+    assert fresh(1) is None                          # nobody has done a frame yet
+    for rtt in (0.090, 0.004):                       # a probe waited for a quota period
+        load.on_answer(1, Load(3, 1, 1, 2.4, {'image': 0.6}), rtt)
+    assert fresh(1) == pytest.approx(2.0 * (0.004 + 0.6))     # the queue left out
+    load.on_answer(2, Load(0, 0, 1, 0.0, {'image': 0.05}), 0.001)
+    assert fresh(2) == 0.25                          # the next frame is due first
+    clock.now += 2.5
+    assert fresh(1) is None                          # no answer in the window
 
 
 def test_the_retry_budget_is_a_share_of_recent_tasks_plus_a_reserve():

@@ -36,7 +36,7 @@ def test_a_new_window_reaches_the_rule_the_probe_plan_and_the_load_view():
     assert made.balancer.estimate(1, 'sort', made.clock()) is None
     assert tuning.set('window', 3.0) == 2.0
     assert made.balancer.estimate(1, 'sort', made.clock()).latency == pytest.approx(0.002)
-    assert made.plan.hold == 3.0 and made.load.board.max_age == 3.0
+    assert made.plan.hold == 3.0 and made.load.balancer.window == 3.0
 
 
 def test_a_faster_task_rate_brings_the_next_send_forward():
@@ -47,7 +47,7 @@ def test_a_faster_task_rate_brings_the_next_send_forward():
     tuning.set('task_rate', 20.0)
     assert stream.period == pytest.approx(0.05)
     assert stream.next_send <= made.clock() + 0.05 < before
-    assert made.load.board.mix == {'sort': 1.0}
+    assert made.load.mix == {'sort': 20.0}
 
 
 def test_hedging_and_the_retry_budget_change_for_every_stream():

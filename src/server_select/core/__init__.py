@@ -11,8 +11,8 @@ checks the direction and that there is no cycle):
 - ``load``: a server's work queue and load reports; what robots announce they send.
 - ``ranking``: the paper profile's ranking: latency windows, the stable sort, the
   policies (mean, hysteresis), answered tasks as samples.
-- ``rule``: the fleet profile's per-task rule, ``least_latency``, and what every per-task
-  rule is told.
+- ``rule``: the fleet profile's per-task rule, ``least_latency``, the one load model every
+  rule keeps, and what every per-task rule is told.
 - ``peers``: the league's peers, per-task balancers a user might put there instead.
 - ``manager``: the manager's stores of every robot's ranking.
 - ``flow``: a task's life at the robot: send, re-send, hedge, check, report once.

@@ -115,10 +115,10 @@ PARAMS = {
                        'busy'),
     'max_queue_bytes': Param(32 << 20, parse_positive_int, 'memory the tasks waiting for a '
                              'worker may hold (bytes); one more is answered busy'),
-    'load_aware': Param(False, parse_bool, 'rank servers by round trip + mean wait at the '
-                        "server's utilization + work per task (from its probe answers), "
-                        'announce its task rate in probes, give each task its deadline, and '
-                        "let attempt deadlines follow the server's backlog"),
+    'load_aware': Param(False, parse_bool, 'rank servers by round trip + wait for a worker + '
+                        'work per task (from its probe answers), announce its task rate in '
+                        'probes, give each task its deadline, and let attempt deadlines '
+                        'follow that estimate'),
     'max_in_flight': Param(0, parse_count, 'tasks of a stream out at once; a send finding '
                            'them all out waits for one to end, the newest frame winning '
                            '(0: no limit)'),

@@ -15,8 +15,8 @@ class AttemptClock(object):
     task round trips, at least ``floor`` s and at most the task ``timeout``; ``first`` s
     (capped by the timeout) while a server has fewer than ``min_samples``.
 
-    ``expected(server)``, when given, is what the server's load says a task there takes
-    (round trip + backlog + work, s; None: unknown): the deadline is then at least
+    ``expected(server)``, when given, is what the robot's estimate says a task there takes
+    (round trip + wait + work, s; None: unknown): the deadline is then at least
     ``load_factor`` times that, so that a server that is slow because it is busy, and
     says so, is not taken for dead.
 
@@ -101,7 +101,7 @@ class AttemptClock(object):
 def from_params(get, kind, period, newest_wins, load=None):
     """The :class:`AttemptClock` of a robot's ``kind`` stream, one task every ``period()`` s,
     from its parameters (``get(name)``), with ``load`` (a load-aware robot's
-    :class:`~server_select.core.load.robot_load.RobotLoad`, or None): a load-aware robot's
+    :class:`~server_select.core.robot.robot_load.RobotLoad`, or None): a load-aware robot's
     first answers from a server may take half the timeout (its work is not known yet; its
     probes say whether it is up), and a frame (``newest_wins``) is fresh for
     ``~fresh_factor`` x its unqueued time there."""

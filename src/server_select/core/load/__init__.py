@@ -1,4 +1,3 @@
 """A server's load (no rospy): its bounded work queue and the load report a probe
-answer carries (``work_queue``), what robots announce they will send (``demand``), what a
-robot makes of its servers' reports (``board``).
+answer carries (``work_queue``), and what robots announce they will send (``demand``).
 """

@@ -6,13 +6,13 @@ server's :class:`Load` (tasks queued and in service, workers, the *backlog*: sec
 sent now would wait for a worker, the *utilization*: the share of the workers' time the
 other robots' tasks take, and the recent work per task of each kind), and a robot ranks
 servers by round trip + expected wait + work (C3's expected completion, NSDI '15;
-:mod:`server_select.core.load.board`). The backlog is what an attempt's deadline follows,
-and a poor forecast of the next task's wait: robots that ranked by it chased the phase of
-each other's frames. The utilization moves only when a robot comes, goes or changes its
-rate: it is what robots *announce* (a load-aware robot's probe says its rate to the server
-its next task goes to, none to the others), so a robot that moves loads its new server in
-the others' eyes at its next probe; a robot that announces nothing counts at the rate its
-tasks arrive (:mod:`server_select.core.load.demand`).
+:mod:`server_select.core.rule.estimates`), its attempts' deadlines too. The backlog is a
+poor forecast of the next task's wait: robots that ranked by it chased the phase of each
+other's frames; the server's own admission reads it. The utilization moves only when a
+robot comes, goes or changes its rate: it is what robots *announce* (a load-aware robot's
+probe says its rate to the server its next task goes to, none to the others), so a robot
+that moves loads its new server in the others' eyes at its next probe; one that announces
+nothing counts at the rate its tasks arrive (:mod:`server_select.core.load.demand`).
 
 Server side, :class:`WorkQueue` holds the tasks waiting for the workers. A task carries
 its *deadline* (when its robot stops waiting): one that cannot be finished by then is

@@ -21,7 +21,7 @@ import time
 
 from server_select.core.flow.budget import RetryBudget
 from server_select.core.load.demand import SendRate
-from server_select.core.load.robot_load import RobotLoad
+from server_select.core.robot.robot_load import RobotLoad
 from server_select.core.robot.probes import ProbeRounds
 from server_select.core.robot.stream import Stream
 from server_select.core.robot.world import Events, Transport
@@ -61,7 +61,7 @@ class Robot(object):
             self.balancer.on_move = lambda server, why, kind: self.events.moved(server, why, kind)
         self.load = RobotLoad(dict((kind.kind, rate) for kind, rate in kinds),
                               self.selection.heading, self.balancer, clock,
-                              max_age=get('window'), sends=self.sends) \
+                              window=get('window'), sends=self.sends) \
             if get('load_aware') and mode == 'select' else None
         self.baseline = TaskBaseline() if self.selection.passive else None
         self.plan = probing.from_params(get)
@@ -223,8 +223,6 @@ class Robot(object):
             self.joining.discard(server)
             self.rounds.remove(server)
         self.selection.remove_server(server)
-        if self.load is not None:
-            self.load.forget(server)
         self.transport.disconnect(server)
 
     def stream(self, kind):

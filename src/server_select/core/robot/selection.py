@@ -36,8 +36,7 @@ class Selection(object):
         self.manager_timeout = manager_timeout
         # a rule asked per task, drawing from ``rng`` (None: the ranking decides);
         # ``rule_args``: its own (the league's ablations)
-        rule_args = dict(rule_args or {}, **({'window': window}
-                                             if policy.kind == 'least_latency' else {}))
+        rule_args = dict(rule_args or {}, window=window)
         self.balancer = balancers.make(policy.kind, clock=clock, rng=rng, **rule_args) \
             if policy.per_task else None
         # its samples as the manager keeps every robot's (its view; None: its rule's own)

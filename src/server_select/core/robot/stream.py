@@ -113,11 +113,8 @@ class Stream(object):
         self.flow.send_next(self.robot.stamp())
 
     def _publish(self, request, server, budget):
-        load = self.robot.load
-        if load is not None:
-            load.sent(server, self.kind.kind)
         self.robot.transport.send_task(self.kind.kind, request, server,
-                                       budget if load is not None else None)
+                                       budget if self.robot.load is not None else None)
 
     def _report(self, outcome):
         self.robot.events.report(outcome)

@@ -120,8 +120,8 @@ class Tuning(object):
         robot = self.robot
         _rule_window(robot).window = seconds
         robot.plan.hold = seconds
-        if robot.load is not None:
-            robot.load.board.max_age = seconds
+        if robot.load is not None:      # (a ranking's robot: the estimates it keeps)
+            robot.load.balancer.window = seconds
 
     def _rate(self, kind, rate):
         stream = self.robot.stream(kind)

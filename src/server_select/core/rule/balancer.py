@@ -10,6 +10,7 @@ import threading
 import time
 
 from server_select.core.load.demand import SendRate
+from server_select.core.rule.estimates import MECHANISMS, ServerEstimates
 
 
 ProbeAnswer = collections.namedtuple('ProbeAnswer',
@@ -45,25 +46,39 @@ class Balancer(object):
     rule counts its own attempts, as a rule made alone). Each kind of task goes where the
     rule sends that kind (:attr:`chosen_for`): a robot sending frames and sort tasks may be
     served best by two servers, and a frame sent to one is no move of its sort tasks.
-    Thread-safe."""
+    Every rule keeps :attr:`estimates` of its servers from the answers of the last
+    ``window`` s (``mechanisms``: the estimate's parts in use), the one load model the
+    robot's attempt deadlines follow whichever rule chooses. Thread-safe."""
 
     name = None
     copies = 1
     own_view = False     # whether it ranks the servers by estimates of its own (view())
 
-    def __init__(self, rng=None, clock=time.monotonic, sends=None):
+    def __init__(self, rng=None, clock=time.monotonic, sends=None, window=1.5,
+                 mechanisms=MECHANISMS):
         self.rng = rng or random.Random()
         self._clock = clock
         self.sends = sends or SendRate(clock)
         self._counts_sends = sends is None
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()    # (ordering asks fresh limits: estimates)
         self.attempts_out = collections.Counter()     # server -> this robot's attempts out there
         self.probes = {}                     # server -> its newest ProbeAnswer
         self.chosen_for = {}                 # kind -> where its last task went
         self.reason_for = {}                 # kind -> why its tasks go there
         self._main = None                    # the kind the robot sent most of lately
         self.on_move = None                  # on_move(server, why, kind): kind's tasks moved
+        # what the robot expects of each server: what attempts' deadlines follow for every rule
+        self.estimates = ServerEstimates(window, self.sends, self.chosen_for, mechanisms)
         self.next_draw = self._draws()
+
+    @property
+    def window(self):
+        """Seconds of probe answers an estimate rests on (a live setting)."""
+        return self.estimates.window
+
+    @window.setter
+    def window(self, seconds):
+        self.estimates.window = float(seconds)
 
     def _draws(self):
         """The random numbers a decision may use (two: a pair of servers)."""
@@ -78,7 +93,14 @@ class Balancer(object):
                              dict(load.service_error or {}) if load else {})
         with self._lock:
             self.probes[server] = answer
+            self.estimates.heard(answer, max(0, answer.rif - self.attempts_out[server]))
             self._probed(answer)
+
+    def estimate_now(self, server, kind):
+        """The :class:`~server_select.core.rule.estimates.Estimate` of a ``kind`` task at
+        ``server`` now (None: no answer in the window)."""
+        with self._lock:
+            return self.estimates.estimate(server, kind, self._clock())
 
     def _probed(self, answer):
         """Subclasses: a probe answer arrived (lock held)."""
