@@ -39,8 +39,8 @@ class RobotLoad(object):
     def on_answer(self, server, load, rtt=None):
         """A probe answer of ``server`` reporting ``load`` (a
         :class:`~server_select.core.load.work_queue.Load`) that took ``rtt`` s: its wait
-        (s): queue + work of the robot's mix of kinds there, what a load-aware ranking adds
-        to the round trip (None: no estimate)."""
+        (s): the answer's wait + work for the robot's mix of kinds there, what a
+        load-aware ranking of samples adds to the round trip (None: no answer)."""
         if rtt is not None:
             self.balancer.probed(server, rtt, load)
         with self._lock:
@@ -48,10 +48,10 @@ class RobotLoad(object):
             weights = [(kind, rate / total) for kind, rate in sorted(self.mix.items())]
         wait = 0.0
         for kind, weight in weights:
-            estimate = self.balancer.estimate_now(server, kind)
-            if estimate is None:
+            seconds = self.balancer.answer_wait(server, kind)
+            if seconds is None:
                 return None
-            wait += weight * (estimate.latency - estimate.rtt)
+            wait += weight * seconds
         return wait
 
     def announcement(self, server):

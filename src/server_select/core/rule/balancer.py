@@ -96,6 +96,12 @@ class Balancer(object):
             self.estimates.heard(answer, max(0, answer.rif - self.attempts_out[server]))
             self._probed(answer)
 
+    def answer_wait(self, server, kind):
+        """What the newest answer of ``server`` says a ``kind`` task waits and works there
+        (s; None: none): :meth:`ServerEstimates.answer_wait`."""
+        with self._lock:
+            return self.estimates.answer_wait(server, kind)
+
     def estimate_now(self, server, kind):
         """The :class:`~server_select.core.rule.estimates.Estimate` of a ``kind`` task at
         ``server`` now (None: no answer in the window)."""

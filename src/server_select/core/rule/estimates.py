@@ -87,7 +87,11 @@ class ServerEstimates(object):
         window (None: none); ``rate``: the robot's ``kind`` tasks a second (:meth:`rate`).
         Its rate-free parts once per window of answers; one try where none is over capacity."""
         kept = self.answers.get(server, ())     # (in the order heard: the window is a suffix)
-        count = sum(1 for a, _ in kept if now - a.at <= self.window)
+        count = len(kept)
+        for answer, _ in kept:                  # (the older ones first: few, or none)
+            if now - answer.at <= self.window:
+                break
+            count -= 1
         if not count:
             return None
         rate = self.rate(kind, now) if rate is None else rate
@@ -102,6 +106,17 @@ class ServerEstimates(object):
         tries = 1.0 if 'tries' not in self.mechanisms or busiest + mine <= 1.0 else \
             math.fsum([max(1.0, u + mine) for u in utilizations]) / len(utilizations)
         return Estimate((rtt + wait + work) * tries, error * tries, wait, parts[1], rtt, work)
+
+    def answer_wait(self, server, kind):
+        """Seconds a ``kind`` task waits and works at ``server`` by its newest answer alone
+        (the others' work in flight per worker + the work; None: no answer): one sample's
+        part of the estimate, which a ranking of samples averages over its window."""
+        kept = self.answers.get(server)
+        if not kept:
+            return None
+        answer, others = kept[-1]
+        work = self.work(answer, kind)
+        return others * work / answer.workers + work
 
     def _own_kinds(self, server, kind, now, newest):
         """Worker-seconds a ``kind`` task at ``server`` waits for the robot's own tasks of other
