@@ -1,12 +1,12 @@
 """The fleet profile's rule, ``least_latency`` (no rospy): the server a task is expected to
 be answered soonest by, kept while nothing beats it beyond the noise.
 
-A server's estimate is the robot's one load model (:mod:`~server_select.core.rule.estimates`:
-round trip + wait + work from the answers of the last ``window`` s, and its noise), which
-its attempt deadlines follow too. ``choose`` keeps the robot's server while
-it is within 3 errors of the best and not behind it for 4 windows (:meth:`_behind`); else
-moves to the best or at random to one within 3 errors of it, lower than its server, not
-behind the best; a frame first where it would not come back stale (:meth:`_late`).
+A server's estimate is the robot's one load model (round trip + wait + work from the
+answers of the last ``window`` s, and its noise: :mod:`~server_select.core.rule.estimates`),
+which its attempt deadlines follow too. ``choose`` keeps the robot's server while it is
+within 3 errors of the best and not behind it for 4 windows (:meth:`_behind`); else moves
+to the best or at random to one within 3 errors of it, lower than its server, not behind
+the best; a frame first where it would not come back stale (:meth:`_late`).
 ``choose`` changes nothing: the move is made at a task's first send (:meth:`started`).
 docs/selection.md has each mechanism and its worth.
 """
