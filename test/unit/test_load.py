@@ -354,10 +354,16 @@ def test_a_robot_ranking_its_samples_keeps_a_rules_estimates_for_its_deadlines()
     estimates: its samples' wait is their queue + work for its mix of kinds."""
     clock = Clock()
     load = RobotLoad({'image': 1.0, 'sort': 3.0}, clock=clock)
+    with pytest.raises(ValueError):
+        RobotLoad({'image': 0.0}, clock=clock)
     wait = load.on_answer(1, Load(2, 1, 1, 0.8, {'image': 0.4, 'sort': 0.02}, 0.5), 0.002)
     mix = 0.25 * (3 * 0.4 + 0.4) + 0.75 * (3 * 0.02 + 0.02)
     assert wait == pytest.approx(mix)
     assert load.expected('sort')(1) == pytest.approx(0.002 + 3 * 0.02 + 0.02)
+    load.set_rate('image', 0.0)                   # one kind still sent: a mix
+    with pytest.raises(ValueError):
+        load.set_rate('sort', 0.0)                # none: no mix to weigh waits by
+    assert load.mix == {'image': 0.0, 'sort': 3.0}
 
 
 def test_a_server_new_to_a_kind_needs_the_least_work_any_server_reported():

@@ -25,8 +25,7 @@ class RobotLoad(object):
 
     def __init__(self, mix, target=None, balancer=None, clock=time.monotonic, window=2.0,
                  sends=None):
-        if not mix or not sum(mix.values()) > 0:
-            raise ValueError('mix must give a positive weight to some kind, got %r' % (mix,))
+        _check_mix(mix)
         self.sends = sends or SendRate(clock)
         self.balancer = balancer if balancer is not None else \
             Balancer(clock=clock, sends=self.sends, window=window)
@@ -69,6 +68,7 @@ class RobotLoad(object):
     def set_rate(self, kind, rate):
         """The robot's ``kind`` stream sends ``rate`` tasks a second from now (tuned)."""
         with self._lock:
+            _check_mix(dict(self.mix, **{kind: rate}))
             self.mix[kind] = rate
 
     def expected(self, kind):
@@ -91,3 +91,10 @@ class RobotLoad(object):
                 return None
             return max(period(), factor * (estimate.rtt + estimate.work))
         return seconds
+
+
+def _check_mix(mix):
+    """ValueError unless ``mix`` gives a positive rate to some kind (its weights divide by
+    the total)."""
+    if not mix or not sum(mix.values()) > 0:
+        raise ValueError('mix must give a positive weight to some kind, got %r' % (mix,))
