@@ -191,6 +191,9 @@ class _SimWorld(object):
     def work_answered(self, robot, wanted):
         pass
 
+    def probe_answered(self, robot, server, rtt):
+        pass
+
 
 def _id(a, b):
     return int((b if a == 'robot' else a)[len('server'):])

@@ -1,10 +1,11 @@
 """Which of the package's modules one fleet decision touches (``python3 -m
 server_select.bench.decision_path``): a fleet robot (the package's
 :class:`~server_select.core.robot.robot.Robot`, fed probe answers of 4 servers) lets a
-sort task fall due, and every function called from the stream's ``act`` to the
-transport's ``send_task`` is traced. Prints the modules in the order first entered and
-their count; the task's own content (``make``) and the transport are stubs, so what is
-counted is the robot's decision and send, not a message's encoding.
+task fall due, and every function called from the stream's ``act`` until the transport's
+``send_task`` is traced, for a sort task and for a camera frame (newest wins, fresh for a
+while). Prints the modules in the order first entered and their count; the task's own
+content (``make``) and the transport are stubs, so what is counted is the robot's decision
+and send, not a message's encoding, nor what the flow does after the send.
 """
 
 import os
@@ -41,6 +42,10 @@ class _Sort(object):
         return True
 
 
+class _Frame(_Sort):
+    kind, newest_wins = 'image', True
+
+
 class _Wire(Transport):
     def __init__(self):
         self.sent = []
@@ -50,40 +55,46 @@ class _Wire(Transport):
 
 
 def fleet_robot(seed=1):
-    """A fleet robot with 4 servers, each answering its probes, a few tasks sent."""
+    """A fleet robot with 4 servers, each answering its probes, a few tasks of each of its
+    streams (sort tasks, frames) sent and answered."""
     clock, wire = _Clock(), _Wire()
     get = lambda name: {'mode': 'select', 'start_delay': 0.0}.get(  # noqa: E731
         name, default(name, 'fleet'))
-    robot = Robot(1, list(SERVERS), 'select', get, [(_Sort(), 2.0)], transport=wire,
-                  clock=clock, random=lambda purpose: random.Random('%s/%d' % (purpose, seed)))
+    robot = Robot(1, list(SERVERS), 'select', get, [(_Sort(), 2.0), (_Frame(), 2.0)],
+                  transport=wire, clock=clock,
+                  random=lambda purpose: random.Random('%s/%d' % (purpose, seed)))
     robot.start()
     for _ in range(20):
         clock.now += 0.25
         robot.probe_round()
         for server in SERVERS:
             for seq in range(1, 200):
-                robot.probe_answered(server, seq, 0.001 * server,
-                                     Load(0, 0, 1, 0.0, {'sort': 0.002}, 0.2))
-        robot.streams[0].act()
+                robot.probe_answered(server, seq, 0.001 * server, Load(
+                    0, 0, 1, 0.0, {'sort': 0.002, 'image': 0.02}, 0.2))
+        for stream in robot.streams:
+            stream.act()
         for task_id, server in wire.sent:      # each answered at once
-            robot.streams[0].resolve(task_id, server, True)
+            for stream in robot.streams:
+                stream.resolve(task_id, server, True)
+        del wire.sent[:]
     return robot, clock, wire
 
 
-def traced_modules():
-    """The package's modules (paths from its root) entered by one task's decision and send,
-    in the order first entered."""
+def traced_modules(kind='sort'):
+    """The package's modules (paths from its root) entered by one ``kind`` task's decision,
+    from its falling due to its send, in the order first entered."""
     robot, clock, wire = fleet_robot()
-    stream = robot.streams[0]
-    clock.now = max(clock.now, stream.next_time())
+    stream = robot.stream(kind)
+    clock.now = max(clock.now, stream.next_send)
     entered = []
+    sent = len(wire.sent)
+    send = _Wire.send_task.__code__
 
     def profile(frame, event, _arg):
-        if event == 'call':
+        if event == 'call' and len(wire.sent) == sent and frame.f_code is not send:
             path = os.path.abspath(frame.f_code.co_filename)
             if path.startswith(PACKAGE) and path not in entered:
                 entered.append(path)
-    sent = len(wire.sent)
     sys.setprofile(profile)
     try:
         stream.act()
@@ -95,10 +106,14 @@ def traced_modules():
 
 
 def main():
-    modules = traced_modules()
-    for module in modules:
-        print(module)
-    print('%d modules from a task falling due to its send' % len(modules))
+    every = []
+    for kind in ('sort', 'image'):
+        modules = traced_modules(kind)
+        print('%s: %d modules from a task falling due to its send' % (kind, len(modules)))
+        for module in modules:
+            print('  ' + module)
+        every += [m for m in modules if m not in every]
+    print('%d modules in all' % len(every))
     return 0
 
 

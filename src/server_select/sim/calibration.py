@@ -59,7 +59,7 @@ def _loopback(job):
     _, variant, seed, constants = job
     scenario = Scenario.load(package_file('config', 'sim', 'loopback.yaml'))
     sim = simulate(scenario, _model(constants), seed, [variant])
-    spread = probe_spread(r for robot in sim.robots for r in robot.rtts.values())
+    spread = probe_spread(sim.probe_rtts.values())
     return ('loopback', 'loopback', seed, {variant: {
         'switches': figures(sim, variant).switches, 'probe_mad': spread}})
 

@@ -4,7 +4,6 @@ robot's transport over the modelled network (probes, tasks and results as transf
 TCP's stalled connections renewed as the node renews them) and its wake-ups, as the
 node's threads are (one for probe rounds, one per task stream)."""
 
-import collections
 import functools
 
 from server_select.core.flow.task_flow import ENDED
@@ -14,21 +13,17 @@ from server_select.sim.events import Wakeup
 from server_select.sim.oracle import OracleFlags
 from server_select.sim.tasks import PROBE_BYTES, TaskKind
 
-KEPT_RTTS = 256          # round trips kept per server (a minute of a contender's, at 4 Hz)
-
 
 class SimRobot(Transport, Events):
     """Robot ``host`` (a scenario Host) of simulation ``sim`` (its loop, network, servers,
-    random streams, model and records, where its task reports go), with parameters
-    ``get(name)`` and ``kinds``;
+    random streams, model and records), with parameters ``get(name)`` and ``kinds``;
     ``scenario_id``: the scenario's robot it is (its links, its oracle, its random streams:
     side by side, every variant's copy meets the same tasks)."""
 
     def __init__(self, sim, host, servers, get, kinds, fixed=None, oracle=False,
                  scenario_id=None, rule_args=None):
         self.sim, self.host, self.id, self.loop = sim, host, host.id, sim.loop
-        self.scenario_id = host.id if scenario_id is None else scenario_id
-        self.oracle = oracle
+        self.scenario_id, self.oracle = host.id if scenario_id is None else scenario_id, oracle
         task_kinds = [(TaskKind(k, self.id, sim.model, self._random('tasks/' + k.name)),
                        k.rate) for k in kinds]
         self.robot = Robot(self.id, servers, get('mode'), get, task_kinds, transport=self,
@@ -38,8 +33,6 @@ class SimRobot(Transport, Events):
         self._round = Wakeup(self.loop, self._probe_round)
         self._wakes = [Wakeup(self.loop, functools.partial(self._act, s)) for s in self.streams]
         self._to, self._from = {}, {}  # server -> connection for tasks, for results
-        # server -> its answered probes' round trips, the newest (the samples a node publishes)
-        self.rtts = collections.defaultdict(lambda: collections.deque(maxlen=KEPT_RTTS))
 
     def _random(self, purpose):
         """The run's seeded stream for the rule's draws, or a kind's tasks."""
@@ -65,8 +58,7 @@ class SimRobot(Transport, Events):
         self.robot.remove_server(server_id)
 
     # -- the robot's wake-ups -------------------------------------------------------------
-    def _stopped(self):
-        """Past its host's stop: no probe, no task sent."""
+    def _stopped(self):      # past its host's stop: no probe, no task sent
         return self.host.stop is not None and self.loop.now() >= self.host.stop
 
     def _probe_round(self):
@@ -79,9 +71,6 @@ class SimRobot(Transport, Events):
         if self._stopped():
             return
         stream.act()
-        self._schedule(stream)
-
-    def _schedule(self, stream):
         self._wakes[self.streams.index(stream)].request(stream.next_time())
 
     def report(self, outcome):
@@ -89,7 +78,7 @@ class SimRobot(Transport, Events):
 
     def sample(self, server, seq, rtt, error, wait, round_number):
         if rtt is not None and not error:
-            self.rtts[server].append(rtt)
+            self.sim.probe_answered(self.id, server, rtt)
 
     # -- the transport: probes ------------------------------------------------------------
     def probe(self, server_id, seq, kinds, rates):
@@ -119,25 +108,25 @@ class SimRobot(Transport, Events):
         """A task connection stalled in TCP's back-off is made anew, as the node's is; the
         server connects again after a round trip to the master and one to the robot, and
         what is sent before reaches nobody."""
-        connection = self._to.get(server_id)
-        now = self.loop.now()
+        connection, now = self._to.get(server_id), self.loop.now()
         if connection is not None and connection.stalled(now):
             connection.close()
-            self._to[server_id] = self._connect(server_id, now + 2.0 * rtt)
+            self._connection(self._to, self.sim.servers[server_id], 'task', now + 2.0 * rtt)
 
     # -- the transport: tasks and results -------------------------------------------------
-    def _connect(self, server_id, usable_from):
-        connection = self.sim.network.connection(self.host.name,
-                                                 self.sim.servers[server_id].host.name, 'task')
-        connection.usable_from = usable_from
-        return connection
+    def _connection(self, table, server, tag, usable_from=None):
+        """``server``'s task connection (``table`` ``_to``) or result one (``_from``), made
+        at its first use or, ``usable_from`` given, anew (what is sent before is dropped)."""
+        if usable_from is not None or server.id not in table:
+            here, there = self.host.name, server.host.name
+            table[server.id] = self.sim.network.connection(
+                *((here, there) if tag == 'task' else (there, here)), tag=tag)
+            table[server.id].usable_from = usable_from or 0.0
+        return table[server.id]
 
     def send_task(self, kind, task, server_id, budget):
-        server = self.sim.servers[server_id]
-        connection = self._to.get(server_id)
-        if connection is None:
-            connection = self._to[server_id] = self._connect(server_id, 0.0)
-        now = self.loop.now()
+        server, now = self.sim.servers[server_id], self.loop.now()
+        connection = self._connection(self._to, server, 'task')
         if now < connection.usable_from:
             return                        # no subscriber connected yet: rospy drops it
         arrival = connection.send(now, task.bytes)
@@ -148,10 +137,7 @@ class SimRobot(Transport, Events):
             server.submit(task, budget, functools.partial(self._reply, server))
 
     def _reply(self, server, task, ok, error, busy):
-        connection = self._from.get(server.id)
-        if connection is None:
-            connection = self._from[server.id] = self.sim.network.connection(
-                server.host.name, self.host.name, 'result')
+        connection = self._connection(self._from, server, 'result')
         arrival = connection.send(self.loop.now(), task.bytes if ok else PROBE_BYTES)
         self.loop.at(arrival, self._resolve, task, server.id, ok, error, busy)
 
@@ -160,4 +146,4 @@ class SimRobot(Transport, Events):
         resolution = stream.resolve(task.task_id, server_id, ok, error, None, busy)
         if ok:
             self.sim.work_answered(self.id, resolution.status == ENDED)
-        self._schedule(stream)
+        self._wakes[self.streams.index(stream)].request(stream.next_time())

@@ -30,6 +30,7 @@ from server_select.testbed.suite_scenario import REPLICA
 
 STATIC = Variant('fixed', 'paper', {})
 SORT_BYTES_PER_VALUE = 4
+KEPT_RTTS = 256          # probe round trips kept per pair (a minute of a contender's, at 4 Hz)
 FRAME_BYTES = 40000          # a 640x480 JPEG frame at quality 80, and its annotated answer
 
 Record = collections.namedtuple('Record', 'robot variant ended outcome')
@@ -124,6 +125,8 @@ class Simulation(object):
                              % (scenario.source, ', '.join(strays)))
         self.records, self.robots = [], []
         self.answers = collections.defaultdict(collections.Counter)   # variant -> wanted?
+        # (robot, server) -> its answered probes' newest round trips (the node's samples)
+        self.probe_rtts = collections.defaultdict(lambda: collections.deque(maxlen=KEPT_RTTS))
         self.variant_of = {}
         for index, name in enumerate(variants, start=1):
             spec = variant(name)
@@ -144,6 +147,9 @@ class Simulation(object):
 
     def report(self, robot, outcome):
         self.records.append(Record(robot, self.variant_of[robot], self.loop.now(), outcome))
+
+    def probe_answered(self, robot, server, rtt):
+        self.probe_rtts[(robot, server)].append(rtt)
 
     def work_answered(self, robot, wanted):
         """A server's finished task reached ``robot``: still wanted, or not."""

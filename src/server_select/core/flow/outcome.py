@@ -1,6 +1,7 @@
-"""A task's life at the robot: in flight (:class:`Pending`) and how it ended
-(:class:`Outcome`), with the constants a ``task_report`` uses (no rospy, no messages: the
-unit tests pin the constants equal to ``TaskReport``'s)."""
+"""How a task ended at the robot (:class:`Outcome`), what an answer did
+(:class:`Resolution`), and the constants a ``task_report`` uses (no rospy, no messages:
+the unit tests pin the constants equal to ``TaskReport``'s). A task in flight is a
+:class:`~server_select.core.flow.attempts.Pending`."""
 
 import collections
 
@@ -62,76 +63,3 @@ class EndedTasks(object):
         if answered_by == NO_SERVER:
             return LATE
         return OUTRUN if server != answered_by and server in sent_to else DUPLICATE
-
-
-class Pending(object):
-    """A task in flight: its request, check context, and the attempts made so far."""
-    __slots__ = ('task_id', 'stamp', 'request', 'context', 'started', 'attempts', 'deadline',
-                 'hedged', 'open', 'not_resent')
-
-    def __init__(self, task_id, stamp, request, context, started):
-        self.task_id, self.stamp, self.request, self.context = task_id, stamp, request, context
-        self.started, self.attempts, self.deadline = started, [], started
-        self.hedged = False
-        self.not_resent = None  # why its last failed attempt went nowhere else (None: it did)
-        self.open = set()       # servers of attempts not ended yet (no answer, no deadline)
-
-    def attempt(self, server, now, observer=None, kind=None, order=None):
-        """An attempt at ``server``, chosen from ``order``, starts ``now``
-        (``observer.started(server, kind, first, order)``: ``first`` for the task's first
-        attempt)."""
-        self.attempts.append((server, now))
-        self.open.add(server)
-        if observer is not None:
-            observer.started(server, kind, len(self.attempts) == 1, order)
-
-    def end(self, server, rtt=None, observer=None):
-        """The attempt at ``server`` ended, once: ``observer.ended(server, rtt)``; None
-        for every attempt still open."""
-        for each in list(self.open) if server is None else [server]:
-            if each in self.open:
-                self.open.discard(each)
-                if observer is not None:
-                    observer.ended(each, rtt)
-
-    def hedge_due(self, now, delay):
-        """Whether a hedged copy of this task goes now: once, when its only attempt is
-        older than ``delay(server)`` s (None: not known yet); a task re-sent meanwhile
-        is not hedged."""
-        if self.hedged:
-            return False
-        first, sent = self.attempts[0]
-        if len(self.attempts) == 1:
-            wait = delay(first)
-            if wait is None or now < sent + wait:
-                return False
-        self.hedged = True
-        return len(self.attempts) == 1
-
-    def hedge_at(self, delay):
-        """When :meth:`hedge_due` will say yes (None: not by itself: hedged already,
-        re-sent, or ``delay`` not known yet)."""
-        if self.hedged or len(self.attempts) != 1:
-            return None
-        first, sent = self.attempts[0]
-        wait = delay(first)
-        return None if wait is None else sent + wait
-
-    def servers(self):
-        """The servers this task was sent to."""
-        return frozenset(s for s, _ in self.attempts)
-
-    def sent_at(self, server):
-        return next((t for s, t in reversed(self.attempts) if s == server), None)
-
-    def unanswered(self, kind, why):
-        """How it ended without an answer: failed, ``why``, the servers it was sent to and,
-        when an attempt failed with no other after it, why there was none."""
-        return self.outcome(kind, NO_SERVER, False, '%s (%d attempts: servers %s%s)' % (
-            why, len(self.attempts), ', '.join(str(s) for s, _ in self.attempts),
-            '; not sent again: %s' % self.not_resent if self.not_resent else ''), None)
-
-    def outcome(self, kind, answered_by, ok, error, rtt):
-        """How it ended (``rtt`` None: no answer)."""
-        return Outcome(self.task_id, kind, self.stamp, self.attempts[0][0], answered_by, ok,
-                       error, rtt, len(self.attempts))

@@ -27,12 +27,12 @@ import itertools
 import threading
 import time
 
-from server_select.core.flow.attempts import AttemptClock
+from server_select.core.flow.attempts import AttemptClock, Pending
 from server_select.core.flow.timing import Timing
 from server_select.core.flow.outcome import (DUPLICATE, ENDED, FOREIGN, LATE,  # noqa: F401
                                              LOCAL, NO_SERVER, OUTRUN, RETRIED, UNKNOWN,
                                              EndedTasks,
-                                             Outcome, Pending, Resolution)
+                                             Outcome, Resolution)
 
 # a hedged copy goes after this quantile of a server's round trips, plus their median
 # ("The Tail at Scale": the p95)

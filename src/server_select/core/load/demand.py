@@ -1,6 +1,6 @@
 """What the robots send a server: the task rates they announce and, for robots that
-announce nothing, the rates their tasks arrive at; and a robot's own count of what it
-sends (:class:`SendRate`) (no rospy).
+announce nothing, the rates their tasks arrive at (no rospy); a robot's own count of what
+it sends is :class:`~server_select.core.rule.estimates.SendRate`.
 
 A load-aware robot's probe says the rate at which it sends tasks of each kind to that
 server now (0 to every server but the one its next task goes to). :class:`Demand` keeps
@@ -12,45 +12,6 @@ by its arrivals (:class:`Arrivals`).
 
 import collections
 import heapq
-import threading
-import time
-
-RATE_HORIZON = 5.0       # s of a robot's own attempts its send rate is counted over
-
-
-class SendRate(object):
-    """A robot's own attempts of each kind in the last :data:`RATE_HORIZON` s: the one
-    count of what it sends, read by its rule (its tasks' share of a server) and by its
-    probes (the rate they announce). Told of each attempt as the robot's other attempt
-    observers are (``started``, ``ended``). Thread-safe."""
-
-    def __init__(self, clock=time.monotonic, horizon=RATE_HORIZON):
-        self.horizon, self._clock = float(horizon), clock
-        self._lock = threading.Lock()
-        self._times = {}          # kind -> deque of when its attempts were sent
-
-    def started(self, server, kind=None, first=True, order=None):
-        now = self._clock()
-        with self._lock:
-            times = self._times.get(kind)
-            if times is None:
-                times = self._times[kind] = collections.deque()
-            times.append(now)
-            while now - times[0] > self.horizon:
-                times.popleft()
-
-    def ended(self, server, rtt=None):
-        """(An attempt's end changes no rate.)"""
-
-    def count(self, kind, now):
-        """``kind`` attempts sent in the last :attr:`horizon` s before ``now``."""
-        with self._lock:
-            return sum(1 for t in self._times.get(kind, ()) if now - t <= self.horizon)
-
-    def kinds(self):
-        """Every kind sent so far (None: attempts told no kind)."""
-        with self._lock:
-            return list(self._times)
 
 
 class Arrivals(object):

@@ -20,7 +20,6 @@ import threading
 import time
 
 from server_select.core.flow.budget import RetryBudget
-from server_select.core.load.demand import SendRate
 from server_select.core.robot.robot_load import RobotLoad
 from server_select.core.robot.probes import ProbeRounds
 from server_select.core.robot.stream import Stream
@@ -29,6 +28,7 @@ from server_select.core.robot import probe_plan as probing
 from server_select.core.robot.answer_time import STILL_OUT
 from server_select.core.ranking.passive import TaskBaseline
 from server_select.core.robot.selection_params import robot_selection
+from server_select.core.rule.estimates import SendRate
 
 
 class Robot(object):

@@ -3,18 +3,19 @@ fresh frames and samples read of the rule's estimates
 (:mod:`~server_select.core.rule.estimates`, the robot's one load model), and what its
 probes announce. The node and the simulator hand it :class:`Load` reports and their clock."""
 
+import functools
 import threading
 import time
 
-from server_select.core.load.demand import SendRate
 from server_select.core.rule.balancer import Balancer
+from server_select.core.rule.estimates import SendRate
 
 
 class RobotLoad(object):
     """What the robot's tasks would wait for at each server: ``mix`` is ``{kind: tasks
     per second}`` of the robot's streams. ``target(kind)`` names the server the robot's
     next ``kind`` task goes to: a probe of it announces the rate the robot sends that kind
-    at (``sends``, the robot's :class:`~server_select.core.load.demand.SendRate`, the count
+    at (``sends``, the robot's :class:`~server_select.core.rule.estimates.SendRate`, the count
     its rule reads; the kind's rate in ``mix`` until its first task is sent), a probe of
     any other announces none of it, so that servers count the robot's tasks where they go
     now (frames to one server and sort tasks to another, each where it goes). What it
@@ -72,25 +73,15 @@ class RobotLoad(object):
             self.mix[kind] = rate
 
     def expected(self, kind):
-        """``(server) -> seconds``: what one attempt of a ``kind`` task takes there by the
-        estimate (round trip + wait + work, not the tries a rule ranks an overloaded server
-        by; None: unknown), what an attempt's deadline follows."""
-        def seconds(server):
-            estimate = self.balancer.estimate_now(server, kind)
-            return None if estimate is None else estimate.rtt + estimate.wait + estimate.work
-        return seconds
+        """``(server) -> seconds``: what one attempt of a ``kind`` task takes there
+        (:meth:`Balancer.attempt_seconds`), what an attempt's deadline follows."""
+        return functools.partial(self.balancer.attempt_seconds, kind)
 
     def fresh_for(self, kind, factor, period):
         """``(server) -> seconds``: how long a ``kind`` task (a camera frame, one every
-        ``period()`` s, the stream's period as it is now) is worth waiting for at a server: until
-        the next frame is due, and at least ``factor`` x (round trip + work) there with no
-        queue (None: unknown)."""
-        def seconds(server):
-            estimate = self.balancer.estimate_now(server, kind)
-            if estimate is None or not estimate.work > 0:
-                return None
-            return max(period(), factor * (estimate.rtt + estimate.work))
-        return seconds
+        ``period()`` s, the stream's period as it is now) is worth waiting for at a server
+        (:meth:`Balancer.fresh_seconds`)."""
+        return functools.partial(self.balancer.fresh_seconds, kind, factor, period)
 
 
 def _check_mix(mix):

@@ -9,8 +9,7 @@ import random
 import threading
 import time
 
-from server_select.core.load.demand import SendRate
-from server_select.core.rule.estimates import MECHANISMS, ServerEstimates
+from server_select.core.rule.estimates import MECHANISMS, SendRate, ServerEstimates
 
 
 ProbeAnswer = collections.namedtuple('ProbeAnswer',
@@ -42,7 +41,7 @@ class Balancer(object):
     """The state every peer keeps: this robot's attempts out per server, the newest probe
     answer of each, and a random source (``rng``), drawn from once per task (``draw``:
     the next decision's numbers, so that asking draws nothing); ``sends``: the robot's
-    :class:`~server_select.core.load.demand.SendRate`, which the robot feeds (None: the
+    :class:`~server_select.core.rule.estimates.SendRate`, which the robot feeds (None: the
     rule counts its own attempts, as a rule made alone). Each kind of task goes where the
     rule sends that kind (:attr:`chosen_for`): a robot sending frames and sort tasks may be
     served best by two servers, and a frame sent to one is no move of its sort tasks.
@@ -102,11 +101,23 @@ class Balancer(object):
         with self._lock:
             return self.estimates.answer_wait(server, kind)
 
-    def estimate_now(self, server, kind):
-        """The :class:`~server_select.core.rule.estimates.Estimate` of a ``kind`` task at
-        ``server`` now (None: no answer in the window)."""
+    def attempt_seconds(self, kind, server):
+        """What one attempt of a ``kind`` task takes at ``server`` by the estimate now (round
+        trip + wait + work, not the tries a rule ranks an overloaded server by; None:
+        unknown): what an attempt's deadline follows."""
         with self._lock:
-            return self.estimates.estimate(server, kind, self._clock())
+            estimate = self.estimates.estimate(server, kind, self._clock())
+        return None if estimate is None else estimate.rtt + estimate.wait + estimate.work
+
+    def fresh_seconds(self, kind, factor, period, server):
+        """How long a ``kind`` task (a camera frame, one every ``period()`` s) is worth
+        waiting for at ``server``: until the next frame is due, and at least ``factor`` x
+        (round trip + work) there with no queue (None: unknown)."""
+        with self._lock:
+            estimate = self.estimates.estimate(server, kind, self._clock())
+        if estimate is None or not estimate.work > 0:
+            return None
+        return max(period(), factor * (estimate.rtt + estimate.work))
 
     def _probed(self, answer):
         """Subclasses: a probe answer arrived (lock held)."""

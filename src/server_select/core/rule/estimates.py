@@ -8,17 +8,21 @@ times the tries a server asked for more than it can do needs. Its noise: the err
 these or, when larger, how far its level strays between windows (:meth:`wander`). A kind
 a server has not done yet needs the least work any server reported for it (one task there
 tells). ``mechanisms`` names the parts in use (the league's ablation switches them off).
+The robot's own tasks count by :class:`SendRate`, its one count of what it sends.
 """
 
 import collections
 import math
 import statistics
+import threading
+import time
 
 from server_select.core.util.stats import mean_error, median_error, since_step, spread_of
 
 Z = 3.0                  # standard errors a challenger must win by (a level's step too)
 KEEP = 64                # answers kept per server at most
 LEVELS = 10              # a server's levels kept, one a window: 8 second differences
+RATE_HORIZON = 5.0       # s of a robot's own attempts its send rate is counted over
 MECHANISMS = ('robust', 'tries', 'work_error', 'wander', 'steps', 'own_kinds')
 
 Estimate = collections.namedtuple('Estimate', 'latency error wait answers rtt work')
@@ -27,9 +31,44 @@ its ``error``, the ``wait`` for a worker, the ``answers`` it rests on, their med
 trip ``rtt`` and the ``work`` per task (s)."""
 
 
+class SendRate(object):
+    """A robot's own attempts of each kind in the last :data:`RATE_HORIZON` s: the one
+    count of what it sends, read by its rule (its tasks' share of a server) and by its
+    probes (the rate they announce). Told of each attempt as the robot's other attempt
+    observers are (``started``, ``ended``). Thread-safe."""
+
+    def __init__(self, clock=time.monotonic, horizon=RATE_HORIZON):
+        self.horizon, self._clock = float(horizon), clock
+        self._lock = threading.Lock()
+        self._times = {}          # kind -> deque of when its attempts were sent
+
+    def started(self, server, kind=None, first=True, order=None):
+        now = self._clock()
+        with self._lock:
+            times = self._times.get(kind)
+            if times is None:
+                times = self._times[kind] = collections.deque()
+            times.append(now)
+            while now - times[0] > self.horizon:
+                times.popleft()
+
+    def ended(self, server, rtt=None):
+        """(An attempt's end changes no rate.)"""
+
+    def count(self, kind, now):
+        """``kind`` attempts sent in the last :attr:`horizon` s before ``now``."""
+        with self._lock:
+            return sum(1 for t in self._times.get(kind, ()) if now - t <= self.horizon)
+
+    def kinds(self):
+        """Every kind sent so far (None: attempts told no kind)."""
+        with self._lock:
+            return list(self._times)
+
+
 class ServerEstimates(object):
     """The estimates of a robot's servers (see the module's docstring). ``sends``: the
-    robot's :class:`~server_select.core.load.demand.SendRate`; ``chosen_for``: ``{kind:
+    robot's :class:`SendRate`; ``chosen_for``: ``{kind:
     server}`` where each kind's tasks go (the rule's, read, never written here). Not
     thread-safe: its rule's lock covers it."""
     memos = ('_wanders', '_parts')    # what its answers give anyway, kept to answer faster
