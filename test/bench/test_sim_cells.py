@@ -59,3 +59,13 @@ def test_the_progress_line_says_cells_done_and_the_time_left():
     now[0] += 65.0
     progress.step()
     assert lines[-1] == 'cells 4 of 4, done in 1 min 20 s'
+
+
+def test_few_cells_are_spread_over_every_worker_and_many_go_in_chunks():
+    """A scale cell's 10 groups on 2 workers go one a task (5 each, not 8 and 2); a league's
+    2,100 cells go 8 a task; one worker or one cell still makes whole tasks."""
+    assert cells.chunk_size(10, 2) == 1
+    assert cells.chunk_size(2100, 2) == cells.CHUNK
+    assert cells.chunk_size(64, 2) == cells.CHUNK
+    assert cells.chunk_size(40, 2) == 5
+    assert cells.chunk_size(1, 0) == 1
