@@ -129,7 +129,9 @@ class Prober(object):
             self.after_answers()
 
     def _probe(self, server, seq, kinds, rates):
-        """A probe that connects first (a worker thread's)."""
+        """A probe that connects first (a worker thread's). Whatever it raises ends the
+        probe failed: its Future would keep the error unseen, and the robot, which probes
+        a server again only once its probe out has ended, would never probe it again."""
         try:
             request = self._request(server, seq, kinds, rates)
             proxy = self._proxies.get(server)
@@ -142,11 +144,27 @@ class Prober(object):
                 self.robot.probe_failed(server, seq, str(error))
                 return
             self._answered(server, seq, request, proxy, response, rtt, None)
+        except Exception as failure:
+            self._unhandled(server, seq, failure)
         finally:
             self._after()
 
+    def _unhandled(self, server, seq, failure):
+        """What a probe's own handling raised: logged (throttled), and the probe failed."""
+        what = '%s: %s' % (type(failure).__name__, failure)
+        rospy.logerr_throttle(5.0, 'robot %d: probe of server %d: %s' % (
+            self.robot_id, server, what))
+        self.robot.probe_failed(server, seq, 'probe not handled: %s' % what)
+
     def _answered(self, server, seq, request, proxy, response, rtt, error):
-        """A probe's end: the robot hears of a failure, or of the answer once checked."""
+        """A probe's end: the robot hears of a failure, or of the answer once checked (what
+        a check raises fails the probe: :meth:`_unhandled`)."""
+        try:
+            self._check(server, seq, request, proxy, response, rtt, error)
+        except Exception as failure:
+            self._unhandled(server, seq, failure)
+
+    def _check(self, server, seq, request, proxy, response, rtt, error):
         if error is not None:
             self.seal.forget(server)    # a server started again knows it from a sealed one
             self.robot.probe_failed(server, seq, str(error))

@@ -124,14 +124,23 @@ class Robot(object):
             return
         number, probes = due
         self.events.round(number, [server for server, _, _ in probes])
+        unsent = None
         for server, seq, late in probes:
             if late:      # its previous probe is late: a failed sample, no second call
                 self._sample(server, seq, None, STILL_OUT, None, number)
                 continue
-            kinds, rates = self.load.announcement(server) if self.load else ((), ())
-            handle = self.transport.probe(server, seq, kinds, rates)
+            try:
+                kinds, rates = self.load.announcement(server) if self.load else ((), ())
+                handle = self.transport.probe(server, seq, kinds, rates)
+            except Exception as error:    # ended failed: left out, it would block the server
+                unsent = unsent or error  # for good; the others still go, then it is raised
+                self.probe_failed(server, seq, 'probe not sent: %s: %s'
+                                  % (type(error).__name__, error))
+                continue
             with self._lock:
                 self.rounds.sent_with(server, seq, handle)
+        if unsent is not None:
+            raise unsent
 
     def probe_answered(self, server, seq, rtt, load=None):
         """Probe ``seq`` of ``server`` was answered (checked, sealed) after ``rtt`` s,
