@@ -111,12 +111,13 @@ class SimRobot(Transport, Events):
         connection, now = self._to.get(server_id), self.loop.now()
         if connection is not None and connection.stalled(now):
             connection.close()
-            self._connection(self._to, self.sim.servers[server_id], 'task', now + 2.0 * rtt)
+            self._connection(self.sim.servers[server_id], 'task', now + 2.0 * rtt)
 
     # -- the transport: tasks and results -------------------------------------------------
-    def _connection(self, table, server, tag, usable_from=None):
-        """``server``'s task connection (``table`` ``_to``) or result one (``_from``), made
-        at its first use or, ``usable_from`` given, anew (what is sent before is dropped)."""
+    def _connection(self, server, tag, usable_from=None):
+        """``server``'s ``tag`` connection, 'task' (``_to`` it) or 'result' (``_from`` it),
+        made at its first use or, ``usable_from`` given, anew (what was sent is dropped)."""
+        table = self._to if tag == 'task' else self._from
         if usable_from is not None or server.id not in table:
             here, there = self.host.name, server.host.name
             table[server.id] = self.sim.network.connection(
@@ -126,7 +127,7 @@ class SimRobot(Transport, Events):
 
     def send_task(self, kind, task, server_id, budget):
         server, now = self.sim.servers[server_id], self.loop.now()
-        connection = self._connection(self._to, server, 'task')
+        connection = self._connection(server, 'task')
         if now < connection.usable_from:
             return                        # no subscriber connected yet: rospy drops it
         arrival = connection.send(now, task.bytes)
@@ -137,7 +138,7 @@ class SimRobot(Transport, Events):
             server.submit(task, budget, functools.partial(self._reply, server))
 
     def _reply(self, server, task, ok, error, busy):
-        connection = self._connection(self._from, server, 'result')
+        connection = self._connection(server, 'result')
         arrival = connection.send(self.loop.now(), task.bytes if ok else PROBE_BYTES)
         self.loop.at(arrival, self._resolve, task, server.id, ok, error, busy)
 

@@ -105,19 +105,21 @@ class Balancer(object):
         """What one attempt of a ``kind`` task takes at ``server`` by the estimate now (round
         trip + wait + work, not the tries a rule ranks an overloaded server by; None:
         unknown): what an attempt's deadline follows."""
-        with self._lock:
-            estimate = self.estimates.estimate(server, kind, self._clock())
+        estimate = self._estimate_now(server, kind)
         return None if estimate is None else estimate.rtt + estimate.wait + estimate.work
 
     def fresh_seconds(self, kind, factor, period, server):
         """How long a ``kind`` task (a camera frame, one every ``period()`` s) is worth
         waiting for at ``server``: until the next frame is due, and at least ``factor`` x
         (round trip + work) there with no queue (None: unknown)."""
-        with self._lock:
-            estimate = self.estimates.estimate(server, kind, self._clock())
+        estimate = self._estimate_now(server, kind)
         if estimate is None or not estimate.work > 0:
             return None
         return max(period(), factor * (estimate.rtt + estimate.work))
+
+    def _estimate_now(self, server, kind):
+        with self._lock:
+            return self.estimates.estimate(server, kind, self._clock())
 
     def _probed(self, answer):
         """Subclasses: a probe answer arrived (lock held)."""
