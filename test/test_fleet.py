@@ -103,6 +103,13 @@ class FleetTest(unittest.TestCase):
                 'no node publishes one (fixed mode)' if self.mode == 'fixed'
                 else 'the manager publishes the shared topic', robot_nodes))
             return
+        # the manager flags a robot once it has heard the robot's samples: on a loaded
+        # host (catkin's run beside the other test streams) the fleet's start alone once
+        # took longer than the 20 s the latched delivery below is given (its copy on the
+        # shared topic, which the recorder hears, says it happened)
+        self.assertTrue(self.rec.wait_for(
+            lambda: set(self.robots) <= set(self.rec.latest_flags()), 60.0),
+            'the manager flagged no robot of %s in 60 s' % self.robots)
         listeners = {}
         for robot, topic in zip(self.robots, own):
             got, handles = [], []
