@@ -488,3 +488,25 @@ def test_least_latency_leaving_a_server_behind_goes_to_none_behind_the_best():
         return 3
     assert {first_move(seed) for seed in range(12)} == {1}
     assert first_move(1, off=('behind',)) == 3      # within the noise: kept
+
+
+def test_least_latency_leaves_no_server_for_one_yet_to_report_the_work():
+    """Identical servers on one host, of which only the robot's own has done its kind: the
+    others' levels lack the work it reports, not its time, so it lies behind none of them
+    (the loopback demo: a robot's first 15 s made 12 of 17 moves of its 90, each to a
+    server yet to do a sort task, then back). Their estimates count the least work any
+    server reported, so one faster beyond the noise is still moved to."""
+    def chosen(rtts):
+        clock = Clock()
+        rule = least_latency(clock, window=2.0)
+        answer = Load(0, 0, 1, 0.0, {}, 0.0, None)
+        for i in range(64):      # 16 s, +-1 ms: server 1 did 1 ms sort tasks; 2 and 3 none
+            jitter = 1e-3 * (-1) ** i
+            rule.probed(1, rtts[0] + jitter, Load(0, 0, 1, 0.0, {'sort': 0.001}, 0.0, None))
+            for server, rtt in zip((2, 3), rtts[1:]):
+                rule.probed(server, rtt + jitter, answer)
+            clock.now += 0.25
+            if i % 2 and (i > 8 or i == 1):
+                yield send(rule, [1, 2, 3], 'sort')
+    assert set(chosen([0.0041, 0.004, 0.0042])) == {1}      # within the noise: kept
+    assert list(chosen([0.0041, 0.004, 0.001]))[-1] == 3     # faster beyond it: moved

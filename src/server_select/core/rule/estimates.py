@@ -112,9 +112,11 @@ class ServerEstimates(object):
             known[kind] = spread_of(since_step(levels, Z) if 'steps' in self.mechanisms else levels)
         return known[kind]
 
-    def level_series(self, server, kind):
-        """``server``'s levels for ``kind``: each window's median round trip + work."""
-        return [rtt + service.get(kind, 0.0) for _, rtt, service in self.levels.get(server, ())]
+    def level_series(self, server, kind, reported=False):
+        """``server``'s levels for ``kind``: each window's median round trip + work (0.0
+        where it reported none; ``reported``: only the windows where it reported some)."""
+        return [rtt + service.get(kind, 0.0) for _, rtt, service in self.levels.get(server, ())
+                if not reported or kind in service]
 
     def rate(self, kind, now):
         """The robot's ``kind`` tasks a second (the next one included: never 0), counted

@@ -102,9 +102,11 @@ class LeastLatency(Balancer):
                                       if len(near) > 1 else ''), estimates)
 
     def _behind(self, here, best, kind):
-        """Whether ``here``'s last :data:`BEHIND` levels all lie above ``best``'s (alike: 1/70)."""
+        """Whether ``here``'s last :data:`BEHIND` levels all lie above ``best``'s (alike: 1/70),
+        counting a level only where its server reported work for ``kind`` (a server yet to do
+        one lies behind none by the work it has not reported)."""
         levels = self.estimates.level_series
-        mine, theirs = (levels(s, kind)[-BEHIND:] for s in (here, best))
+        mine, theirs = (levels(s, kind, reported=True)[-BEHIND:] for s in (here, best))
         return 'behind' in self.mechanisms and len(mine) == len(theirs) == BEHIND and \
             min(mine) > max(theirs)
 
