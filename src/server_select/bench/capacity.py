@@ -39,6 +39,7 @@ from server_select.bench.capacity_work import SORT_SIZE, cpu_per_task
 from server_select.vision.image_source import write_frame
 from server_select.bench.harness import scenario_run
 from server_select.testbed import bag_analysis, suite
+from server_select.testbed.suite_scenario import server_args
 
 VARIANTS = ('paper', 'fleet', 'static', 'fleet_hysteresis') + suite.RULES
 # besides static, any suite variant whose robots select, on hosts of their own
@@ -77,7 +78,8 @@ def run_once(variant, kind, rate, args, work, name):
         for server in range(1, len(shares) + 1):   # a host's /sys hides its cgroup quota
             args_of = ('server%d' % server, 'server.launch', 'server_id:=%d' % server,
                        'routing:=direct', 'workers:=%d' % math.ceil(shares[server - 1]),
-                       'summary_period:=%g' % SUMMARY_PERIOD)
+                       'summary_period:=%g' % SUMMARY_PERIOD,
+                       'check_every:=%g' % server_args()['check_every'])
             if late is not None and server == len(shares):
                 threading.Thread(target=lambda a=args_of: (run.tb.sleep_until(late),
                                                            run.launch(*a)),

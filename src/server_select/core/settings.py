@@ -105,6 +105,10 @@ PARAMS = {
     'work_delay': Param(0.0, parse_non_negative, 'each task takes this much longer (s): a '
                         'slower or busier machine; with ~test_knobs, rosparam set changes '
                         'it at run time'),
+    'check_every': Param(0.0, parse_non_negative, 'server: while no robot sends here, time '
+                         'a copy of the last task of a kind not timed for this long (s; and '
+                         'at most 5 % of a worker), so that probes say what one takes now '
+                         '(0: never)'),
     'test_knobs': Param(False, parse_bool, 'server: follow ~work_delay at run time (tests and '
                         'the testbed); off, it is read once at start and no other node can '
                         'slow the server down'),
@@ -221,7 +225,9 @@ PROFILES = {
               'contender_rate': 4.0, 'background_rate': 1.0,
               'hedge': True,
               # capacity: docs/design.md, "Capacity and overload"
-              'load_aware': True, 'max_in_flight': 1, 'fresh_factor': 2.0},
+              'load_aware': True, 'max_in_flight': 1, 'fresh_factor': 2.0,
+              # a server's idle kinds checked: docs/design.md, "Capacity and overload"
+              'check_every': 0.5},
 }
 
 

@@ -64,6 +64,9 @@ class ServerNode(object):
         - ``~max_queue_bytes`` (int, 32 MiB): memory those tasks may hold; more: busy.
         - ``~summary_period`` (s, 10): period of the log line of what it has done.
         - ``~work_delay`` (s, 0): each task takes this much longer (a slower machine).
+        - ``~check_every`` (s, 0; fleet: 0.5): while no robot sends here, a copy of the
+          last task of a kind not timed for this long (nor for 20 of its tasks' work) is
+          worked on again, so that probe answers say what one takes now.
         - ``~test_knobs`` (bool, false): follow ``~work_delay`` at run time (``rosparam
           set``, for tests and the testbed); off, it is read once at start.
         - ``~detector`` (str, ``haar``): ``haar`` or ``hog``.
@@ -94,6 +97,7 @@ class ServerNode(object):
         self.server_id = param('server_id')
         self.queue_size = param('queue_size')
         self.work_delay = param('work_delay')
+        self.check_every = param('check_every')
         workers = param('workers') or usable_cpus()
         self.work = ServerWork(self.server_id, workers, param('max_queue'),
                                param('max_queue_bytes'))
@@ -163,6 +167,7 @@ class ServerNode(object):
     def on_probe(self, req):
         if self.admission.probe(req):
             self._heard(req)
+            self.work.check(self.check_every)
         load = self.work.load(req.robot_id)
         return seal.seal_answer(LatencyProbeResponse(
             server_id=self.server_id, seq=req.seq, stamp=req.stamp, server_stamp=rospy.Time.now(),

@@ -121,8 +121,9 @@ class ServerEndpoint(object):
     for its result and :meth:`reply` with it; each result goes back the way its task came.
     Tasks addressed to another server are dropped here."""
 
-    def __init__(self, server_id, kind, handle, direct, submit, queue_size=100):
+    def __init__(self, server_id, kind, handle, direct, submit, queue_size=100, rehearse=None):
         self.server_id, self.kind, self.handle = server_id, kind, handle
+        self.rehearse = rehearse or (lambda task: False)
         self.kind_name = kind_name(kind)
         self.submit = submit
         self.direct = ResultRoutes(kind.result_topic, kind.result_type) if direct else None

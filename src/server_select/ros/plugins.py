@@ -28,7 +28,8 @@ class TaskPlugin(object):
     and ``process_time`` (and ``bool busy``); the rest is the plug-in's.
 
     Robot side (``robot_id`` is an int): ``make``, ``check``, ``run_local``, ``rate`` and
-    ``ready``. Server side (``robot_id`` is None): ``start``, ``warm`` and ``handle``.
+    ``ready``. Server side (``robot_id`` is None): ``start``, ``warm``, ``handle`` and
+    ``rehearse``.
     """
 
     kind = None                          # the name in task reports and of the settings
@@ -74,6 +75,12 @@ class TaskPlugin(object):
     def handle(self, task, result):
         """Fill ``result`` for ``task`` on a server; raise ValueError to reject the task."""
         raise NotImplementedError
+
+    def rehearse(self, task, result):
+        """Server side: ``task``'s work again, into ``result`` and nowhere else: what a
+        server nobody sends to times to say what one takes now (``~check_every``). False,
+        the default: not rehearsed (a type's ``handle`` may act beyond its result)."""
+        return False
 
     def max_bytes(self):
         """Server side: the longest task message taken, bytes (setting ``max_bytes``,
@@ -141,7 +148,7 @@ class PluginHandler(object):
     def __init__(self, server_id, plugin, submit, queue_size=100, direct=False, work=None):
         self.server_id, self.plugin = server_id, plugin
         self.endpoint = ServerEndpoint(server_id, plugin, self.on_task, direct, submit,
-                                       queue_size)
+                                       queue_size, rehearse=self.rehearse)
         self.work = work
         self._lock = threading.Lock()
         self.done = self.rejected = 0
@@ -150,10 +157,22 @@ class PluginHandler(object):
         self.plugin.start()
         self.endpoint.start()
 
+    def _result(self, task):
+        return self.plugin.result_type(header=task.header, robot_id=task.robot_id,
+                                       task_id=task.task_id, server_id=self.server_id)
+
+    def rehearse(self, task):
+        """``task``'s work again with no effect beyond its result, which goes nowhere (a
+        check: :meth:`TaskPlugin.rehearse`); False when its type does not rehearse."""
+        if self.plugin.rehearse(task, self._result(task)) is False:
+            return False
+        if self.work is not None:
+            self.work()
+        return True
+
     def on_task(self, task):
         """The result of ``task``."""
-        result = self.plugin.result_type(header=task.header, robot_id=task.robot_id,
-                                         task_id=task.task_id, server_id=self.server_id)
+        result = self._result(task)
         start = time.perf_counter()
         try:
             self.plugin.handle(task, result)

@@ -7,7 +7,7 @@ import time
 import rospy
 
 from server_select.core.load.pauses import Pauses
-from server_select.core.load.work_queue import WorkQueue
+from server_select.core.load.work_queue import CHECK, WorkQueue
 from server_select.core.trust.senders import SenderThrottle, Throttle
 
 
@@ -17,7 +17,9 @@ class ServerWork(object):
     result from a worker, or at once a *busy* result when the task cannot be finished by
     the deadline its robot gave (``budget``), or the queue is full; a task whose deadline
     passed while it waited, or that a task of a robot holding less of the queue pushed
-    out, is answered busy too, without doing the work."""
+    out, is answered busy too, without doing the work. While nobody sends here, a copy of
+    the last task of a kind none of whose tasks was timed in the last ``check_every`` s is
+    worked on again (:meth:`check`), its result going nowhere."""
 
     def __init__(self, server_id, workers, max_queue, max_queue_bytes=None,
                  clock=time.monotonic):
@@ -25,7 +27,9 @@ class ServerWork(object):
         self.queue = WorkQueue(workers, max_queue, max_bytes=max_queue_bytes, clock=clock,
                                on_pushed_out=lambda job, why: self._busy(*job.item, why))
         self._lock = threading.Lock()
-        self.busy = 0
+        self.busy = self.checks = 0
+        self._last = {}          # kind -> (endpoint, task) of its last task done
+        self._unrehearsed = set()    # kinds whose type does not rehearse a task
         self.pauses = Pauses(clock=clock)
         self._paused_lines = Throttle(5.0, clock=clock)
         self._busy_lines = SenderThrottle(5.0, clock=clock)    # a line per robot
@@ -59,22 +63,45 @@ class ServerWork(object):
             if why is not None:
                 self._busy(endpoint, task, direct, why)
                 continue
-            start = self._clock()
+            start, check = self._clock(), job.owner == CHECK
             try:
-                result = endpoint.handle(task)
+                result = endpoint.rehearse(task) if check else endpoint.handle(task)
             except Exception as error:    # a defect in one handler must not stop a worker
                 self.queue.done(job)
-                rospy.logerr('server %d: %s task %d of robot %d: %s: %s', self.server_id,
+                rospy.logerr('server %d: %s task %d of robot %d%s: %s: %s', self.server_id,
                              endpoint.kind_name, task.task_id, task.robot_id,
+                             ' (a check; the kind is not checked again)' if check else '',
                              type(error).__name__, error)
-                endpoint.reply(task, direct, endpoint.error_result(task, 'server error: %s'
-                                                                   % error))
+                if check:
+                    self._checked(job.kind, False)
+                else:
+                    endpoint.reply(task, direct, endpoint.error_result(
+                        task, 'server error: %s' % error))
                 continue
             first = job.kind not in loaded
             loaded.add(job.kind)
-            self.queue.done(job, self._work(job.kind, start) if result.ok and not first
-                            else None)
-            endpoint.reply(task, direct, result)
+            ok = result is not False if check else result.ok
+            self.queue.done(job, self._work(job.kind, start) if ok and not first else None)
+            if check:
+                self._checked(job.kind, result)
+            else:
+                if ok:
+                    self._last[job.kind] = (endpoint, task)
+                endpoint.reply(task, direct, result)
+
+    def check(self, every):
+        """While nobody sends here, a check of a kind due one (a probe came: from a probe's
+        thread; never blocks; :meth:`WorkQueue.offer_check`)."""
+        def item_of(kind):
+            last = None if kind in self._unrehearsed else self._last.get(kind)
+            return last and last + (None,)
+        self.queue.offer_check(every, item_of)
+
+    def _checked(self, kind, rehearsed):
+        with self._lock:
+            self.checks += rehearsed is not False
+        if rehearsed is False:
+            self._unrehearsed.add(kind)
 
     def _work(self, kind, start):
         """The seconds of work a task begun at ``start`` took, or None when the process
@@ -112,7 +139,8 @@ class ServerWork(object):
     def summary(self):
         queue = self.queue
         return '%d workers, %d tasks worked on, %d answered busy (%d of them shed from the ' \
-            'queue)' % (queue.workers, queue.finished, self.busy, queue.shed)
+            'queue), %d checks of an idle kind' % (queue.workers, queue.finished, self.busy,
+                                                   queue.shed, self.checks)
 
     def shutdown(self):
         """Stop the workers; tasks still queued get no answer (their robots re-send)."""

@@ -13,6 +13,8 @@ import sys
 
 import yaml
 
+from server_select.core.settings import default
+
 from server_select.sim import cells, league, report
 from server_select.sim.model import Model
 from server_select.sim.report import ORACLE
@@ -52,6 +54,7 @@ def _from_bag(path, out):
     from server_select.testbed.bag_analysis import load
     run = load(path)
     data = from_bag.scenario(run, Model.load())
+    data['suite']['check_every'] = default('check_every', own_profile(run))   # its servers'
     name = os.path.abspath(os.path.join(out, 'from_bag.yaml'))
     with open(name, 'w') as stream:
         stream.write('# the run of %s\n' % path)

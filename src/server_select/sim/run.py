@@ -13,7 +13,8 @@ A scenario file's ``suite: robot_args`` say what the robots send (``task_rate``,
 what one robot sends otherwise (``{robot7: {frame_rate: 4}}``: a burst robot's own rate,
 beside a ``stop``); ``suite: measure_from``
 where the measured part starts (35 s, the suite's, by default); ``suite: hop_ms`` the
-middleware's delay per message where it is not the model's (a bag's run on one host).
+middleware's delay per message where it is not the model's (a bag's run on one host);
+``suite: check_every`` the servers' checks of an idle kind (the fleet profile's: 5 s).
 """
 
 import collections
@@ -26,7 +27,7 @@ from server_select.sim.robot import SimRobot
 from server_select.sim.server import SimServer
 from server_select.sim.tasks import Kind
 from server_select.testbed.suite import MEASURE_FROM, VARIANTS, Variant
-from server_select.testbed.suite_scenario import REPLICA
+from server_select.testbed.suite_scenario import REPLICA, server_args
 
 STATIC = Variant('fixed', 'paper', {})
 SORT_BYTES_PER_VALUE = 4
@@ -112,7 +113,8 @@ class Simulation(object):
         # a scenario may say its middleware's delay (a bag's run on one host: less)
         self.network = Network(scenario, self.streams, float(
             scenario.suite['hop_ms']) * 1e-3 if 'hop_ms' in scenario.suite else model.hop)
-        self.servers = dict((h.id, SimServer(self.loop, h, model, self.streams))
+        check_every = server_args(scenario.suite)['check_every']
+        self.servers = dict((h.id, SimServer(self.loop, h, model, self.streams, check_every))
                             for h in scenario.of_role('server'))
         suite = scenario.suite
         args = dict(suite.get('robot_args') or {})

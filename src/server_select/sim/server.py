@@ -8,24 +8,32 @@ every variant of a seed meets the same task sizes) over the host's CPU share per
 worker, plus the scenario's extra ``work`` delay; on a host of less than a core, whose one
 worker the cgroup's quota stops when it is spent, the work runs at full speed within the
 quota of each ``cpu_period`` (:class:`~server_select.sim.quota.CpuQuota`). A worker's first
-task of a kind is not timed, as the node's is not. While the host hangs (SIGSTOP) nothing
+task of a kind is not timed, as the node's is not. While no robot sends here, a probe's
+answer offers a check of an idle kind (``check_every``), as the node's does: a task of the
+work of that kind's last, timed and answered to nobody. While the host hangs (SIGSTOP) nothing
 runs and nothing is answered: work and answers resume when it goes on. A probe is
 answered after its CPU (at full speed on a host of less than a core), which with a busy
 worker there waits for the next quota period (``cpu_period``), as a cgroup throttles it.
 """
 
+import collections
 import math
 
-from server_select.core.load.work_queue import WorkQueue
+from server_select.core.load.work_queue import CHECK, WorkQueue
 from server_select.sim.quota import CpuQuota
+
+
+Check = collections.namedtuple('Check', 'work')   # a check's task: the CPU s of its kind's last
 
 
 class SimServer(object):
     """Server ``host`` (a scenario Host) on ``loop``; ``reply(task, result)`` sends a
     result back."""
 
-    def __init__(self, loop, host, model, streams, max_queue=100, cores=2):
+    def __init__(self, loop, host, model, streams, check_every=0.0, max_queue=100, cores=2):
         self.loop, self.host, self.model = loop, host, model
+        self.check_every = check_every
+        self.last_work = {}       # kind -> the CPU s of its last task begun
         self.id = host.id
         self.cpu = host.cpu
         self.workers = int(math.ceil(self.cpu)) if self.cpu else cores
@@ -108,6 +116,10 @@ class SimServer(object):
                 self.model.cpu_factor / min(1.0, self.cpu or 1.0)
         if self.cpu and self.idle < self.workers:
             self.stolen += self.model.probe_cpu * self.model.cpu_factor
+        if self.queue.offer_check(self.check_every, lambda kind: (
+                Check(self.last_work[kind]), None) if kind in self.last_work else None):
+            self.waiting += 1
+            self._start_workers()
         return self.queue.load(excluding=robot)
 
     # -- tasks ----------------------------------------------------------------------------
@@ -154,7 +166,7 @@ class SimServer(object):
                 continue
             self.idle -= 1
             now = self.loop.now()
-            cpu = task.work
+            cpu = self.last_work[job.kind] = task.work
             if job.kind in self.unwarmed:      # nobody announced it: its first task loads
                 self.unwarmed.discard(job.kind)
                 cpu += self.model.warm[job.kind] * self.model.cpu_factor
@@ -180,6 +192,7 @@ class SimServer(object):
         self.idle += 1
         if not self.running(self.loop.now()):
             return                    # the process was stopped: no answer, no more work
-        self.completions.append(self.loop.now())
-        reply(task, True, '', False)
+        if job.owner != CHECK:        # (a check is answered to nobody)
+            self.completions.append(self.loop.now())
+            reply(task, True, '', False)
         self._start_workers()

@@ -135,6 +135,17 @@ class Frames(TaskPlugin):
         return 3 * self.max_pixels + MESSAGE_SLACK
 
     def handle(self, task, result):
+        boxes = self.rehearse(task, result)
+        header = task.image.header if not task.compressed.data else task.compressed.header
+        self.detections_pub.publish(Detections(
+            header=header, robot_id=task.robot_id, task_id=task.task_id,
+            server_id=result.server_id, detections=[
+                Detection(roi=RegionOfInterest(x_offset=b.x, y_offset=b.y, width=b.width,
+                                               height=b.height),
+                          label=b.label, score=b.score) for b in boxes]))
+
+    def rehearse(self, task, result):
+        """The frame searched and ``result`` made, nothing shared (the boxes found)."""
         img, packed = task.image, task.compressed
         raw = not packed.data
         boxes, annotated = self._search((img.encoding, img.height, img.width, img.step,
@@ -147,12 +158,7 @@ class Frames(TaskPlugin):
             fmt, data = image_codec.encode(annotated, self.quality)
             result.compressed = CompressedImage(header=packed.header, format=fmt, data=data)
         result.detection_count = len(boxes)
-        self.detections_pub.publish(Detections(
-            header=img.header if raw else packed.header, robot_id=task.robot_id,
-            task_id=task.task_id, server_id=result.server_id, detections=[
-                Detection(roi=RegionOfInterest(x_offset=b.x, y_offset=b.y, width=b.width,
-                                               height=b.height),
-                          label=b.label, score=b.score) for b in boxes]))
+        return boxes
 
     def _search(self, raw, packed):
         """Boxes and annotated frame of a raw or ``packed`` frame, with a detector of this

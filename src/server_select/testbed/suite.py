@@ -4,13 +4,12 @@ One run of a scenario gives each *variant* (a mode, a profile and parameters: th
 baseline pinned to one server, the oracle, the paper's rule, the fleet profile, each
 policy alone, the fleet profile with hedged tasks) its own copy of every robot: robot
 ``r`` of variant ``k`` is robot ``10 k + r`` on a host of its own with the same links as
-the scenario's robot ``r``. The servers (and the network) are shared, so all variants
-meet the same link changes at the same moment and their ratios are measured side by side;
-each select variant has a manager of its own (``manager_<variant>``). Runs are repeated
-(``--repeats``), each in a fresh testbed with its own namespace prefix.
+the scenario's robot ``r``. The servers (launched with ``suite_scenario.server_args``) and
+the network are shared, so all variants meet the same changes at the same moment; each
+select variant has a manager of its own (``manager_<variant>``). Runs are repeated, each
+in a fresh testbed with its own namespace prefix.
 
-The bags (``<out>/<scenario>/run<i>.bag`` with a ``.json`` beside each) are the only input
-of :mod:`server_select.testbed.suite_report`.
+The bags (``<out>/<scenario>/run<i>.bag``, a ``.json`` beside each) are ``suite_report``'s input.
 """
 
 import collections
@@ -30,7 +29,7 @@ from server_select.testbed.traces import netns_pids
 from server_select.testbed.scenario import Scenario, ScenarioError
 from server_select.testbed.suite_scenario import (expand, launch_args, robot_params,
                                                   scenario_path, scenario_robot_args,
-                                                  short_name)
+                                                  server_args, short_name)
 
 Variant = collections.namedtuple('Variant', 'mode profile params host')
 Variant.__new__.__defaults__ = ({},)     # host: what its robots' hosts are like (scenario keys)
@@ -109,7 +108,7 @@ def _args(params, accepted):
 class SuiteRun(HostRun):
     """One run of one scenario with every variant side by side."""
 
-    def start_variants(self, variants, owners, options, bag, robot_args=None):
+    def start_variants(self, variants, owners, options, bag, robot_args=None, servers=None):
         manager = self.scenario.manager.name
         robots_of = collections.defaultdict(list)
         for rid, (variant, _) in sorted(owners.items()):
@@ -127,7 +126,8 @@ class SuiteRun(HostRun):
         for server in self.scenario.of_role('server'):
             self.launch(server.name, 'server.launch', 'server_id:=%d' % server.id,
                         'routing:=direct',      # takes broadcast and direct tasks
-                        'test_knobs:=true')     # its events may set ~work_delay
+                        'test_knobs:=true',     # its events may set ~work_delay
+                        *_args(servers or server_args(), ('check_every',)))
             threading.Thread(target=self.server_events, args=(server,), daemon=True).start()
         if robot_args and self.tb.t0 is None:
             raise ScenarioError('%s: a sweep starts at time zero, which its robots must be '
@@ -225,7 +225,8 @@ def run_scenario(name, out_dir, repeat, variants, options, log=print):
     with Testbed(scenario, path, run_dir, prefix=options.prefix) as tb:
         run = SuiteRun(tb, scenario, run_dir)
         run.start_master()
-        run.start_variants(variants, owners, options, bag, suite.get('robot_args'))
+        run.start_variants(variants, owners, options, bag, suite.get('robot_args'),
+                           server_args(suite))
         log('%s run %d: %d variants, %d robots, until %.0f s (%s)'
             % (name, repeat, len(variants), len(owners), scenario.duration, run_dir))
         tb.sleep_until(scenario.duration)

@@ -6,6 +6,7 @@ import os
 import tempfile
 import xml.etree.ElementTree as ElementTree
 
+from server_select.core.settings import default
 from server_select.ros.paths import package_file
 from server_select.testbed.scenario import ScenarioError
 
@@ -14,6 +15,14 @@ REPLICA = 10        # robot r of variant k is robot REPLICA * k + r
 # the suite's network scenarios that the leagues run (simulated and on the testbed)
 NETWORK = ('paper_moving', 'crossing', 'near_equal', 'link_flap', 'loaded_server',
            'hung_server')
+
+
+def server_args(suite=None):
+    """``{parameter: value}`` of a league's servers beyond their defaults, shared by every
+    variant (the simulator's alike): the fleet profile's checks of an idle kind, or a
+    scenario's ``suite: check_every``."""
+    return {'check_every': float((suite or {}).get('check_every',
+                                                   default('check_every', 'fleet')))}
 
 
 def scenario_path(name):

@@ -48,3 +48,5 @@ class WordCount(TaskPlugin):
         if len(task.text) > 100000:
             raise ValueError('text longer than 100000 characters')
         result.words = len(task.text.split())
+
+    rehearse = handle     # it acts on its result alone: an idle server may time a copy

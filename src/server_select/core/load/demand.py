@@ -13,6 +13,8 @@ by its arrivals (:class:`Arrivals`).
 import collections
 import heapq
 
+ROUNDING = 1e-9     # tasks a second: what subtracting announced rates may leave of none
+
 
 class Arrivals(object):
     """The rate at which each sender's tasks of each kind arrive (not thread-safe: the
@@ -108,6 +110,9 @@ class Demand(object):
         entry = self._announced.pop(owner, None)
         if entry is not None:
             self._sums.subtract(entry[1])
+            for kind in entry[1]:      # no rounding left over: a rate nobody announces is none
+                if self._sums[kind] < ROUNDING:
+                    del self._sums[kind]
 
     def _expire(self, now):
         while self._expiry and now - self._expiry[0][0] > self.announce_age:

@@ -11,6 +11,7 @@ from server_select.core.util.stats import mean_error, median_error
 # the standard error of a median of n draws: its variance is 1 / (4 n f(median)^2) for
 # large n, sqrt(pi / 2) x sigma / sqrt(n) when the draws are normal
 MEDIAN_ERROR = 1.2533
+CHECK_SHARE = 0.05   # of a worker's time, at most, that checks of an idle kind take
 
 
 class ServiceTimes(object):
@@ -33,7 +34,10 @@ class ServiceTimes(object):
     never ran alone: what it last did.) 10 s is the decay time of tower's and Finagle's
     peak-EWMA, which forget a left server alike. A kind whose recent tasks did not run alone
     (a burst) reports the same once none was done for ``horizon`` s: what slowed them is
-    gone with it, and the next runs alone.
+    gone with it, and the next runs alone. But what a server was is not what it is: a
+    slowed one whose robots left said it was fast, and they came back every ``idle`` s to
+    slow tasks, and one that recovered was not known to have. So a server nobody sends to
+    checks an idle kind (:meth:`due`): it times a copy of its last task, alone, as a task.
     """
 
     def __init__(self, keep=20, horizon=1.0, least=3, idle=10.0, history=60,
@@ -53,6 +57,7 @@ class ServiceTimes(object):
         self._history = {}    # {kind: its last `history` tasks' seconds, run alone}
         self._typical = {}    # {kind: (median, its error) of its history}, until its next task
         self._beside = {}     # {kind: whether a task of its median did not run alone}
+        self._checked = {}    # {kind: when a check of it was last begun}
 
     def add(self, kind, seconds, alone=True):
         """A ``kind`` task took ``seconds``; ``alone``: none ran beside it or waited."""
@@ -76,6 +81,23 @@ class ServiceTimes(object):
             self._beside[kind] = not all(ran_alone for _, _, ran_alone in times)
             self._medians[kind] = statistics.median(values)
             self._errors[kind] = MEDIAN_ERROR * mean_error(values)[1]
+
+    def due(self, every):
+        """The kinds none of whose tasks was timed or checked in the last ``every`` s (0:
+        none), nor in the last 1 / :data:`CHECK_SHARE` of its work: what a server nobody
+        sends to times a copy of a task of, to report what one takes now rather than what
+        its history says (a slowed server that recovered, or one that slowed).
+        :meth:`checking` says a check of one was begun."""
+        with self._lock:
+            now = self._clock()
+            return [kind for kind, times in self._times.items() if every > 0 and
+                    now - max(times[-1][0], self._checked.get(kind, times[-1][0])) >=
+                    max(every, self._work(kind, now)[0] / CHECK_SHARE)]
+
+    def checking(self, kind):
+        """A check of ``kind`` was begun now (its time comes to :meth:`add`)."""
+        with self._lock:
+            self._checked[kind] = self._clock()
 
     def _work(self, kind, now):
         """``(seconds, error)`` of ``kind``'s work now (lock held; it was done before)."""

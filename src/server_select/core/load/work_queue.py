@@ -1,27 +1,19 @@
 """A server's load: its bounded work queue, and what a robot makes of its reports (no rospy).
 
-A task's round trip is the network, the wait for a worker and the work itself; a probe,
-answered on its own thread, measures only the first. So every probe answer carries the
-server's :class:`Load` (tasks queued and in service, workers, the *backlog*: seconds a task
-sent now would wait for a worker, the *utilization*: the share of the workers' time the
-other robots' tasks take, and the recent work per task of each kind), and a robot ranks
-servers by round trip + expected wait + work (C3's expected completion, NSDI '15;
-:mod:`server_select.core.rule.estimates`), its attempts' deadlines too. The backlog is a
-poor forecast of the next task's wait: robots that ranked by it chased the phase of each
-other's frames; the server's own admission reads it. The utilization moves only when a
-robot comes, goes or changes its rate: it is what robots *announce* (a load-aware robot's
-probe says its rate to the server its next task goes to, none to the others), so a robot
-that moves loads its new server in the others' eyes at its next probe; one that announces
-nothing counts at the rate its tasks arrive (:mod:`server_select.core.load.demand`).
+A task's round trip is the network, the wait for a worker and the work; a probe, answered
+on its own thread, measures only the first. So every probe answer carries the server's
+:class:`Load`: tasks queued and in service, workers, the *backlog* (seconds a task sent now
+would wait for a worker), the *utilization* (the share of the workers' time the other
+robots' tasks take: what they *announce*, :mod:`server_select.core.load.demand`; it moves
+only when a robot comes, goes or changes its rate, where the backlog follows the phase of
+each other's frames, which robots that ranked by it chased) and the recent work per task of
+each kind, which a robot ranks by with the round trip and the wait (C3's expected
+completion, NSDI '15; :mod:`server_select.core.rule.estimates`).
 
-Server side, :class:`WorkQueue` holds the tasks waiting for the workers. A task carries
-its *deadline* (when its robot stops waiting): one that cannot be finished by then is
-refused at once as busy (its robot sends it elsewhere, or drops it for a newer frame); one
-whose deadline passes while it waits is shed when a worker takes it. The queue is shared
-fairly between the robots (:class:`~server_select.core.load.fair_queue.FairQueue`): a
-task waits behind about as much of each other robot's work as its own robot has queued,
-one robot's flood of tasks takes no place another robot's task needs, and while others
-send no robot holds every worker.
+Server side, :class:`WorkQueue` holds the tasks waiting for the workers, each with its
+*deadline* (refused at once as busy when it cannot be met; shed when it passes while the
+task waits), shared fairly between the robots
+(:class:`~server_select.core.load.fair_queue.FairQueue`).
 """
 
 import collections
@@ -32,6 +24,7 @@ from server_select.core.load.demand import Demand
 from server_select.core.load.fair_queue import FairQueue, Job
 from server_select.core.load.service_times import SenderShares, ServiceTimes
 
+CHECK = 'check'     # the owner of a check's job (:meth:`WorkQueue.offer_check`): no robot
 Load = collections.namedtuple('Load', 'queued in_service workers backlog service utilization '
                               'service_error')
 Load.__new__.__defaults__ = (0.0, None)
@@ -42,16 +35,10 @@ Load.__doc__ = """One load report: ``service`` is ``{kind: seconds of work per t
 
 class WorkQueue(object):
     """Tasks waiting for ``workers`` workers, at most ``max_queue`` of them holding at most
-    ``max_bytes`` (None: any; a task alone in the queue is taken whatever its size)
-    (thread-safe).
-
-    :meth:`offer` queues a task or says at once why not (full, or not done by its deadline:
-    busy); one pushed out by a newer task of a robot holding less of the queue goes to
-    ``on_pushed_out(job, why)`` (answered busy). Workers :meth:`take` the next by the
-    robots' round robin (None once closed), ask :meth:`stale` whether its deadline passed
-    meanwhile, and call :meth:`done` with the seconds it took (:class:`ServiceTimes`).
-    :meth:`announce` hears the rates a robot's probe says it sends here (:class:`Demand`:
-    kept ``announce_age`` s; else its arrivals over ``horizon`` s). Times are ``clock``'s.
+    ``max_bytes`` (None: any; a task alone is taken whatever its size) (thread-safe): one
+    pushed out by a newer task of a robot holding less of the queue goes to
+    ``on_pushed_out(job, why)`` (answered busy). Robots' rates are announced (kept
+    ``announce_age`` s), else counted as their tasks arrive (over ``horizon`` s).
     """
 
     def __init__(self, workers, max_queue, times=None, clock=time.monotonic, horizon=10.0,
@@ -74,8 +61,7 @@ class WorkQueue(object):
         return self._queue.bytes
 
     def _backlog(self, now, excluding=None):
-        """Seconds until a worker is free for one more task (call with the lock held),
-        leaving out the tasks of owner ``excluding`` (None: counting every task)."""
+        """Seconds until a worker is free for one more task, ``excluding``'s left out."""
         if len(self._queue) + len(self._running) < self.workers:
             return 0.0           # a worker is free, whoever's tasks are left out
         queued = [job for job in self._queue.jobs()
@@ -98,9 +84,9 @@ class WorkQueue(object):
         return self._work(kind, now) * self._shares.ratio(owner, kind)
 
     def _work(self, kind, now):
-        """Seconds of work per ``kind`` task (lock held): the recent median; while none is
-        known, as long as its longest-running task has taken so far (a server's first
-        frames, which load what the kind needs, once counted as none drew every robot)."""
+        """Seconds of work per ``kind`` task (lock held): the recent median, or while none is
+        known its longest-running task's so far (a server's first frames, which load what
+        the kind needs, once counted as none, drew every robot)."""
         known = self.times.get(kind, None)
         if known is not None:
             return known
@@ -126,6 +112,23 @@ class WorkQueue(object):
             if self.on_pushed_out is not None:
                 self.on_pushed_out(job, 'busy: pushed out of the queue by a task of a robot '
                                    'holding less of it')
+        return None
+
+    def offer_check(self, every, item_of):
+        """While nobody sends here and no worker is busy, a check of a kind due one
+        (:meth:`ServiceTimes.due`): a job of :data:`CHECK` holding ``item_of(kind)`` (None:
+        not checked), timed as a task's (:meth:`done`). The kind queued, or None."""
+        with self._cond:
+            now = self._clock()
+            if self._closed or self._running or len(self._queue) or self.demand.rates(now):
+                return None
+            for kind in self.times.due(every):
+                item = item_of(kind)
+                if item is not None:
+                    self.times.checking(kind)
+                    self._queue.push(Job(kind, item, None, now, CHECK))
+                    self._cond.notify()
+                    return kind
         return None
 
     def _refusal(self, kind, owner, size, deadline, now, room):
@@ -207,9 +210,9 @@ class WorkQueue(object):
         work, e.g. a rejected task)."""
         with self._cond:
             self._running.discard(job)
-            self.finished += 1
+            self.finished += job.owner != CHECK
             self._cond.notify_all()
-            if seconds is not None:
+            if seconds is not None and job.owner != CHECK:
                 self._shares.add(job.owner, job.kind, seconds)
         if seconds is not None:
             self.times.add(job.kind, seconds, job.alone)
@@ -225,12 +228,9 @@ class WorkQueue(object):
                    for kind, rate in self.demand.rates(now, excluding).items()) / self.workers
 
     def load(self, excluding=None):
-        """The :class:`Load` now; its backlog and utilization without the tasks of owner
-        ``excluding`` (what a robot's next task waits for when the robot's own tasks are
-        done by then: a robot that keeps one task out would otherwise see its own task as
-        load on its server and none on the others, and move for nothing; leaving its own
-        out of its server's utilization is what keeps it there: moving would add them to
-        another's)."""
+        """The :class:`Load` now, its backlog and utilization without the tasks of owner
+        ``excluding``: a robot that saw its own tasks as load on its server and none on
+        the others would move for nothing (moving adds them to another's)."""
         with self._cond:
             now = self._clock()
             service = self.times.snapshot()
