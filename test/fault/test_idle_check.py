@@ -23,7 +23,9 @@ from support.record import until_answered
 
 SERVER, ROBOT = 9, 7
 SLOW = 0.2                  # s a task takes more while the server is slowed
-SHOWS_BY = 10.0 + 3 * 2.0   # s: its last task's arrival forgotten, then two checks
+# s: its last task's arrival forgotten (10 s at most), then two checks, 2 s apart, or 4 s
+# apart once a task takes 0.2 s (checks take at most a twentieth of a worker)
+SHOWS_BY = 16.0
 
 
 def checks_counted(tmp_path):
