@@ -54,12 +54,13 @@ def _from_bag(path, out):
     from server_select.testbed.bag_analysis import load
     run = load(path)
     data = from_bag.scenario(run, Model.load())
-    data['suite']['check_every'] = default('check_every', own_profile(run))   # its servers'
+    profile = own_profile(run)
+    data['suite']['check_every'] = default('check_every', profile)   # its servers'
     name = os.path.abspath(os.path.join(out, 'from_bag.yaml'))
     with open(name, 'w') as stream:
         stream.write('# the run of %s\n' % path)
         yaml.safe_dump(data, stream, sort_keys=False)
-    return name, from_bag.recorded(run, data['suite']['measure_from']), own_profile(run)
+    return name, from_bag.recorded(run, data['suite']['measure_from']), profile
 
 
 def own_profile(run):

@@ -14,7 +14,7 @@ what one robot sends otherwise (``{robot7: {frame_rate: 4}}``: a burst robot's o
 beside a ``stop``); ``suite: measure_from``
 where the measured part starts (35 s, the suite's, by default); ``suite: hop_ms`` the
 middleware's delay per message where it is not the model's (a bag's run on one host);
-``suite: check_every`` the servers' checks of an idle kind (the fleet profile's: 5 s).
+``suite: check_every`` the servers' checks of an idle kind (the fleet profile's: 0.5 s).
 """
 
 import collections

@@ -118,9 +118,9 @@ class WorkQueue(object):
         """While nobody sends here and no worker is busy, a check of a kind due one
         (:meth:`ServiceTimes.due`): a job of :data:`CHECK` holding ``item_of(kind)`` (None:
         not checked), timed as a task's (:meth:`done`). The kind queued, or None."""
-        with self._cond:
+        with self._cond:      # (off, asked at every probe: declined before the rates)
             now = self._clock()
-            if self._closed or self._running or len(self._queue) or self.demand.rates(now):
+            if every <= 0 or self._closed or self._running or self._queue or self.demand.rates(now):
                 return None
             for kind in self.times.due(every):
                 item = item_of(kind)
