@@ -77,6 +77,23 @@ def test_recovery_is_when_no_task_fails_and_round_trips_are_back_within_ten_perc
     assert never is None
 
 
+def test_a_late_recovery_names_the_pairs_that_held_it_worst_first():
+    event = {'start': 100.0, 'end': 110.0, 'bound': 5.0}
+    before = _steady(40.0, 100.0)
+    back = _steady(110.0, 170.0, robots=(1,))                  # robot 1 is back at once
+    held = [r._replace(answered_by=2) for r in _steady(110.0, 170.0, rtt=0.034, robots=(2,))]
+    history = sorted(before + back + held)
+    assert checks.recovery(history, event, [event], {1, 2}, 170.0)[0] is None
+    found = checks.held_back(history, event, [event], {1, 2}, 170.0)
+    (robot, kind, ratio, failed, server), = found
+    assert (robot, kind, failed, server) == (2, 'sort', 0, 2) and abs(ratio - 3.4) < 1e-6
+    failing = [report(120.0, 1, 9999, ok=False)]
+    found = checks.held_back(sorted(history + failing), event, [event], {1, 2}, 170.0)
+    assert [(f[0], f[3]) for f in found] == [(1, 1), (2, 0)]   # a failure first
+    assert checks.held_back(sorted(before + _steady(110.0, 170.0)), event, [event], {1, 2},
+                            170.0) == []
+
+
 def test_a_message_two_recorders_heard_is_one_and_two_in_one_bag_are_two():
     merged = merge([{'reports': {('a',): 1, ('b',): 2}}, {'reports': {('a',): 1}}])
     assert merged['reports'] == {('a',): 1, ('b',): 2}

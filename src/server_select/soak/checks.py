@@ -139,6 +139,30 @@ def recovery(reports, event, events, robots, limit):
     return None, len(reference)
 
 
+def held_back(reports, event, events, robots, limit, most=3):
+    """What kept the fleet from being back after ``event`` (a late recovery's cause, from
+    the reports alone): the (robot, kind) pairs whose tasks sent from when it is over until
+    ``limit`` failed, or took over 1 + TOLERANCE of their reference, worst first, at most
+    ``most``, each as ``(robot, kind, mean over its reference or None, failed, the server
+    that answered most of them or None)``."""
+    reference = _reference(reports, event, events, robots)
+    over = over_with(event, events)
+    pairs = collections.defaultdict(list)
+    for r in reports:
+        if r.robot in robots and over <= r.t <= limit:
+            pairs[(r.robot, r.kind)].append(r)
+    found = []
+    for (robot, kind), mine in pairs.items():
+        answered = [r for r in mine if r.ok]
+        failed = len(mine) - len(answered)
+        ratio = sum(r.rtt for r in answered) / len(answered) / reference[(robot, kind)] \
+            if answered and (robot, kind) in reference else None
+        if failed or ratio is not None and ratio > 1.0 + TOLERANCE:
+            servers = collections.Counter(r.answered_by for r in answered).most_common(1)
+            found.append((robot, kind, ratio, failed, servers[0][0] if servers else None))
+    return sorted(found, key=lambda f: (-f[3], -(f[2] or 0.0)))[:most]
+
+
 def served_again(event, history, nodes):
     """{node: s from the end of ``event`` to its first sign of doing its job (None: none)}
     for ``nodes`` (a server in a robot's ranking with samples, a robot's answered task, the

@@ -43,6 +43,9 @@ def timeline(events, hist, t0):
         limit = min([r['start'] for r in rows if r['start'] > over], default=over + 60)
         row['recovery'], row['reference'] = checks.recovery(hist.reports, row, rows,
                                                             set(ROBOTS), limit)
+        late = row['recovery'] is None or row['recovery'] > row['bound']
+        row['held back by'] = checks.held_back(
+            hist.reports, row, rows, set(ROBOTS), limit) if late else []
     return rows
 
 
@@ -131,10 +134,10 @@ def _markdown(log, verdict, ledger, stray, rows, slopes, judged, hist):
             (round(r.t - t0, 1), r.robot, r.task, r.error) for r in stray[:10]])
     lines += ['', '## Faults', '', markdown_table(
         ['at s', 'kind', 'target', 'lasted s', 'back after s', 'bound s', 'served again s',
-         'what'],
+         'what', 'held back by'],
         [['%.1f' % r['at'], r['kind'], r['target'] or '', '%.1f' % r['lasted'],
-          _fmt(r['recovery']), '%g' % r['bound'], _serving(r['serving']), r['detail']]
-         for r in rows])]
+          _fmt(r['recovery']), '%g' % r['bound'], _serving(r['serving']), r['detail'],
+          _held(r['held back by'])] for r in rows])]
     lines += ['', '## Recovery by kind', '', markdown_table(
         ['kind', 'faults', 'median s', 'max s', 'bound s'], _by_kind(rows))]
     lines += ['', '## Resources over the second half (slope per 10 minutes)', '',
@@ -147,6 +150,15 @@ def _markdown(log, verdict, ledger, stray, rows, slopes, judged, hist):
               '10 minutes per node.' % (RSS_SLOPE_MAX, COUNT_GROWTH_MAX),
               '', '![timeline](timeline.png)', '']
     return '\n'.join(lines)
+
+
+def _held(pairs):
+    """A late recovery's cause: e.g. 'robot 2 sort 3.4x on server 2; robot 6 image 2
+    failed'."""
+    return '; '.join('robot %d %s%s%s%s' % (
+        robot, kind, ' %.1fx' % ratio if ratio is not None else '',
+        ' %d failed' % failed if failed else '', ' on server %d' % server if server else '')
+        for robot, kind, ratio, failed, server in pairs)
 
 
 def _serving(serving):
