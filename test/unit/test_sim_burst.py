@@ -39,11 +39,15 @@ def test_a_robot_sends_its_own_kinds_and_nothing_after_it_stops():
         simulate(stray, Model.load(), 1, ['fleet'])
 
 
-def test_the_burst_is_its_robots_that_stop_and_the_fleet_those_up_throughout():
-    event, fleet = recovery.burst_of(burst())
-    assert (event['start'], event['end'], fleet) == (10.0, 20.0, [1])
-    with pytest.raises(ValueError, match='no robot stops'):
-        recovery.burst_of(Scenario.load('config/sim/mixed_kinds.yaml'))
+def test_the_fault_is_its_robots_that_stop_or_a_server_hang_and_the_fleet_those_up_throughout():
+    event, fleet = recovery.fault_of(burst())
+    assert (event['kind'], event['start'], event['end'], fleet) == ('overload', 10.0, 20.0, [1])
+    hung, fleet = recovery.fault_of(Scenario.load('config/sim/mixed_kinds.yaml'))
+    assert (hung['kind'], hung['start'], hung['end']) == ('server_stop', 50.0, 55.0)
+    calm = burst()
+    calm.hosts['robot2'] = calm.hosts['robot2']._replace(stop=None)
+    with pytest.raises(ValueError, match='no robot stops and no server hangs'):
+        recovery.fault_of(calm)
 
 
 def test_the_fleet_is_back_at_once_after_a_burst_it_was_not_slowed_by_and_never_without_server():

@@ -12,8 +12,9 @@ that 20 seeds scored p90 2.9 -> 1.9 s and max 7.2 -> 3.5 made seeds 21-40 later,
 came to +0.18 s [-0.36, +0.72] over 40.
 
 The fault is the scenario's robots that stop (a burst: from the first of them to start
-until the last stops); the fleet is the robots up throughout, back once a window of their
-tasks all succeeded with their round trips within the soak's tolerance of the minute before.
+until the last stops), or else its first server hang (the soak's ``server_stop``); the fleet
+is the robots up throughout, back once a window of their tasks all succeeded with their
+round trips within the soak's tolerance of the minute before.
 """
 
 import argparse
@@ -29,22 +30,28 @@ from server_select.soak import checks
 from server_select.soak.plan import RECOVERY
 from server_select.testbed.scenario import Scenario
 
-LIMIT = 30.0     # s after the burst a recovery is looked for (None past it)
+LIMIT = 30.0     # s after the fault a recovery is looked for (None past it)
 # what the soak's check reads of a task report (its bags' reports have more)
 Task = collections.namedtuple('Task', 't robot kind ok rtt')
 
 
-def burst_of(scenario):
-    """``(event, [robot ids up throughout])`` of ``scenario``: the event as the soak writes
-    one (start, end, bound); ValueError when no robot stops."""
+def fault_of(scenario):
+    """``(event, [robot ids up throughout])`` of ``scenario``'s fault, the event as the soak
+    writes one (kind, start, end, bound): its robots that stop (a burst, ``overload``: from
+    the first of them to start until the last stops), else its first server hang (the
+    soak's ``server_stop``); ValueError when it has neither."""
     robots = scenario.of_role('robot')
+    fleet = [h.id for h in robots if h.stop is None and h.start == 0]
     bursting = [h for h in robots if h.stop is not None]
-    if not bursting:
-        raise ValueError('%s: no robot stops, so there is no burst to recover from'
-                         % scenario.source)
-    event = {'kind': 'overload', 'start': min(h.start for h in bursting),
-             'end': max(h.stop for h in bursting), 'bound': RECOVERY}
-    return event, [h.id for h in robots if h.stop is None and h.start == 0]
+    if bursting:
+        return {'kind': 'overload', 'start': min(h.start for h in bursting),
+                'end': max(h.stop for h in bursting), 'bound': RECOVERY}, fleet
+    hangs = sorted(span for h in scenario.of_role('server') for span in h.hang)
+    if not hangs:
+        raise ValueError('%s: no robot stops and no server hangs, so there is no fault to '
+                         'recover from' % scenario.source)
+    return {'kind': 'server_stop', 'start': hangs[0][0], 'end': hangs[0][1],
+            'bound': RECOVERY}, fleet
 
 
 def reports(sim, timeout):
@@ -56,9 +63,9 @@ def reports(sim, timeout):
 
 
 def recovery(scenario, model, seed, variant):
-    """s from the end of ``scenario``'s burst until ``variant``'s fleet is back (None: not
+    """s from the end of ``scenario``'s fault until ``variant``'s fleet is back (None: not
     within LIMIT s) with ``seed``."""
-    event, fleet = burst_of(scenario)
+    event, fleet = fault_of(scenario)
     sim = simulate(scenario, model, seed, [variant])
     back, _ = checks.recovery(reports(sim, sim.timeout), event, [event], set(fleet),
                               event['end'] + LIMIT)
@@ -105,7 +112,8 @@ def table(found, against=None):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(prog='recovery', description=__doc__.split('\n\n')[0])
-    parser.add_argument('scenario', help='a scenario file whose burst robots stop')
+    parser.add_argument('scenario', help='a scenario file whose burst robots stop, or one '
+                        'of whose servers hangs')
     parser.add_argument('--variants', default='fleet,prequal,oracle_fleet')
     parser.add_argument('--seeds', type=int, default=40)
     parser.add_argument('--out', metavar='FILE', help='write the per-seed times (JSON)')
@@ -117,8 +125,8 @@ def main(argv=None):
             against = json.load(stream)
     scenario, model = Scenario.load(args.scenario), Model.load()
     found = times_of(scenario, model, args.variants.split(','), args.seeds)
-    print('recovery after the burst (s; the soak bound %g s), %d seeds; base: %s'
-          % (RECOVERY, args.seeds, args.variants.split(',')[0]))
+    print('recovery after the %s (s; the soak bound %g s), %d seeds; base: %s'
+          % (fault_of(scenario)[0]['kind'], RECOVERY, args.seeds, args.variants.split(',')[0]))
     print(table(found, against))
     if args.out:
         with open(args.out, 'w') as stream:
