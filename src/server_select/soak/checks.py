@@ -10,6 +10,8 @@ bags, faults from the nemesis's log).
   restarted serve again) the fleet is back: in a window of
   ``WINDOW`` s no task fails and the round trips are within ``TOLERANCE`` of the minute
   before the fault (each robot and kind against its own, so frames and sort tasks mix).
+- :func:`held_back`: what kept a late recovery back (the robots and kinds slowed or
+  failing, and the server that answered them).
 - :func:`served_again`: how long after a fault a node it restarted does its job again.
 """
 
