@@ -18,6 +18,7 @@ import xmlrpc.client
 import pytest
 import rosgraph
 
+from server_select.bench.harness import master_up
 from server_select.core.ranking.rank import NO_SERVER
 from server_select.core.util.procs import stop_group, wait_until
 
@@ -260,14 +261,6 @@ def _fleet_whole():
     return robots <= inbound
 
 
-def master_answers():
-    try:
-        rosgraph.Master('/fault_tests').getPid()
-        return True
-    except Exception:  # not up yet
-        return False
-
-
 def test_roscore_restart(ros):
     rec = ros['rec']
     rec.clear()
@@ -292,7 +285,8 @@ def test_roscore_restart(ros):
         t_start = time.monotonic()
         # roscore's own start (roslaunch, rosmaster, rosout) is not the fleet's recovery:
         # the nodes' 20 s begin once the new master answers
-        assert wait_until(master_answers, 60.0), 'the new roscore did not answer in 60 s'
+        assert wait_until(lambda: master_up(core.uri), 60.0), \
+            'the new roscore did not answer in 60 s'
         t_up = time.monotonic()
         assert wait_until(lambda: all(fleet.pid(n) for n in NODES), 20.0), system_state()
         t_registered = time.monotonic()

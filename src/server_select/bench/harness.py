@@ -49,7 +49,8 @@ def free_port():
     raise RuntimeError('no free port below %d' % low)
 
 
-def _master_up(uri):
+def master_up(uri):
+    """Whether the master at ``uri`` answers (a roscore started, or started again)."""
     try:
         xmlrpc.client.ServerProxy(uri).getPid('/bench')
         return True
@@ -73,7 +74,7 @@ class Roscore(object):
             self.proc = subprocess.Popen(['roscore', '-p', str(self.port)],
                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                          start_new_session=True)
-            if wait_until(lambda: _master_up(self.uri) or self.proc.poll() is not None,
+            if wait_until(lambda: master_up(self.uri) or self.proc.poll() is not None,
                           30.0, period=0.2) and self.proc.poll() is None:
                 return self
             stop_group(self.proc)
