@@ -179,7 +179,7 @@ class _SimWorld(object):
     def __init__(self, script):
         self.script, self.loop = script, script.loop
         self.streams = Streams(1)
-        self.model = mock.Mock(work=lambda kind, rng, size: WORK)
+        self.model = mock.Mock(alone=lambda kind, rng, size: WORK, shared_delay=lambda rng: 0.0)
         self.network = mock.Mock(once=lambda a, b, t, size, tag: t + HALF_TRIP[_id(a, b)],
                                  connection=lambda a, b, tag: _Connection(
                                      HALF_TRIP[_id(a, b)]))

@@ -98,13 +98,16 @@ def test_a_simulated_server_checks_as_the_node_does_and_answers_nobody():
     class Model(object):
         probe_cpu, cpu_factor, warm = 0.0005, 1.0, {}
 
+        def shared_delay(self, rng):
+            return 0.0
+
     def reports(every):
         loop, answers, seen = EventLoop(), [], []
         host = Scenario({'hosts': {'manager': {'role': 'manager'}, 's': {
             'role': 'server', 'id': 1, 'work': [{'at': 15, 'delay': 25}]}}}).hosts['s']
         server = SimServer(loop, host, Model(), Streams(1), check_every=every)
         for n in range(4):
-            loop.at(0.25 * n, server.submit, Task(1, n, 'sort', 0.001, 100), 0.0,
+            loop.at(0.25 * n, server.submit, Task(1, n, 'sort', 0.001, 100, 0.001), 0.0,
                     lambda task, ok, error, busy: answers.append(task.task_id))
         for second in range(2, 40):
             loop.at(second, lambda: seen.append(server.probe(2, []).service['sort']))
@@ -114,6 +117,39 @@ def test_a_simulated_server_checks_as_the_node_does_and_answers_nobody():
     assert (answers, done) == ([0, 1, 2, 3], 4)
     assert max(checked[:12]) < 0.002 and min(checked[26:]) > 0.025, checked
     assert max(reports(0.0)[2]) < 0.002        # unchecked: what its history says
+
+
+def test_a_simulated_check_reruns_the_task_with_the_hosts_share_drawn_anew():
+    """A check reruns its kind's last task: what that task takes alone, plus a share of
+    the host of its own. A copy of the task's whole work made one draw of a shared CPU
+    the idle server's report, with no spread, for as long as nobody sent it a task."""
+    from server_select.sim.events import EventLoop, Streams
+    from server_select.sim.server import SimServer
+    from server_select.sim.tasks import Task
+    from server_select.testbed.scenario import Scenario
+
+    class Model(object):
+        probe_cpu, cpu_factor, warm = 0.0005, 1.0, {}
+
+        def shared_delay(self, rng):
+            return rng.uniform(0.0, 0.001)
+
+    loop, timed = EventLoop(), []
+    host = Scenario({'hosts': {'manager': {'role': 'manager'}, 's': {
+        'role': 'server', 'id': 1}}}).hosts['s']
+    server = SimServer(loop, host, Model(), Streams(1), check_every=0.5)
+    add = server.queue.times.add
+    server.queue.times.add = lambda kind, seconds, alone=True: (
+        timed.append(seconds), add(kind, seconds, alone))
+    for n in range(2):       # (a kind's first task is not timed)
+        loop.at(0.1 * n, server.submit, Task(1, n, 'sort', 0.004, 100, 0.001), 0.0,
+                lambda task, ok, error, busy: None)
+    for second in range(1, 10):
+        loop.at(second, server.probe, 2, [])
+    loop.run(10.0)
+    checks = timed[1:]
+    assert timed[0] == 0.004 and len(checks) >= 5, timed
+    assert all(0.001 <= c < 0.002 for c in checks) and len(set(checks)) == len(checks), checks
 
 
 def test_checks_take_at_most_a_twentieth_of_a_worker():

@@ -100,10 +100,10 @@ def test_a_server_refuses_at_once_what_it_cannot_finish_by_its_deadline():
     def reply(task, ok, error, busy):
         answers.append((task.task_id, loop.now(), busy))
     for n in range(2):
-        server.submit(Task(1, n, 'sort', 0.1, 100), 0.0, reply)   # no deadline: learnt
+        server.submit(Task(1, n, 'sort', 0.1, 100, 0.1), 0.0, reply)   # no deadline: learnt
     loop.run(0.9)
     for n in range(2, 5):
-        loop.at(1.0, server.submit, Task(1, n, 'sort', 0.1, 100), 0.5, reply)
+        loop.at(1.0, server.submit, Task(1, n, 'sort', 0.1, 100, 0.1), 0.5, reply)
     loop.run(5.0)
     assert [(n, round(t, 2), busy) for n, t, busy in answers] == [
         (0, 0.2, False), (1, 0.4, False), (4, 1.0, True), (2, 1.2, False), (3, 1.4, False)]
@@ -115,8 +115,8 @@ def test_a_hung_server_works_and_answers_after_it_goes_on_and_a_stopped_one_neve
 
     def reply(task, ok, error, busy):
         answers.append(loop.now())
-    loop.at(0.5, server.submit, Task(1, 1, 'sort', 1.0, 100), 0.0, reply)
-    loop.at(2.0, server.submit, Task(1, 2, 'sort', 0.1, 100), 0.0, reply)
+    loop.at(0.5, server.submit, Task(1, 1, 'sort', 1.0, 100, 1.0), 0.0, reply)
+    loop.at(2.0, server.submit, Task(1, 2, 'sort', 0.1, 100, 0.1), 0.0, reply)
     loop.run(10.0)
     assert answers == [pytest.approx(3.1), pytest.approx(3.5)]
     assert server.probe_done(2.0) == pytest.approx(3.0005)
@@ -130,8 +130,8 @@ def test_a_hung_server_reports_the_work_of_a_task_it_did_across_the_hang_not_the
     loop = EventLoop()
     server = _server({'cpu': 1.0, 'hang': [[1.0, 3.0]]}, loop)
     reply = lambda task, ok, error, busy: None      # noqa: E731
-    loop.at(0.0, server.submit, Task(1, 1, 'sort', 0.2, 100), 0.0, reply)   # not timed
-    loop.at(0.5, server.submit, Task(1, 2, 'sort', 1.0, 100), 0.0, reply)   # across it
+    loop.at(0.0, server.submit, Task(1, 1, 'sort', 0.2, 100, 0.2), 0.0, reply)   # not timed
+    loop.at(0.5, server.submit, Task(1, 2, 'sort', 1.0, 100, 1.0), 0.0, reply)   # across it
     loop.run(10.0)
     assert server.queue.times.get('sort') == pytest.approx(1.0)
 
@@ -197,7 +197,7 @@ def test_a_kind_is_loaded_when_a_probe_first_announces_it_and_its_first_task_wai
     server = SimServer(loop, host, Warm(), Streams(1))
     server.probe(7, [('image', 1.0)])           # 0.1 CPU s at half a core: until 0.2 s
     server.probe(8, [('image', 1.0)])           # announced again: loaded once
-    loop.at(0.05, server.submit, Task(7, 1, 'image', 0.05, 100), 0.0,
+    loop.at(0.05, server.submit, Task(7, 1, 'image', 0.05, 100, 0.05), 0.0,
             lambda task, ok, error, busy: answers.append(loop.now()))
     loop.run(5.0)
     assert answers == [pytest.approx(0.3, abs=1e-3)]

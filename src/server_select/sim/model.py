@@ -55,14 +55,18 @@ class Model(object):
         with open(path or package_file(*PATH)) as stream:
             return cls(yaml.safe_load(stream))
 
-    def work(self, kind, rng, size=0):
-        """CPU seconds of one ``kind`` task (``size`` values for a sort task)."""
+    def alone(self, kind, rng, size=0):
+        """CPU seconds of one ``kind`` task timed alone: what its content takes."""
         median, sigma, per = self.kinds[kind]
         median *= self.cpu_factor
         if per and size:
             median *= size / float(per)
-        work = median * math.exp(rng.gauss(0.0, sigma)) if sigma > 0 else median
-        return work + rng.expovariate(1.0 / self.shared) if self.shared > 0 else work
+        return median * math.exp(rng.gauss(0.0, sigma)) if sigma > 0 else median
+
+    def shared_delay(self, rng):
+        """What one task's run gains on a host the fleet's nodes share (0.0 without
+        ``shared_ms``): each run's own, a rerun of the same task included."""
+        return rng.expovariate(1.0 / self.shared) if self.shared > 0 else 0.0
 
 
 def _fit(seconds):

@@ -23,7 +23,9 @@ from server_select.core.load.work_queue import CHECK, WorkQueue
 from server_select.sim.quota import CpuQuota
 
 
-Check = collections.namedtuple('Check', 'work')   # a check's task: the CPU s of its kind's last
+# a check's task: the CPU s its kind's last task takes alone (a rerun of it: the host's
+# share of each run is drawn anew)
+Check = collections.namedtuple('Check', 'alone')
 
 
 class SimServer(object):
@@ -33,13 +35,14 @@ class SimServer(object):
     def __init__(self, loop, host, model, streams, check_every=0.0, max_queue=100, cores=2):
         self.loop, self.host, self.model = loop, host, model
         self.check_every = check_every
-        self.last_work = {}       # kind -> the CPU s of its last task begun
+        self.last_alone = {}      # kind -> its last task's CPU s alone (what a check reruns)
         self.id = host.id
         self.cpu = host.cpu
         self.workers = int(math.ceil(self.cpu)) if self.cpu else cores
         self.queue = WorkQueue(self.workers, max_queue, clock=loop.now,
                                on_pushed_out=self._pushed_out)
         self.rng = streams.rng('server', self.id)
+        self.check_rng = streams.rng('check', self.id)    # a check's share of the host
         period = host.cpu_period * 1e-3
         self.quota = CpuQuota(self.cpu, period, streams.rng('quota', self.id).uniform(
             0.0, period)) if self.cpu and self.cpu < 1.0 else None
@@ -117,7 +120,7 @@ class SimServer(object):
         if self.cpu and self.idle < self.workers:
             self.stolen += self.model.probe_cpu * self.model.cpu_factor
         if self.queue.offer_check(self.check_every, lambda kind: (
-                Check(self.last_work[kind]), None) if kind in self.last_work else None):
+                Check(self.last_alone[kind]), None) if kind in self.last_alone else None):
             self.waiting += 1
             self._start_workers()
         return self.queue.load(excluding=robot)
@@ -166,7 +169,10 @@ class SimServer(object):
                 continue
             self.idle -= 1
             now = self.loop.now()
-            cpu = self.last_work[job.kind] = task.work
+            if job.owner == CHECK:
+                cpu = task.alone + self.model.shared_delay(self.check_rng)
+            else:
+                cpu, self.last_alone[job.kind] = task.work, task.alone
             if job.kind in self.unwarmed:      # nobody announced it: its first task loads
                 self.unwarmed.discard(job.kind)
                 cpu += self.model.warm[job.kind] * self.model.cpu_factor
