@@ -73,6 +73,21 @@ def test_the_kernel_stamps_a_request_as_it_leaves_and_the_queue_is_emptied():
     assert len(second) == 1 and second[0] >= stamps[0]
 
 
+def test_a_request_s_own_stamp_is_read_and_the_reading_stops_there():
+    robot, server = tcp_pair()
+    with robot, server:
+        assert stamp_packets(robot) == (True, True)
+        robot.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)    # a send, a packet
+        robot.sendall(b'old')                   # its stamp left unread
+        middle = time.time()
+        robot.sendall(b'new')
+        robot.sendall(b'newer')
+        read = departures(robot, until=middle)
+        rest = departures(robot)
+    assert len(read) == 2 and read[0] < middle <= read[1]
+    assert len(rest) == 1 and rest[0] >= read[1]
+
+
 def test_no_send_stamp_without_the_option():
     robot, server = tcp_pair()
     with robot, server:

@@ -66,12 +66,14 @@ def arrival(ancillary):
     return None
 
 
-def departures(sock):
+def departures(sock, until=None):
     """The send stamps (epoch s) waiting on ``sock``'s error queue, oldest first; reading
     them empties the queue (left there, they would make the socket poll ready and take
-    its receive buffer)."""
+    its receive buffer). With ``until``, the reading stops at the first stamp not before
+    it: a request's own, the one a probe waits for (the rest, if any, are read at the next
+    call; a read of an empty queue raises, and was a third of a probe's stamps' cost)."""
     stamps = []
-    while True:
+    while not stamps or until is None or stamps[-1] < until:
         try:
             _data, ancillary, _flags, _address = sock.recvmsg(
                 0, 512, socket.MSG_ERRQUEUE | socket.MSG_DONTWAIT)
@@ -81,6 +83,7 @@ def departures(sock):
             if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPING and len(data) >= 16:
                 seconds, nanoseconds = struct.unpack('qq', data[:16])     # ts[0]: software
                 stamps.append(seconds + nanoseconds * 1e-9)
+    return stamps
 
 
 class ProbeTimeout(rospy.ServiceException):
@@ -171,7 +174,7 @@ class TimedServiceProxy(rospy.ServiceProxy):
         transport = self.transport
         if not self._stamps[1] or transport is None or transport.socket is None:
             return None
-        stamps = [t for t in departures(transport.socket) if t >= after]
+        stamps = [t for t in departures(transport.socket, after) if t >= after]
         return stamps[-1] if stamps else None
 
     def read_answer(self):
@@ -181,19 +184,20 @@ class TimedServiceProxy(rospy.ServiceProxy):
         error answer or a closed connection."""
         transport = self.transport
         try:
-            if self._stamps[1]:
-                departures(transport.socket)    # a send stamp come late: polled ready too
-            data, ancillary, _flags, _address = transport.socket.recvmsg(
-                transport.protocol.buff_size, STAMP_SPACE if self._stamps[0] else 0,
-                socket.MSG_DONTWAIT)
+            try:
+                data, ancillary, _flags, _address = transport.socket.recvmsg(
+                    transport.protocol.buff_size, STAMP_SPACE if self._stamps[0] else 0,
+                    socket.MSG_DONTWAIT)
+            except (BlockingIOError, InterruptedError):
+                if self._stamps[1]:
+                    departures(transport.socket)    # a send stamp come late: polled ready
+                return None
             if not data:
                 raise rospy.ServiceException('the server closed the connection')
             transport.read_buff.write(data)
             answers = []
             transport.protocol.read_messages(transport.read_buff, answers, transport.socket)
             return (answers[0], arrival(ancillary)) if answers else None
-        except (BlockingIOError, InterruptedError):
-            return None                         # ready for a send stamp only
         except (rospy.ServiceException, ROSException, OSError, AttributeError,
                 genpy.DeserializationError) as error:
             self._drop()

@@ -110,14 +110,23 @@ class AttemptClock(object):
         self.expected, self.load_factor, self.fresh = expected, float(load_factor), fresh
         self._lock = threading.Lock()
         self._rtts = collections.defaultdict(lambda: collections.deque(maxlen=self.keep))
+        self._ordered = {}      # server -> its round trips sorted, until the next one
 
     def add(self, server, rtt):
         with self._lock:
             self._rtts[server].append(rtt)
+            self._ordered.pop(server, None)
+
+    def _sorted(self, server):
+        """``server``'s round trips, sorted (asked at each send and each tick: kept)."""
+        with self._lock:
+            ordered = self._ordered.get(server)
+            if ordered is None:
+                ordered = self._ordered[server] = sorted(self._rtts.get(server, ()))
+            return ordered
 
     def seconds(self, server):
-        with self._lock:
-            rtts = sorted(self._rtts.get(server, ()))
+        rtts = self._sorted(server)
         if len(rtts) < self.min_samples:
             seconds = max(self.floor, self.first)
         else:
@@ -144,8 +153,7 @@ class AttemptClock(object):
         packet in 5 % of tasks set the p95 in the 200 ms tail, hedges stopped, the tail's
         round trips came back into the history and held it there: one simulated field
         had 14 tasks of 150 on that server at 220 ms where a rule hedging them had 4."""
-        with self._lock:
-            rtts = sorted(self._rtts.get(server, ()))
+        rtts = self._sorted(server)
         if len(rtts) < self.min_samples:
             return None
         median = rtts[len(rtts) // 2]
