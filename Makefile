@@ -29,7 +29,7 @@ help:
 	@echo 'make search-demo     the cooperative search: 2 robots, 2 servers, hidden people'
 	@echo 'make evaluate        the paper experiment on the testbed (SCENARIO=config/...yaml)'
 	@echo 'make evaluate-suite  every scenario, every variant, side by side (about 45 min)'
-	@echo 'make league          the fleet profile beside the peer balancers, simulated (~6 min)'
+	@echo 'make league          the fleet profile beside the peer balancers, simulated (~4 min)'
 	@echo 'make calibrate       the simulator beside the testbed league (~4 min)'
 	@echo 'make league-testbed  the league on the testbed, for cells named in LEAGUE_ARGS'
 	@echo 'make soak            the fleet through every fault kind for SOAK_MINUTES (root, TUN)'
@@ -137,7 +137,7 @@ bench-hedging: build
 # paper, fleet and the static assignment; overload, crowd and herd (root, ~50 min).
 # The league, simulated: the fleet profile beside the peers (p2c peak-EWMA, least request,
 # Prequal, weighted round robin, replication) on every network scenario and capacity case,
-# 30 paired seeds each (the package's own core objects on a virtual clock; ~6 min).
+# 30 paired seeds each (the package's own core objects on a virtual clock; ~4 min).
 # Tables and plot: results/league/league.md (docs/league.md). LEAGUE_ARGS: e.g. "--seeds 60"
 # or "--scenarios gen:1-200".
 LEAGUE_ARGS ?=
