@@ -70,8 +70,8 @@ def departures(sock, until=None):
     """The send stamps (epoch s) waiting on ``sock``'s error queue, oldest first; reading
     them empties the queue (left there, they would make the socket poll ready and take
     its receive buffer). With ``until``, the reading stops at the first stamp not before
-    it: a request's own, the one a probe waits for (the rest, if any, are read at the next
-    call; a read of an empty queue raises, and was a third of a probe's stamps' cost)."""
+    it, a request's own: the rest, if any, are read at the next call, and a probe does not
+    pay for the read of an empty queue, which raises."""
     stamps = []
     while not stamps or until is None or stamps[-1] < until:
         try:

@@ -16,8 +16,9 @@
   nodes, emulator and recorder share two cores): calibrated on the capacity cases.
 - ``shared_ms``: what a task's work gains on a host whose CPU the fleet's nodes share, as
   against timed alone: a delay of its own per task, exponential with this mean (the
-  scheduler's and the interpreter's waits, whatever the task's size): fitted to the spread
-  of the work servers report on the loopback demo (``sim.work_noise``).
+  scheduler's and the interpreter's waits, whatever the task's size; a server's check,
+  which reruns a task, draws its own): fitted to the spread of the work servers report on
+  the loopback demo (``sim.work_noise``).
 
 ``python3 -m server_select.sim.model --measure`` times the kinds here and rewrites
 ``kinds`` (the constants it keeps).
