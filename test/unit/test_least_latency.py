@@ -443,10 +443,10 @@ def test_least_latency_sends_sort_tasks_away_from_where_its_own_frames_wait():
     assert server == 2 and own > 0.010, own
 
 
-def test_least_latency_leaves_a_kept_server_behind_the_best_for_four_windows():
+def test_least_latency_leaves_a_kept_server_behind_the_best_for_five_windows():
     """A server whose answers swing (another robot's frames queue there now and then) has
     an error wide enough to keep a robot's sort tasks there at three times the best's
-    estimate; once its last four levels all lie above the best's, that is no noise, and
+    estimate; once its last five levels all lie above the best's, that is no noise, and
     the robot moves (the soak: 15-20 ms against 4-5 for a minute after a restart)."""
     def where(off):
         clock = Clock()
@@ -463,13 +463,15 @@ def test_least_latency_leaves_a_kept_server_behind_the_best_for_four_windows():
         return chosen
     assert set(where(off=('behind',))) == {2}
     moved = where(off=())
-    assert moved[-1] == 1 and moved[:4] == [2] * 4, moved
+    # left at its fifth level above the best's (10 s, sends every 0.5 s), not its fourth:
+    # two servers alike order so once in 252 tests, not once in 70
+    assert moved[-1] == 1 and moved.index(1) == 20, moved
 
 
 def test_least_latency_leaving_a_server_behind_goes_to_none_behind_the_best():
     """Three servers alike within the noise but with levels apart (identical servers on one
     shared CPU: 0.1-0.2 ms): a robot that leaves the one behind the best goes to the best,
-    not at random to another one behind it, which it would leave again 4 windows later (the
+    not at random to another one behind it, which it would leave again 5 windows later (the
     loopback demo: moves of 0.09-0.6 ms "within the noise: one at random", 2.3 a minute)."""
     def first_move(seed, off=()):
         clock = Clock()

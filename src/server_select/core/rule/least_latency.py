@@ -4,7 +4,7 @@ be answered soonest by, kept while nothing beats it beyond the noise.
 A server's estimate is the robot's one load model (round trip + wait + work from the
 answers of the last ``window`` s, and its noise: :mod:`~server_select.core.rule.estimates`),
 which its attempt deadlines follow too. ``choose`` keeps the robot's server while it is
-within 3 errors of the best and not behind it for 4 windows (:meth:`_behind`); else moves
+within 3 errors of the best and not behind it for 5 windows (:meth:`_behind`); else moves
 to the best or at random to one within 3 errors of it, lower than its server, not behind
 the best; a frame first where it would not come back stale (:meth:`_late`).
 ``choose`` changes nothing: the move is made at a task's first send (:meth:`started`).
@@ -21,7 +21,7 @@ from server_select.core.ranking.rank import by_estimate
 # what each can be switched off for (the league's ablation: docs/selection.md)
 MECHANISMS = ('keep', 'robust', 'tries', 'work_error', 'wander', 'steps', 'fresh', 'own_kinds',
               'behind')
-BEHIND = 4               # levels of a kept server all above the best's: no noise (1 in 70)
+BEHIND = 5               # levels of a kept server all above the best's: no noise (1 in 252)
 
 
 def within(estimate, best):
@@ -102,7 +102,7 @@ class LeastLatency(Balancer):
                                       if len(near) > 1 else ''), estimates)
 
     def _behind(self, here, best, kind):
-        """Whether ``here``'s last :data:`BEHIND` levels all lie above ``best``'s (alike: 1/70),
+        """Whether ``here``'s last :data:`BEHIND` levels all lie above ``best``'s (alike: 1/252),
         counting a level only where its server reported work for ``kind`` (a server yet to do
         one lies behind none by the work it has not reported)."""
         levels = self.estimates.level_series
