@@ -134,7 +134,7 @@ def test_every_view_names_where_a_robots_tasks_go_at_each_switch(ros, fleet):
             'no status of robot 1 stamped 1.5 s after its last move (%.2f) by %.2f: %s' % (
                 last, rospy.get_time(), status_gaps(views.statuses))
         # the manager's log of the last move comes by way of the robot's view and rosout
-        # (a CI run checked it 1.5 s after the move, before the line had arrived)
+        # (a fault run checked it 1.5 s after the move, before the line had arrived)
         wait_until(lambda: not [w for w in disagreements(views, rec, moves(rec, start))
                                 if w[0] == 'manager log'], 10.0)
         found = moves(rec, start)
