@@ -29,11 +29,14 @@ def mean_wait(workers, arrival_rate, service, customers, seed=1):
         assert ok and not busy
         waits.append(loop.now() - task.bytes - task.work)    # bytes: the arrival time
 
+    def arrive(n, t):       # (its work drawn as it arrives; all of it its own)
+        work = service(rng)
+        server.submit(Task(1, n, 'job', work, t, work), 0.0, reply)
+
     t = 0.0
     for n in range(customers):
         t += rng.expovariate(arrival_rate)
-        loop.at(t, lambda n=n, t=t: server.submit(
-            Task(1, n, 'job', service(rng), t), 0.0, reply))
+        loop.at(t, arrive, n, t)
     loop.run(t + 1000.0)
     assert len(waits) == customers
     skip = customers // 20                                      # the start-up transient
